@@ -1,0 +1,253 @@
+"""Input signals: step, ramp, sine, chirp, triangle, piecewise-linear, CSV column.
+
+Every signal is encoded as a kind code, a row of parameters and (for tables) a slice of a
+shared time/value table, so the compiled integrator evaluates all inputs and their time
+derivatives without calling back into Python.  ``value(t)`` evaluates the same code from
+Python.  Times in s, frequencies in Hz, phases in degrees; values in the input's unit.
+
+Command-line syntax (``--input NAME=SPEC``): ``step(amplitude=1, t0=0, offset=0)``,
+``ramp(slope=1, t0=0, offset=0)``, ``sine(amplitude=1, frequency=1, phase=0, offset=0)``,
+``chirp(amplitude=1, f0=1, f1=100, t1=1, phase=0, offset=0)`` (linear sweep, as
+scipy.signal.chirp), ``triangle(amplitude=1, frequency=1, phase=0, offset=0)``,
+``pwl(0:0, 1:10, 2:0)`` (time:value pairs) and ``csv(file=data.csv, column=V)``; a plain
+number is a constant.
+"""
+from __future__ import annotations
+
+import inspect
+import math
+import os
+import re
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+from numba import njit
+
+from .errors import SignalError
+
+CONST, STEP, RAMP, SINE, CHIRP, TRIANGLE, PWL = range(7)
+NPAR = 6
+
+
+@dataclass(frozen=True)
+class Signal:
+    """An input signal: ``kind`` code, parameter row, optional (t, v) table, breakpoints."""
+
+    kind: int
+    par: tuple
+    table_t: tuple = ()
+    table_v: tuple = ()
+    label: str = ""
+
+    def breakpoints(self) -> list[float]:
+        """Times where the signal jumps (the integrator restarts there)."""
+        return [self.par[1]] if self.kind == STEP else []
+
+    def value(self, t) -> np.ndarray:
+        """Signal value at times ``t`` (array), evaluated by the compiled code."""
+        return SignalBank({"_": self}).sample(t)[:, 0]
+
+    def __str__(self):
+        return self.label
+
+
+def Constant(value: float = 0.0) -> Signal:
+    return Signal(CONST, _row(value), label=f"{value:g}")
+
+
+def Step(amplitude: float = 1.0, t0: float = 0.0, offset: float = 0.0) -> Signal:
+    """offset for t < t0, offset + amplitude from t0 on."""
+    return Signal(STEP, _row(amplitude, t0, offset), label=f"step(amplitude={amplitude:g}, t0={t0:g}, offset={offset:g})")
+
+
+def Ramp(slope: float = 1.0, t0: float = 0.0, offset: float = 0.0) -> Signal:
+    """offset + slope·max(0, t − t0)."""
+    return Signal(RAMP, _row(slope, t0, offset), label=f"ramp(slope={slope:g}, t0={t0:g}, offset={offset:g})")
+
+
+def Sine(amplitude: float = 1.0, frequency: float = 1.0, phase: float = 0.0, offset: float = 0.0) -> Signal:
+    """offset + amplitude·sin(2π·frequency·t + phase°)."""
+    return Signal(SINE, _row(amplitude, frequency, math.radians(phase), offset),
+                  label=f"sine(amplitude={amplitude:g}, frequency={frequency:g}, phase={phase:g}, offset={offset:g})")
+
+
+def Chirp(amplitude: float = 1.0, f0: float = 1.0, f1: float = 100.0, t1: float = 1.0,
+          phase: float = 0.0, offset: float = 0.0) -> Signal:
+    """Linear sweep from f0 at t=0 to f1 at t1 (continues beyond t1, like scipy.signal.chirp)."""
+    if t1 <= 0:
+        raise SignalError("chirp: t1 must be positive")
+    return Signal(CHIRP, _row(amplitude, f0, f1, t1, math.radians(phase), offset),
+                  label=f"chirp(amplitude={amplitude:g}, f0={f0:g}, f1={f1:g}, t1={t1:g})")
+
+
+def Triangle(amplitude: float = 1.0, frequency: float = 1.0, phase: float = 0.0, offset: float = 0.0) -> Signal:
+    """Symmetric triangle between offset ± amplitude; like
+    ``offset + amplitude·scipy.signal.sawtooth(2π·f·t + phase°, width=0.5)``."""
+    return Signal(TRIANGLE, _row(amplitude, frequency, math.radians(phase), offset),
+                  label=f"triangle(amplitude={amplitude:g}, frequency={frequency:g}, offset={offset:g})")
+
+
+def PiecewiseLinear(times, values, label: str = "") -> Signal:
+    """Linear interpolation between (time, value) samples, constant outside."""
+    t = np.asarray(times, float)
+    v = np.asarray(values, float)
+    if t.ndim != 1 or t.shape != v.shape or t.size < 1:
+        raise SignalError("piecewise-linear signal needs equal-length 1-D times and values")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+        raise SignalError("piecewise-linear signal has NaN or infinite samples")
+    if np.any(np.diff(t) <= 0):
+        raise SignalError("piecewise-linear signal: times must be strictly increasing")
+    return Signal(PWL, _row(), tuple(t.tolist()), tuple(v.tolist()), label or f"pwl({t.size} points)")
+
+
+def _row(*vals) -> tuple:
+    return tuple(float(v) for v in vals) + (0.0,) * (NPAR - len(vals))
+
+
+class SignalBank:
+    """All inputs of a model packed into arrays for the compiled integrator."""
+
+    def __init__(self, signals: Mapping[str, Signal]):
+        sigs = list(signals.values())
+        self.names = list(signals)
+        self.kind = np.array([s.kind for s in sigs], np.int64)
+        self.par = np.array([s.par for s in sigs], float).reshape(len(sigs), NPAR)
+        lens = [len(s.table_t) for s in sigs]
+        self.len = np.array(lens, np.int64)
+        self.off = np.concatenate([[0], np.cumsum(lens)[:-1]]).astype(np.int64) if sigs else np.zeros(0, np.int64)
+        self.tt = np.array([x for s in sigs for x in s.table_t] or [0.0], float)
+        self.tv = np.array([x for s in sigs for x in s.table_v] or [0.0], float)
+        self.breaks = sorted({b for s in sigs for b in s.breakpoints()})
+
+    def args(self):
+        return self.kind, self.par, self.off, self.len, self.tt, self.tv
+
+    def sample(self, t) -> np.ndarray:
+        """Values of all inputs at times ``t``: array (len(t), n_inputs)."""
+        t = np.atleast_1d(np.asarray(t, float))
+        out = np.zeros((t.size, len(self.names)))
+        if self.names:
+            _sample(t, *self.args(), out)
+        return out
+
+
+@njit(cache=True)
+def eval_inputs(t, kind, par, off, ln, tt, tv, u, du):
+    """Write every input's value and time derivative at time t into u and du."""
+    for i in range(kind.shape[0]):
+        k = kind[i]
+        p = par[i]
+        if k == CONST:
+            u[i] = p[0]
+            du[i] = 0.0
+        elif k == STEP:
+            u[i] = p[2] + (p[0] if t >= p[1] else 0.0)
+            du[i] = 0.0
+        elif k == RAMP:
+            if t > p[1]:
+                u[i] = p[2] + p[0] * (t - p[1])
+                du[i] = p[0]
+            else:
+                u[i] = p[2]
+                du[i] = 0.0
+        elif k == SINE:
+            w = 2.0 * math.pi * p[1]
+            u[i] = p[3] + p[0] * math.sin(w * t + p[2])
+            du[i] = p[0] * w * math.cos(w * t + p[2])
+        elif k == CHIRP:
+            beta = (p[2] - p[1]) / p[3]
+            ph = 2.0 * math.pi * (p[1] * t + 0.5 * beta * t * t) + p[4]
+            u[i] = p[5] + p[0] * math.cos(ph)
+            du[i] = -p[0] * math.sin(ph) * 2.0 * math.pi * (p[1] + beta * t)
+        elif k == TRIANGLE:
+            # scipy.signal.sawtooth(x, 0.5): rises -1 -> 1 over [0, pi), falls over [pi, 2 pi)
+            x = (2.0 * math.pi * p[1] * t + p[2]) % (2.0 * math.pi)
+            slope = 2.0 * p[0] * 2.0 * p[1]
+            if x < math.pi:
+                u[i] = p[3] + p[0] * (-1.0 + 2.0 * x / math.pi)
+                du[i] = slope
+            else:
+                u[i] = p[3] + p[0] * (3.0 - 2.0 * x / math.pi)
+                du[i] = -slope
+        else:  # PWL
+            o = off[i]
+            n = ln[i]
+            if t <= tt[o]:
+                u[i] = tv[o]
+                du[i] = 0.0
+            elif t >= tt[o + n - 1]:
+                u[i] = tv[o + n - 1]
+                du[i] = 0.0
+            else:
+                j = np.searchsorted(tt[o:o + n], t, side="right") - 1
+                a = o + j
+                s = (tv[a + 1] - tv[a]) / (tt[a + 1] - tt[a])
+                u[i] = tv[a] + s * (t - tt[a])
+                du[i] = s
+
+
+@njit(cache=True)
+def _sample(t, kind, par, off, ln, tt, tv, out):
+    u = np.zeros(kind.shape[0])
+    du = np.zeros(kind.shape[0])
+    for k in range(t.shape[0]):
+        eval_inputs(t[k], kind, par, off, ln, tt, tv, u, du)
+        out[k, :] = u
+
+
+_CALL = re.compile(r"^\s*([a-z]+)\s*\((.*)\)\s*$", re.S)
+_FACTORIES = {"step": Step, "ramp": Ramp, "sine": Sine, "chirp": Chirp, "triangle": Triangle}
+
+
+def parse_signal(spec: str, base_dir: str | None = None) -> Signal:
+    """Parse a command-line signal specification (see the module docstring)."""
+    from .data import read_csv  # local import: data reading is only needed for csv inputs
+
+    text = spec.strip()
+    try:
+        return Constant(float(text))
+    except ValueError:
+        pass
+    m = _CALL.match(text)
+    if not m:
+        raise SignalError(f"bad signal {spec!r}: write e.g. sine(amplitude=10, frequency=5) or a number")
+    kind, body = m.group(1), m.group(2).strip()
+    if kind == "pwl":
+        try:
+            pairs = [tuple(float(x) for x in item.split(":")) for item in body.split(",") if item.strip()]
+            if not pairs or any(len(p) != 2 for p in pairs):
+                raise ValueError
+        except ValueError:
+            raise SignalError(f"bad signal {spec!r}: write pwl(t0:v0, t1:v1, ...)") from None
+        t, v = zip(*pairs)
+        return PiecewiseLinear(t, v, label=text)
+    kwargs = {}
+    for item in filter(None, (s.strip() for s in body.split(","))):
+        key, sep, val = item.partition("=")
+        if not sep:
+            raise SignalError(f"bad signal {spec!r}: arguments are key=value, got {item!r}")
+        kwargs[key.strip()] = val.strip()
+    if kind == "csv":
+        unknown = set(kwargs) - {"file", "column"}
+        if unknown or "file" not in kwargs:
+            raise SignalError(f"bad signal {spec!r}: write csv(file=PATH, column=NAME)")
+        path = kwargs["file"]
+        if base_dir and not os.path.isabs(path) and not os.path.exists(path):
+            path = os.path.join(base_dir, path)
+        col = kwargs.get("column", "V")
+        ds = read_csv(path, required=("t", col))
+        return PiecewiseLinear(ds.t, ds.columns[col], label=f"csv({kwargs['file']}:{col})")
+    if kind not in _FACTORIES:
+        raise SignalError(f"unknown signal kind '{kind}' in {spec!r}; "
+                          f"known: {', '.join(list(_FACTORIES) + ['pwl', 'csv'])}")
+    factory = _FACTORIES[kind]
+    names = list(inspect.signature(factory).parameters)
+    try:
+        args = {k: float(v) for k, v in kwargs.items()}
+    except ValueError:
+        raise SignalError(f"bad signal {spec!r}: values must be numbers") from None
+    unknown = set(args) - set(names)
+    if unknown:
+        raise SignalError(f"bad signal {spec!r}: {kind} takes {', '.join(names)}; not {', '.join(sorted(unknown))}")
+    return factory(**args)
