@@ -13,12 +13,12 @@ from .graph import Component, Model
 from .memory import MemoryOperator
 from .parameters import Parameter
 from .signals import Chirp, Constant, PiecewiseLinear, Ramp, Signal, Sine, Step, Triangle
-from .simulate import SimResult, Simulator, simulate
+from .simulate import Experiment, SimResult, Simulator, simulate
 
 __all__ = [
     "Causality", "assign_causality", "C", "CField", "GY", "I", "J0", "J1", "R", "Se", "Sf", "TF",
     "Equations", "derive", "BondGraphError", "CausalityError", "DataError", "ModelError",
     "ParameterError", "SignalError", "UsageError", "Component", "Model", "MemoryOperator",
     "Parameter", "Chirp", "Constant", "PiecewiseLinear", "Ramp", "Signal", "Sine", "Step",
-    "Triangle", "SimResult", "Simulator", "simulate",
+    "Triangle", "Experiment", "SimResult", "Simulator", "simulate",
 ]

@@ -38,7 +38,7 @@ def _create_temp(directory: str, base: str) -> tuple[int, str]:
     """
     flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
     for _ in range(100):
-        tmp = os.path.join(directory, f".{base}.{secrets.token_hex(4)}.tmp")
+        tmp = os.path.join(directory, f".{base[:100]}.{secrets.token_hex(4)}.tmp")
         try:
             return os.open(tmp, flags, 0o666), tmp
         except FileExistsError:
@@ -104,8 +104,16 @@ def atomic_write(
             raise
         with f:
             yield f
-            f.flush()
-            os.fsync(f.fileno())
+            still_open = not f.closed
+            if still_open:
+                f.flush()
+                os.fsync(f.fileno())
+        if not still_open:  # the block closed the file itself: sync through a new descriptor
+            sync_fd = os.open(tmp, os.O_RDWR)
+            try:
+                os.fsync(sync_fd)
+            finally:
+                os.close(sync_fd)
         try:
             os.chmod(tmp, stat.S_IMODE(os.stat(target).st_mode))
         except OSError:

@@ -194,13 +194,13 @@ def assign_causality(model: Model) -> Causality:
 
 
 def _source_conflict(model: Model, a: _Assigner, source: str) -> str:
-    """Explain a source conflict: name the source and the junction or source it fights."""
+    """Explain a source conflict: name the source, its junction and the rival sources there."""
     k, end = a.incident[source][0]
     other = a.other(k, end)[0]
-    rivals = [n for n in model.elements
-              if isinstance(model.elements[n], (Se, Sf)) and n != source and a.incident[n][0][0] in a.setter]
+    rivals = sorted({a.other(kk, e)[0] for kk, e in a.incident[other]} - {source, other})
+    rivals = [r for r in rivals if isinstance(model.elements[r], (Se, Sf))]
     elem = model.elements[source]
     what = "effort" if isinstance(elem, Se) else "flow"
-    return (f"{model.name}: causal conflict: {elem.kind} '{source}' cannot impose its {what} at '{other}'"
-            + (f" (already imposed by {', '.join(repr(r) for r in rivals)})" if rivals else "")
-            + "; two sources fix the same variable; remove one or put an R or C/I between them")
+    also = f" (so does {', '.join(repr(r) for r in rivals)})" if rivals else ""
+    return (f"{model.name}: causal conflict: {elem.kind} '{source}' imposes the {what} at '{other}'{also}; "
+            f"two sources fix the same variable: remove one or put an R, C or I between them")

@@ -159,44 +159,9 @@ def generate_source(eqs: Equations, with_jacobian: bool = False) -> str:
         commits.append(f"    op{j}_commit(out[{j}], mem[{a}:{b}], th[{c}:{d}])")
     lines += function("commit", opins, commits)
     if with_jacobian:
-        lines += function("jac", jacobian_entries(eqs))
+        xs = eqs.state_symbols
+        lines += function("jac", list(eqs.jacobian([eqs.rates[s] for s in xs], xs)))
     return "\n".join(lines) + "\n"
-
-
-def jacobian_entries(eqs: Equations) -> list[sp.Expr]:
-    """Row-major entries of ∂(dx/dt)/∂x by forward differentiation of the program.
-
-    Operator outputs are treated as frozen (their memory holds within a step), which is the
-    Jacobian of the right-hand side the integrator actually sees up to the operator slope;
-    the slope ∂H/∂v is included through the operator's input expression derivative times
-    zero, i.e. operators are linearised as constants (adequate for a Newton iteration)."""
-    xs = eqs.state_symbols
-    grad: dict = {}
-    for st in eqs.program:
-        if st.op is not None:
-            continue
-        g: dict = {}
-        for s in st.expr.free_symbols:
-            if s in grad:
-                d = sp.diff(st.expr, s)
-                for x, dx in grad[s].items():
-                    g[x] = g.get(x, 0) + d * dx
-            elif s in xs:
-                g[s] = g.get(s, 0) + sp.diff(st.expr, s)
-        grad[st.var] = g
-    entries = []
-    for x_i in xs:
-        r = eqs.rates[x_i]
-        row: dict = {}
-        for s in r.free_symbols:
-            if s in grad:
-                d = sp.diff(r, s)
-                for x, dx in grad[s].items():
-                    row[x] = row.get(x, 0) + d * dx
-            elif s in xs:
-                row[s] = row.get(s, 0) + sp.diff(r, s)
-        entries += [row.get(x_j, sp.Integer(0)) for x_j in xs]
-    return entries
 
 
 @dataclass

@@ -93,6 +93,38 @@ class Equations:
     def operator_inputs(self) -> dict[sp.Symbol, sp.Expr]:
         return self.substituted({st.var: st.expr for st in self.program if st.op is not None})
 
+    def jacobian(self, roots: list[sp.Expr], wrt: list[sp.Symbol], op_gains: dict | None = None) -> sp.Matrix:
+        """∂roots/∂wrt by forward differentiation through the program (sparse, linear cost).
+
+        An operator output h = H[v] gets slope ``op_gains[h]`` (0 if not given: frozen memory)."""
+        wrt_set = set(wrt)
+        grad: dict = {}
+        for st in self.program:
+            g = _grad(st.expr, grad, wrt_set)
+            if st.op is not None:
+                gain = (op_gains or {}).get(st.var, 0)
+                g = {s: gain * d for s, d in g.items()} if gain else {}
+            grad[st.var] = g
+        rows = []
+        for r in roots:
+            g = _grad(r, grad, wrt_set)
+            rows.append([g.get(w, sp.Integer(0)) for w in wrt])
+        return sp.Matrix(rows) if rows else sp.zeros(0, len(wrt))
+
+
+def _grad(expr: sp.Expr, grad: dict, wrt_set: set) -> dict:
+    g: dict = {}
+    for s in expr.free_symbols:
+        if s in grad:
+            if not grad[s]:
+                continue
+            d = sp.diff(expr, s)
+            for w, dw in grad[s].items():
+                g[w] = g.get(w, 0) + d * dw
+        elif s in wrt_set:
+            g[s] = g.get(s, 0) + sp.diff(expr, s)
+    return g
+
 
 def derive(model: Model, causality: Causality | None = None) -> Equations:
     """Derive the state equations of ``model`` (assigning causality first if needed)."""

@@ -164,6 +164,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
         if t + h >= t_stop:
             h = t_stop - t
             hit = True
+        t_left = np.nextafter(t_stop, -np.inf)
         # stages
         for s in range(1, ns):
             for i in range(n):
@@ -172,6 +173,8 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
                     acc += A[s, j] * K[j, i]
                 xs[i] = x[i] + h * acc
             ts = t + C[s] * h
+            if hit and ts >= t_stop:
+                ts = t_left  # inputs jump at a breakpoint: the step sees their left limit
             eval_inputs(ts, skind, spar, soff, slen, stt, stv, u, du)
             rhs(ts, xs, u, du, th, mem, K[s])
         for i in range(n):
@@ -180,8 +183,9 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
                 acc += B[j] * K[j, i]
             xn[i] = x[i] + h * acc
         t_new = t_stop if hit else t + h
-        eval_inputs(t_new, skind, spar, soff, slen, stt, stv, u, du)
-        rhs(t_new, xn, u, du, th, mem, K[ns])
+        t_eval = t_left if hit else t_new
+        eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, u, du)
+        rhs(t_eval, xn, u, du, th, mem, K[ns])
         n_rhs += ns
         _weights(x, xn, peak, atol, rtol, w)
         en = 0.0
@@ -211,8 +215,8 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             eval_inputs(t, skind, spar, soff, slen, stt, stv, u, du)
             opin(t, x, u, du, th, mem, v0)
             reversal = -1.0
-            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, u, du)
-            opin(t_new, xn, u, du, th, mem, v1)
+            eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, u, du)
+            opin(t_eval, xn, u, du, th, mem, v1)
             for c in range(1, _N_CHECK + 1):
                 theta = c / (_N_CHECK + 1.0)
                 _dense(x, K, h, theta, P, xd)
@@ -239,9 +243,14 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             X[k_out, :] = xd
             Y[k_out, :ny] = y[:ny]
             k_out += 1
-        eval_inputs(t_new, skind, spar, soff, slen, stt, stv, u, du)
         if nv:
+            if hit:  # follow the input up to the jump, then across it
+                eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, u, du)
+                commit(t_eval, xn, u, du, th, mem, v1)
+            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, u, du)
             commit(t_new, xn, u, du, th, mem, v1)
+        else:
+            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, u, du)
         for i in range(n):
             x[i] = xn[i]
             if abs(xn[i]) > peak[i]:

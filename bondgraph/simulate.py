@@ -28,6 +28,26 @@ class SimulationError(BondGraphError, RuntimeError):
     """The integrator failed (step-size underflow, non-finite state, too many steps)."""
 
 
+@dataclass(frozen=True)
+class Experiment:
+    """A model file's default simulation (like Modelica's ``experiment`` annotation):
+    end time and output step (s), input signals, integration method and tolerance."""
+
+    t_end: float = 1.0
+    dt: float = 1e-3
+    inputs: Mapping[str, Signal] = field(default_factory=dict)
+    method: str = "auto"
+    rtol: float = 1e-6
+
+    def times(self, t_end: float | None = None, dt: float | None = None) -> np.ndarray:
+        t_end = self.t_end if t_end is None else t_end
+        dt = self.dt if dt is None else dt
+        if not (t_end > 0 and dt > 0) or t_end / dt > 5e7:
+            raise SignalError(f"need t_end > 0 and 0 < dt with at most 5e7 samples (got t_end={t_end}, dt={dt})")
+        n = int(round(t_end / dt))
+        return np.linspace(0.0, n * dt, n + 1)
+
+
 @dataclass
 class SimResult:
     """Sampled simulation result: ``t`` (s), inputs, outputs and states by name."""
@@ -99,8 +119,11 @@ class Simulator:
     # ---- running -----------------------------------------------------------------------------
     def run(self, t, inputs: Mapping[str, Signal] | None = None, params: Mapping | None = None,
             x0=None, method: str = "auto", rtol: float = 1e-6, atol=0.0, max_step: float = np.inf,
-            max_steps: int = 50_000_000) -> SimResult:
-        """Simulate and sample at times ``t`` (increasing array, or a scalar end time → 1001 samples)."""
+            max_steps: int = 50_000_000, progress=None) -> SimResult:
+        """Simulate and sample at times ``t`` (increasing array, or a scalar end time → 1001 samples).
+
+        ``params`` maps parameter names to values; ``progress(fraction)`` is called between
+        chunks of long runs."""
         t = np.asarray(t, float)
         if t.ndim == 0:
             t = np.linspace(0.0, float(t), 1001)
@@ -119,17 +142,26 @@ class Simulator:
         X = np.zeros((t.size, n))
         Y = np.zeros((t.size, len(self.output_names)))
         stats = np.zeros(4, np.int64)
-        breaks = np.array([b for b in bank.breaks if t[0] < b < t[-1]], float)
-        if method == "dopri5":
-            c = self.compiled
-            status = dopri5(c.rhs, c.output, c.opin, c.commit, x, th, mem, len(self.eqs.operators),
-                            *bank.args(), t, breaks, float(rtol), atol_v, 0.0, float(max_step),
-                            int(max_steps), X, Y, stats)
-            if status != 0:
-                raise SimulationError(f"integration failed ({STATUS[int(status)]}) near t = "
-                                      f"{_last_time(t, X):.6g} s; check parameters or try --method radau")
-        else:
-            self._run_scipy(method, t, x, th, mem, bank, breaks, rtol, atol_v, max_step, X, Y, stats)
+        n_chunks = 1 if progress is None else int(min(50, max(1, t.size // 20000)))
+        bounds = np.linspace(0, t.size - 1, n_chunks + 1).round().astype(int)
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            tc = t[a:b + 1]
+            breaks = np.array([br for br in bank.breaks if tc[0] < br < tc[-1]], float)
+            Xc, Yc, st = X[a:b + 1], Y[a:b + 1], np.zeros(4, np.int64)
+            if method == "dopri5":
+                c = self.compiled
+                status = dopri5(c.rhs, c.output, c.opin, c.commit, x, th, mem, len(self.eqs.operators),
+                                *bank.args(), np.ascontiguousarray(tc), breaks, float(rtol), atol_v, 0.0,
+                                float(max_step), int(max_steps), Xc, Yc, st)
+                if status != 0:
+                    raise SimulationError(f"integration failed ({STATUS[int(status)]}) near t = "
+                                          f"{_last_time(tc, Xc):.6g} s; check parameters or try --method radau")
+            else:
+                self._run_scipy(method, tc, x, th, mem, bank, breaks, rtol, atol_v, max_step, Xc, Yc, st)
+            stats += st
+            x = np.ascontiguousarray(Xc[-1])
+            if progress is not None:
+                progress(b / (t.size - 1))
         U = bank.sample(t)
         ins = {n: U[:, i] for i, n in enumerate(self.input_names)}
         return SimResult(t, ins, {n: Y[:, i] for i, n in enumerate(self.output_names)},
