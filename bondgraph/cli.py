@@ -111,7 +111,7 @@ def _causality(args):
 def _simulate(args):
     from .data import write_csv
     from .signals import parse_signal
-    from .simulate import Simulator
+    from .simulate import ATOL_FLOOR, Simulator
 
     lm = _load(args)
     exp = lm.experiment
@@ -125,7 +125,7 @@ def _simulate(args):
     started = time.time()
     sim = Simulator(lm.model)
     res = sim.run(t, inputs, method=args.method or exp.method, rtol=args.rtol or exp.rtol,
-                  atol=args.atol or 0.0, progress=_progress("simulating") if not args.quiet else None)
+                  atol=args.atol or ATOL_FLOOR, progress=_progress("simulating") if not args.quiet else None)
     meta = {"model": str(args.model), "method": res.stats["method"], "rtol": str(args.rtol or exp.rtol)}
     for name, sig in inputs.items():
         meta[f"input {name}"] = str(sig)
@@ -232,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("--dt", type=float, help="output sample interval (s)")
             p.add_argument("--method", choices=("auto", "dopri5", "radau", "bdf", "lsoda"))
             p.add_argument("--rtol", type=float, help="relative tolerance (default 1e-6)")
-            p.add_argument("--atol", type=float, help="absolute tolerance floor (default: relative to the peak)")
+            p.add_argument("--atol", type=float, help="absolute tolerance floor (default 1e-20; the error is otherwise relative to each state's peak)")
             p.add_argument("--out", metavar="FILE.csv", help="write the result CSV (default: stdout)")
             p.add_argument("--plot", metavar="FILE.png", help="plot inputs and outputs (needs matplotlib)")
             p.add_argument("--states", action="store_true", help="include the states in the CSV")

@@ -11,9 +11,10 @@ File format (see ``CONTRACT.md``, "Measured data (CSV)")::
 
 * UTF-8 (a byte-order mark is tolerated), LF or CRLF line endings, comma-separated.
 * Lines whose first non-blank character is ``#`` are comments, before or between rows.  A
-  comment of the form ``# key: value`` (key: a letter or ``_`` then letters, digits, spaces
-  and ``_ . - / ( ) [ ]``) is metadata; the value is stripped of surrounding blanks.  If a
-  key repeats, the last value wins.  Blank lines are ignored.
+  comment of the form ``# key: value`` (the key starts with a letter or ``_`` and runs to
+  the first ``:``; it holds no ``#``) is metadata, e.g. ``# param k1: 2.5e6``; key and value
+  are stripped of surrounding blanks.  If a key repeats, the last value wins.  Blank lines
+  are ignored.
 * The header names the columns; names are stripped of blanks (and of one pair of enclosing
   double quotes).  ``t`` is time in seconds, strictly increasing; ``V`` drive voltage (V);
   ``x`` displacement (m); optional ``F`` (N), ``i`` (A), ``q`` (C); other columns are kept.
@@ -73,8 +74,11 @@ _NUMBER = re.compile(
     r"[ \t]*[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|inf(?:inity)?|nan)[ \t]*",
     re.IGNORECASE | re.ASCII,
 )
-_META = re.compile(r"#\s*([A-Za-z_][\w .\-/()\[\]]*?)\s*:(.*)")
-_META_KEY = re.compile(r"[A-Za-z_](?:[\w .\-/()\[\]]*[\w.\-/()\[\]])?")
+# "# key: value": the key starts with a letter or "_" and runs to the first ":" (no "#").
+_META = re.compile(r"#\s*([^\W\d][^:#]*?)\s*:(.*)")
+_META_KEY = re.compile(r"[^\W\d](?:[^:#\n\r]*[^:#\s])?")
+
+_LINE_BREAKS = re.compile(r"\s*[\r\n]+\s*")
 
 _CHUNK_ROWS = 65536
 
@@ -247,7 +251,9 @@ class Dataset:
         """Split in time into (fit, validation): the first part covers the first
         ``fraction`` of the time span, the second the rest.  No sample is in both."""
         if not (isinstance(fraction, (int, float)) and 0.0 < fraction < 1.0):
-            raise UsageError(f"split fraction must be between 0 and 1 (exclusive), not {fraction!r}")
+            raise UsageError(
+                f"split fraction must be between 0 and 1 (exclusive), not {fraction!r}"
+            )
         t_split = self.t[0] + fraction * (self.t[-1] - self.t[0])
         k = int(np.searchsorted(self.t, t_split, "left"))
         if k < 2 or len(self) - k < 2:
@@ -385,7 +391,8 @@ def check_units(ds: Dataset, stacklevel: int = 1) -> list[str]:
         step = ds.dt
         if step >= 1.0 and ds.duration >= T_SPAN_SUSPICIOUS:
             messages.append(
-                f"{where}: time step {step:g} s over {ds.duration:g} s ({ds.duration / 3600:.3g} h) "
+                f"{where}: time step {step:g} s over {ds.duration:g} s "
+                f"({ds.duration / 3600:.3g} h) "
                 f"looks like 't' is in milliseconds or sample numbers, not seconds: if so scale "
                 f"it by 1e-3 (ms); ignore this for long slow records such as creep tests"
             )
@@ -483,7 +490,8 @@ def _parse_header(src: str, line: str, lineno: int, last_comment) -> list[str]:
         if not n:
             fix = "remove the trailing comma" if j == len(names) - 1 else "name every column"
             raise DataError(
-                f"{src}:{lineno}: column {j + 1} of the header {_q(line.strip())} has no name; {fix}"
+                f"{src}:{lineno}: column {j + 1} of the header {_q(line.strip())} has no name; "
+                f"{fix}"
             )
     seen: dict[str, int] = {}
     for j, n in enumerate(names):
@@ -726,9 +734,10 @@ def read_csv(
     if not increasing.all():
         i = int(np.argmin(increasing))
         a_, b_ = line_of(i), line_of(i + 1)
+        jt = keep[names.index("t")]
         raise DataError(
-            f"{src}:{b_}: time not strictly increasing: t = {cell_text(i + 1, keep[names.index('t')])} "
-            f"at line {b_} follows t = {cell_text(i, keep[names.index('t')])} at line {a_}; "
+            f"{src}:{b_}: time not strictly increasing: t = {cell_text(i + 1, jt)} "
+            f"at line {b_} follows t = {cell_text(i, jt)} at line {a_}; "
             f"sort the rows by time and remove repeated samples"
         )
     columns = {
@@ -765,8 +774,9 @@ def write_csv(
 ) -> None:
     """Write a CSV file that :func:`read_csv` reads back identically, atomically.
 
-    Layout: one ``# key: value`` line per metadata item (values converted with ``str`` and
-    stripped of surrounding blanks), the header ``t,<columns...>``, then one row per sample
+    Layout: one ``# key: value`` line per metadata item (values converted with ``str``,
+    line breaks replaced by a blank, stripped of surrounding blanks), the header
+    ``t,<columns...>``, then one row per sample
     with every number written by ``repr`` (shortest exact round-trip text).  The data are
     validated like a :class:`Dataset` (finite, ``t`` strictly increasing, equal lengths), so
     a file is never written that :func:`read_csv` would refuse.  Written via
@@ -783,13 +793,11 @@ def write_csv(
     for key, value in dict(metadata or {}).items():
         if not isinstance(key, str) or not _META_KEY.fullmatch(key):
             raise DataError(
-                f"{dst}: metadata key {key!r} cannot be written: keys start with a letter or '_' "
-                f"and hold letters, digits, spaces and _ . - / ( ) [ ]"
+                f"{dst}: metadata key {key!r} cannot be written: keys start with a letter or '_', "
+                f"hold no ':', '#' or line break, and do not end with a blank"
             )
-        value = str(value)
-        if "\n" in value or "\r" in value:
-            raise DataError(f"{dst}: metadata value for {key!r} must be a single line")
-        meta_lines.append(f"# {key}: {value.strip()}\n")
+        value = _LINE_BREAKS.sub(" ", str(value)).strip()
+        meta_lines.append(f"# {key}: {value}\n")
     ds = Dataset(t, columns, {}, dst)
     table = np.column_stack([ds.t, *ds.columns.values()])
     nrow, ncol = table.shape

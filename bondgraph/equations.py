@@ -400,21 +400,29 @@ class _Deriver:
         return g
 
     def _solve_loops(self):
+        """Solve each algebraic loop by tearing: pick a few tear variables that break every
+        cycle, express the loop's other variables through them in causal order, and solve
+        the small linear system of the tear residuals.  Only the tear variables get new
+        assignments; the rest keep theirs, so the program stays compact (a star of N
+        parallel resistors needs one tear variable and an O(N) expression)."""
         g = self._graph()
         for comp in nx.strongly_connected_components(g):
             if len(comp) == 1:
                 v = next(iter(comp))
                 if not g.has_edge(v, v):
                     continue
+            names = sorted({self.origin[v] for v in comp})
             if any(v in self.ops for v in comp):
-                names = sorted({self.origin[v] for v in comp})
                 raise CausalityError(f"{self.m.name}: algebraic loop through a memory operator "
                                      f"({', '.join(names)}); add a storage element in the loop")
-            unknowns = sorted(comp, key=str)
-            eqs = [u - self.assign[u] for u in unknowns]
-            names = sorted({self.origin[v] for v in comp})
+            tears = _tear_set(g.subgraph(comp))
+            rest = nx.DiGraph(g.subgraph(comp - set(tears)))
+            sub: dict = {}
+            for v in nx.topological_sort(rest):
+                sub[v] = self.assign[v].xreplace(sub)
+            eqs = [t - self.assign[t].xreplace(sub) for t in tears]
             try:
-                A, b = sp.linear_eq_to_matrix(eqs, unknowns)
+                A, b = sp.linear_eq_to_matrix(eqs, tears)
             except (ValueError, sp.PolynomialError):
                 raise CausalityError(f"{self.m.name}: nonlinear algebraic loop through {', '.join(names)}; "
                                      f"add a storage element (small C or I) to break it") from None
@@ -422,10 +430,10 @@ class _Deriver:
                 sol = _solve_linear(A, b)
             except ZeroDivisionError:
                 raise CausalityError(f"{self.m.name}: singular algebraic loop through {', '.join(names)}") from None
-            for u, s in zip(unknowns, sol):
-                self.assign[u] = s
-            self.loops.append(f"algebraic loop through {', '.join(names)} "
-                              f"({len(unknowns)} variables) solved symbolically")
+            for t, val in zip(tears, sol):
+                self.assign[t] = val
+            self.loops.append(f"algebraic loop through {', '.join(names)} ({len(comp)} variables, "
+                              f"torn at {', '.join(map(str, tears))}) solved symbolically")
 
     # ---- derivative causality ----------------------------------------------------------------
     def _eliminate_dependent(self):
@@ -487,14 +495,32 @@ class _Deriver:
         return [Statement(v, self.assign[v], self.origin[v], self.ops.get(v)) for v in order]
 
 
+def _tear_set(g: nx.DiGraph) -> list[sp.Symbol]:
+    """A small set of variables whose removal leaves ``g`` acyclic (greedy feedback vertex set)."""
+    g = nx.DiGraph(g)
+    tears: list = []
+    while True:
+        cyclic = [c for c in nx.strongly_connected_components(g)
+                  if len(c) > 1 or g.has_edge(next(iter(c)), next(iter(c)))]
+        if not cyclic:
+            return sorted(tears, key=str)
+        comp = max(cyclic, key=len)
+        v = max(sorted(comp, key=str), key=lambda n: g.in_degree(n) * g.out_degree(n) + 2 * g.has_edge(n, n))
+        tears.append(v)
+        g.remove_node(v)
+
+
 def _solve_linear(A: sp.Matrix, b: sp.Matrix) -> list[sp.Expr]:
+    """Solve A·v = b symbolically; small results are put over a common denominator."""
     if A.shape[0] == 1:
         if A[0, 0] == 0:
             raise ZeroDivisionError
-        return [sp.cancel(b[0] / A[0, 0])]
-    if A.det() == 0:
-        raise ZeroDivisionError
-    return [sp.cancel(x) for x in A.LUsolve(b)]
+        sol = [b[0] / A[0, 0]]
+    else:
+        if A.det() == 0:
+            raise ZeroDivisionError
+        sol = list(A.LUsolve(b))
+    return [sp.cancel(x) if sp.count_ops(x) < 60 else x for x in sol]
 
 
 def _invert_law(law: sp.Expr, var: sp.Symbol, value: sp.Expr, name: str, kind: str) -> sp.Expr:

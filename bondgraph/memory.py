@@ -79,17 +79,18 @@ class MemoryOperator(ABC):
         parts = []
         for fname in ("output", "commit"):
             fn = getattr(type(self), fname)
-            src = textwrap.dedent(inspect.getsource(fn))
-            lines = [ln for ln in src.splitlines() if not ln.lstrip().startswith("@")]
-            src = "\n".join(lines)
+            lines = textwrap.dedent(inspect.getsource(fn)).splitlines()
+            # drop the decorators (possibly spanning several lines), keep the body verbatim
+            start = next(k for k, ln in enumerate(lines) if ln.startswith(f"def {fname}("))
+            src = "\n".join(lines[start:])
             src = src.replace(f"def {fname}(", f"def {prefix}_{fname}(", 1)
             parts.append(src)
         return "\n\n".join(parts)
 
     def run(self, v: np.ndarray, prm: np.ndarray | None = None) -> np.ndarray:
         """Apply the operator to a sampled input sequence (reference, pure Python)."""
-        prm = self.parameter_values() if prm is None else np.asarray(prm, float)
-        v = np.asarray(v, float)
+        prm = np.ascontiguousarray(self.parameter_values() if prm is None else prm, dtype=np.float64)
+        v = np.asarray(v, dtype=np.float64)
         mem = self.initial_memory(float(v[0]), prm)
         out_fn = type(self).output
         commit_fn = type(self).commit

@@ -22,6 +22,9 @@ from .signals import Constant, Signal, SignalBank, eval_inputs
 
 METHODS = ("auto", "dopri5", "radau", "bdf", "lsoda")
 _EXPLICIT_STEP_LIMIT = 3e6
+#: default absolute error floor: states start at exactly zero, where a purely relative error
+#: test would chase rounding noise; 1e-20 is far below any SI state magnitude of interest
+ATOL_FLOOR = 1e-20
 
 
 class SimulationError(BondGraphError, RuntimeError):
@@ -118,7 +121,7 @@ class Simulator:
 
     # ---- running -----------------------------------------------------------------------------
     def run(self, t, inputs: Mapping[str, Signal] | None = None, params: Mapping | None = None,
-            x0=None, method: str = "auto", rtol: float = 1e-6, atol=0.0, max_step: float = np.inf,
+            x0=None, method: str = "auto", rtol: float = 1e-6, atol=ATOL_FLOOR, max_step: float = np.inf,
             max_steps: int = 50_000_000, progress=None) -> SimResult:
         """Simulate and sample at times ``t`` (increasing array, or a scalar end time → 1001 samples).
 
