@@ -10,6 +10,7 @@ from .equations import Equations, derive
 from .errors import (BondGraphError, CausalityError, DataError, ModelError, ParameterError,
                      SignalError, UsageError)
 from .graph import Component, Model, Quantity
+from .linearize import LinearModel, linearize
 from .memory import MemoryOperator
 from .parameters import Parameter
 from .signals import Chirp, Constant, PiecewiseLinear, Ramp, Signal, Sine, Step, Triangle
@@ -18,7 +19,7 @@ from .simulate import Experiment, SimResult, Simulator, simulate
 __all__ = [
     "Causality", "assign_causality", "C", "CField", "GY", "I", "J0", "J1", "R", "Se", "Sf", "TF",
     "Equations", "derive", "BondGraphError", "CausalityError", "DataError", "ModelError",
-    "ParameterError", "SignalError", "UsageError", "Component", "Model", "Quantity", "MemoryOperator",
+    "ParameterError", "SignalError", "UsageError", "Component", "Model", "Quantity", "LinearModel", "linearize", "MemoryOperator",
     "Parameter", "Chirp", "Constant", "PiecewiseLinear", "Ramp", "Signal", "Sine", "Step",
     "Triangle", "Experiment", "SimResult", "Simulator", "simulate",
 ]

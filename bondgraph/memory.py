@@ -89,7 +89,8 @@ class MemoryOperator(ABC):
 
     def run(self, v: np.ndarray, prm: np.ndarray | None = None) -> np.ndarray:
         """Apply the operator to a sampled input sequence (reference, pure Python)."""
-        prm = np.ascontiguousarray(self.parameter_values() if prm is None else prm, dtype=np.float64)
+        prm = self.parameter_values() if prm is None else prm
+        prm = np.ascontiguousarray(prm, dtype=np.float64)
         v = np.asarray(v, dtype=np.float64)
         mem = self.initial_memory(float(v[0]), prm)
         out_fn = type(self).output

@@ -223,8 +223,7 @@ class Simulator:
             return self.jacobian_at(tt, np.ascontiguousarray(xx), th, mem, bank)
 
         solver_cls = {"radau": si.Radau, "bdf": si.BDF, "lsoda": si.LSODA}[method]
-        if not np.any(atol_v > 0):
-            atol_v = self._scale_atol(solver_cls, f, jac, t, x, rtol, breaks)
+        atol_v = np.maximum(atol_v, self._scale_atol(solver_cls, f, t, x, rtol, breaks))
         edges = [t[0], *breaks, t[-1]]
         k = 0
 
@@ -258,20 +257,21 @@ class Simulator:
             x = np.ascontiguousarray(s.y)
             stats[2] += s.nfev
 
-    def _scale_atol(self, solver_cls, f, jac, t, x, rtol, breaks):
-        """atol_i = rtol·max|x_i| from a loose first pass (SI magnitudes differ by decades)."""
+    def _scale_atol(self, solver_cls, f, t, x, rtol, breaks):
+        """atol_i = rtol·max|x_i| from a loose first pass (scipy's solvers weigh errors by
+        atol + rtol·|x|, which chases rounding noise when a state crosses zero)."""
         peak = np.abs(x).copy()
         edges = [t[0], *breaks, t[-1]]
         xx = x.copy()
         for a, b in zip(edges[:-1], edges[1:]):
-            s = solver_cls(f, a, xx, b, rtol=1e-3, atol=1e-30 + 1e-12 * np.abs(xx))
+            s = solver_cls(f, a, xx, b, rtol=1e-3, atol=ATOL_FLOOR)
             while s.status == "running":
                 s.step()
                 if s.status == "failed":
                     break
                 peak = np.maximum(peak, np.abs(s.y))
             xx = s.y
-        return np.maximum(rtol * peak, 1e-300)
+        return np.maximum(rtol * peak, ATOL_FLOOR)
 
 
 def _last_time(t, X):

@@ -1,0 +1,1 @@
+"""Component library: numerical models of piezoelectric actuators."""
