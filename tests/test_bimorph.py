@@ -1,0 +1,268 @@
+"""Bimorph modal bond graphs (library.bimorph) and the model files of seeds 000 and 001.
+
+(a) seed 000: Table 2 natural frequencies and the 0.737 L minimum-phase boundary, through
+    ``bondgraph linearize --json``;
+(b) seed 001: time-domain steady state of the nonlinear single-mode model against the
+    multiple-scales amplitude equation (eq. 54), and the softening peak drift;
+(c) every CLI command on both model files.
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import bondgraph as bg
+from bondgraph.cli import main
+from bondgraph.data import read_csv
+from bondgraph.linearize import linearize
+from bondgraph.modelfile import load_model
+from conftest import MODELS, ROOT
+from library.beam import T215_A4_103X, T226_H4_203X
+from library.bimorph import (ModeNonlinearity, add_bimorph_modes, amplitude_equation_peak,
+                             amplitude_equation_phase, amplitude_equation_roots, effective_tip_mass,
+                             pi_operator)
+
+T215 = str(MODELS / "bimorph_t215.py")
+T226 = str(MODELS / "bimorph_t226.py")
+
+
+def cli(capsys, *argv: str) -> str:
+    """Run the CLI in-process; return stdout (exit status must be 0)."""
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    assert code == 0, f"bondgraph {' '.join(argv)} exited {code}: {err}"
+    return out
+
+
+def cli_json(capsys, *argv: str) -> dict:
+    return json.loads(cli(capsys, *argv))
+
+
+# ---- (a) seed 000: Table 2 and the non-minimum-phase boundary ------------------------------------
+def test_table2_natural_frequencies_from_the_console_script():
+    """`bondgraph linearize models/bimorph_t215.py --set modes=3 --json`: Table 2 within 0.5 %."""
+    run = subprocess.run([sys.executable, "-m", "bondgraph", "linearize", "models/bimorph_t215.py",
+                          "--set", "modes=3", "--json"], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    res = json.loads(run.stdout)
+    np.testing.assert_allclose(res["natural_frequencies_rad_s"], [2249.0, 14094.24, 39464.29], rtol=5e-3)
+    assert res["rhp_zeros"] == 0   # at 0.95 L the three-mode model is minimum phase too
+    assert len(res["poles"]) == 6
+
+
+@pytest.mark.parametrize("target, nmp", [(0.7, True), (0.9, False), (0.95, False)])
+def test_rhp_zeros_depend_on_the_target_point(capsys, target, nmp):
+    """Seed 000 Sec. 3.1 / 4.1: two modes, non-minimum phase at 0.7 L, minimum phase at 0.9 L, 0.95 L."""
+    res = cli_json(capsys, "linearize", T215, "--set", f"target={target}", "--json")
+    assert len(res["natural_frequencies_rad_s"]) == 2
+    if nmp:
+        assert res["rhp_zeros"] >= 1
+    else:
+        assert res["rhp_zeros"] == 0
+        assert len(res["zeros"]) == 2   # the LHP pair that the paper's Fig. 13 shows
+
+
+def test_minimum_phase_boundary_by_bisection(capsys):
+    """The RHP zero disappears at l_t = 0.737 L (seed 000 Fig. 8); 8 bisection steps on target."""
+    def nmp(target):
+        return cli_json(capsys, "linearize", T215, "--set", f"target={target!r}", "--json")["rhp_zeros"] > 0
+
+    lo, hi = 0.70, 0.80
+    assert nmp(lo) and not nmp(hi)
+    for _ in range(8):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if nmp(mid) else (lo, mid)
+    assert abs(0.5 * (lo + hi) - 0.737) < 0.005
+    # and the same boundary from the sign of a1 = 1 + mp2 phi2(lt) / (mp1 phi1(lt)) (seed 000 eq. 38)
+    modes = T215_A4_103X.modes(2)
+    g = modes.input_gains
+    a1 = lambda f: 1 + g[1] * modes.shape(1, f * T215_A4_103X.L) / (g[0] * modes.shape(0, f * T215_A4_103X.L))
+    assert a1(lo) < 0 < a1(hi)
+
+
+def test_modal_bond_graph_matches_the_beam_transfer_function():
+    """The assembled graph (gains, signs, output) reproduces library.beam's w(l_t)/V exactly."""
+    lm = load_model(T215, {"modes": 3, "target": 0.8})
+    lin = linearize(bg.derive(lm.model))
+    modes = T215_A4_103X.modes(3)
+    num, den = modes.transfer_function(0.8 * T215_A4_103X.L, modes.damping_ratios(1e-3, 1e-5))
+    w = np.array([100.0, 2247.4, 5000.0, 14084.2, 39436.2, 1e5])
+    np.testing.assert_allclose(lin.frequency_response(w), np.polyval(num, 1j * w) / np.polyval(den, 1j * w),
+                               rtol=1e-9)
+
+
+# ---- (b) seed 001: multiple scales versus time-domain steady state ------------------------------------
+LEVELS = (0.5, 2.0, 4.5)          # V, the paper's identification range 0.5-4.5 V
+ABOVE = (0.0, 0.01, 0.02, 0.04)   # drive frequencies omega_peak (1 + d) on the resonant branch
+CYCLES = 80                       # from the multiple-scales state the transient is gone by ~40
+PPC = 64                          # samples per cycle for the Fourier projection
+
+
+@pytest.fixture(scope="module")
+def seed001():
+    """Simulated steady states of bimorph_t226 (nonlinear=true) near resonance at three drives."""
+    lm = load_model(T226, {"nonlinear": True})
+    sim = bg.Simulator(lm.model)
+    tab = {str(k): v for k, v in lm.model.parameter_table().items()}
+    wn, z, k1, k2, mu1, mp, phi = (tab[n] for n in ("omega_1", "zeta_1", "k1", "k2", "mu1", "mp_1", "phi_1"))
+    iq, ip = sim.state_names.index("q_spring_1"), sim.state_names.index("p_mass_1")
+
+    def ms_state(V, w, a):
+        """State of q = a cos(w t - gamma) at t = 0 (multiple scales, forcing mp V cos(w t))."""
+        F = mp * V
+        g = amplitude_equation_phase(a, w, wn, z, abs(F), k1, k2, mu1)
+        x0 = np.zeros(2)
+        x0[iq], x0[ip] = np.sign(F) * a * np.cos(g), np.sign(F) * a * w * np.sin(g)
+        return x0
+
+    def run(V, w, x0, cycles=CYCLES):
+        """Simulate V cos(w t) from x0 for whole cycles; return the first-harmonic amplitude of x
+        over the last 10 cycles (m) and the final state (at drive phase 0 again)."""
+        t = np.linspace(0.0, cycles * 2 * np.pi / w, cycles * PPC + 1)
+        res = sim.run(t, {"V": bg.Sine(V, w / (2 * np.pi), phase=90.0)}, x0=x0, rtol=1e-9)
+        tt, x = t[-10 * PPC - 1:-1], res["x"][-10 * PPC - 1:-1]
+        amp = float(np.hypot(2 * np.mean(x * np.cos(w * tt)), 2 * np.mean(x * np.sin(w * tt))))
+        return amp, np.array([res.states[n][-1] for n in sim.state_names])
+
+    out = {"wn": wn, "levels": {}}
+    for V in LEVELS:
+        F = abs(mp * V)
+        w_pk, a_pk = amplitude_equation_peak(wn, z, F, k1, k2, mu1)
+        rows = []
+        for d in ABOVE:   # independent runs, each started on the multiple-scales resonant branch
+            w = w_pk * (1 + d)
+            a = amplitude_equation_roots(w, wn, z, F, k1, k2, mu1).max()
+            rows.append((w, abs(phi) * a, run(V, w, ms_state(V, w, a))[0]))
+        # slow downward sweep (each run starts from the previous end state) until the response
+        # has fallen to half its maximum: the simulated peak frequency
+        w = w_pk * 1.02
+        x = ms_state(V, w, amplitude_equation_roots(w, wn, z, F, k1, k2, mu1).max())
+        sweep = []
+        for k in range(40):
+            w = w_pk * (1.02 - 0.005 * k)
+            amp, x = run(V, w, x, cycles=60)
+            sweep.append((w, amp))
+            if amp < 0.5 * max(a for _, a in sweep):
+                break
+        out["levels"][V] = {"w_peak": w_pk, "a_peak": a_pk, "rows": rows, "sweep": sweep,
+                            "w_sim": max(sweep, key=lambda r: r[1])[0]}
+    return out
+
+
+def test_seed001_steady_state_agrees_with_multiple_scales(seed001):
+    """At and above the multiple-scales peak the simulated amplitude is within 3 % (measured <= 1.8 %).
+
+    Below the peak first-order multiple scales is less accurate: it puts the jump too high in
+    frequency and, on the lower branch, its detuning omega_n^2 - omega^2 ~ -2 sigma omega_n^2 is off by
+    O(sigma) (2-5 % at these drives), so those frequencies are not compared."""
+    for V, lev in seed001["levels"].items():
+        for w, x_ms, x_sim in lev["rows"]:
+            assert abs(x_sim / x_ms - 1) < 0.03, f"V={V} V, omega={w:.1f} rad/s: sim {x_sim:.4e} m, MS {x_ms:.4e} m"
+
+
+def test_seed001_peak_drifts_down_with_drive(seed001):
+    """Softening: the simulated peak frequency (downward sweep) falls with the drive amplitude, as
+    the multiple-scales peak does; at 0.5 V the two agree within the 0.5 % sweep step."""
+    lev = seed001["levels"]
+    w_sim = [lev[V]["w_sim"] for V in LEVELS]
+    w_ms = [lev[V]["w_peak"] for V in LEVELS]
+    assert w_ms[0] < seed001["wn"] and all(a > b for a, b in zip(w_ms, w_ms[1:]))
+    assert w_sim[0] < seed001["wn"] and all(a > b for a, b in zip(w_sim, w_sim[1:])), w_sim
+    assert abs(w_sim[0] / w_ms[0] - 1) <= 0.0051
+    for V in LEVELS:   # the sweep passed the peak: the response dropped (a jump above 0.5 V)
+        amps = [a for _, a in lev[V]["sweep"]]
+        assert amps[-1] < 0.5 * max(amps)
+
+
+def test_amplitude_equation_linear_limit_and_peak():
+    wn, z, F = 2637.0, 0.0085, 0.05
+    for w in (2500.0, 2637.0, 2700.0):
+        (a,) = amplitude_equation_roots(w, wn, z, F)
+        sigma = w / wn - 1
+        assert a == pytest.approx(F / (2 * wn * np.hypot(z * wn, sigma * wn)), rel=1e-9)
+    k = dict(k1=-6.94e17, k2=1.443e28, mu1=6.28e13)
+    w_pk, a_pk = amplitude_equation_peak(wn, z, F, **k)
+    grid = np.linspace(0.95 * wn, 1.0 * wn, 501)
+    best = max(amplitude_equation_roots(w, wn, z, F, **k).max() for w in grid)
+    assert best == pytest.approx(a_pk, rel=1e-4) and w_pk < wn
+    assert amplitude_equation_roots(w_pk, wn, z, F, **k).max() == pytest.approx(a_pk, rel=1e-3)
+
+
+# ---- (c) every CLI command on both model files --------------------------------------------------------
+VARIANTS = [(T215, []), (T215, ["--set", "hysteresis=pi"]), (T226, []), (T226, ["--set", "nonlinear=true"])]
+IDS = ["t215", "t215-pi", "t226", "t226-nonlinear"]
+
+
+@pytest.mark.parametrize("model, sets", VARIANTS, ids=IDS)
+def test_every_cli_command(capsys, tmp_path, model, sets):
+    out = cli(capsys, "params", model, *sets)
+    for name in ("omega_1", "zeta_1", "mp_1", "phi_1", "target"):
+        assert name in out
+    for fmt in ("text", "latex", "markdown"):
+        text = cli(capsys, "equations", model, *sets, "--format", fmt)
+        assert "omega" in text and "mp" in text and "phi" in text
+    assert "bond" in cli(capsys, "causality", model, *sets)
+    csv = tmp_path / "run.csv"
+    cli(capsys, "simulate", model, *sets, "--out", str(csv), "--quiet")
+    ds = read_csv(str(csv))
+    assert {"V", "x"} <= set(ds.columns) and ds.t.size > 1000
+    assert np.all(np.isfinite(ds.columns["x"])) and np.abs(ds.columns["x"]).max() > 1e-7
+    res = cli_json(capsys, "linearize", model, *sets, "--json")
+    assert res["input"] == "V" and res["output"] == "x" and res["natural_frequencies_rad_s"]
+    assert {"poles", "zeros", "rhp_zeros"} <= set(res)
+
+
+def test_model_parameters_and_options(capsys):
+    assert "2637" in cli(capsys, "params", T226)
+    comp = cli_json(capsys, "linearize", T226, "--set", "frequency=computed", "--json")
+    assert comp["natural_frequencies_rad_s"][0] == pytest.approx(2915.5, rel=1e-4)   # REFERENCE §3
+    meas = cli_json(capsys, "linearize", T226, "--json")
+    assert meas["natural_frequencies_rad_s"][0] == pytest.approx(2637.0, rel=1e-9)
+    assert meas["damping_ratios"][0] == pytest.approx(0.0085, rel=1e-9)
+    # nonlinear terms are parameters only when switched on; unknown names are usage errors
+    assert "mu1" in cli(capsys, "params", T226, "--set", "nonlinear=true")
+    assert main(["params", T226, "--set", "k1=1"]) == 2
+    assert "unknown parameter 'k1'" in capsys.readouterr().err
+    assert main(["params", T215, "--set", "hysteresis=bouc"]) == 2
+    assert "none, pi" in capsys.readouterr().err
+
+
+def test_pi_hysteresis_is_the_identity_at_small_drive(tmp_path, capsys):
+    """H[V] has slope 1 below the first nonzero threshold (10 V): the 0.3 V chirp is unchanged."""
+    paths = []
+    for sets in ([], ["--set", "hysteresis=pi"]):
+        paths.append(tmp_path / f"run{len(paths)}.csv")
+        cli(capsys, "simulate", T215, *sets, "--t-end", "0.05", "--out", str(paths[-1]), "--quiet")
+    x0, x1 = (read_csv(str(p)).columns["x"] for p in paths)
+    assert np.max(np.abs(x1 - x0)) < 1e-4 * np.max(np.abs(x0))
+
+
+def test_pi_operator_is_loaded_lazily(monkeypatch):
+    monkeypatch.setitem(sys.modules, "library.hysteresis", None)
+    with pytest.raises(bg.ModelError, match="hysteresis"):
+        pi_operator([0.0, 1.0], [1.0, 0.1])
+
+
+# ---- library details -------------------------------------------------------------------------------------
+def test_per_mode_nonlinearity_and_parameters():
+    m = bg.Model("two")
+    info = add_bimorph_modes(m, T226_H4_203X, 2, 1.0, alpha=1e-3, beta=1e-5,
+                             nonlinear={2: ModeNonlinearity(k1=-1e17, mu1=1e13)})
+    assert {"k1_2", "k2_2", "mu1_2"} <= set(m.parameters) and "k1_1" not in m.parameters
+    rates = bg.derive(m).state_equations()
+    p2 = [s for s in rates if str(s) == "p_mass_2"][0]
+    text = str(rates[p2])
+    assert "k1_2" in text and "mu1_2" in text and "k1_1" not in str(rates)
+    assert info.values["omega_1"] == pytest.approx(T226_H4_203X.modes(1).omegas[0])
+    with pytest.raises(bg.ModelError):
+        add_bimorph_modes(bg.Model("bad"), T226_H4_203X, 1, 1.5)
+
+
+def test_effective_tip_mass():
+    m = T226_H4_203X.mass
+    assert effective_tip_mass(T226_H4_203X) == pytest.approx(33 / 140 * m, rel=1e-9)   # seed 003
+    assert effective_tip_mass(T226_H4_203X, mode=1) == pytest.approx(m / 4, rel=1e-6)  # 1/phi_1(L)^2
