@@ -124,9 +124,10 @@ def _simulate(args):
     t = exp.times(args.t_end, args.dt)
     started = time.time()
     sim = Simulator(lm.model)
-    res = sim.run(t, inputs, method=args.method or exp.method, rtol=args.rtol or exp.rtol,
-                  atol=args.atol or ATOL_FLOOR, progress=_progress("simulating") if not args.quiet else None)
-    meta = {"model": str(args.model), "method": res.stats["method"], "rtol": str(args.rtol or exp.rtol)}
+    rtol = exp.rtol if args.rtol is None else args.rtol
+    res = sim.run(t, inputs, method=args.method or exp.method, rtol=rtol,
+                  atol=ATOL_FLOOR if args.atol is None else args.atol, progress=_progress("simulating") if not args.quiet else None)
+    meta = {"model": str(args.model), "method": res.stats["method"], "rtol": str(rtol)}
     for name, sig in inputs.items():
         meta[f"input {name}"] = str(sig)
     for name, value in lm.model.values.items():
@@ -253,8 +254,8 @@ def main(argv: list[str] | None = None) -> int:
         parser = build_parser()
         args = parser.parse_args(argv)
         if not args.command:
-            parser.print_help()
-            return 2
+            raise UsageError(f"no command given; choose one of {', '.join(_COMMANDS)} (see bondgraph --help)")
+        _check_numbers(args)
         with warnings.catch_warnings():
             warnings.simplefilter("default")
             warnings.showwarning = _show_warning
@@ -276,6 +277,18 @@ def main(argv: list[str] | None = None) -> int:
         print(f"bondgraph: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)",
               file=sys.stderr)
         return 1
+
+
+def _check_numbers(args):
+    """Refuse nonsensical numeric options with a one-line message."""
+    import math
+    for name in ("rtol", "atol"):
+        v = getattr(args, name, None)
+        if v is None:
+            continue
+        if not math.isfinite(v) or v <= 0 or (name == "rtol" and v >= 1):
+            bound = "between 0 and 1" if name == "rtol" else "a positive number"
+            raise UsageError(f"--{name.replace('_', '-')} must be {bound}, got {v}")
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None):

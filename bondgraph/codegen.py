@@ -91,7 +91,6 @@ def layout(eqs: Equations) -> Layout:
     pindex = {p: i for i, p in enumerate(eqs.params)}
     for p, i in pindex.items():
         names[p] = f"th[{i}]"
-    names[sp.Symbol("t", real=True)] = "t"
     for k, st in enumerate(eqs.program):
         names[st.var] = f"v{k}"
     mem_slices, prm_slices, pos = [], [], 0

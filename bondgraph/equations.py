@@ -179,6 +179,9 @@ class _Deriver:
     # ---- main ------------------------------------------------------------------------------
     def run(self) -> Equations:
         m = self.m
+        # generated names never collide with the user's (parameters, inputs, states, operators)
+        self._names |= {str(s) for s in m.parameter_table()} | set(m.inputs) | set(m.internal_states) \
+            | set(m.operators)
         self.e, self.f, self.sign = {}, {}, {}
         for b in m.bonds:
             label = self._bond_label(b)
@@ -225,13 +228,13 @@ class _Deriver:
             (port, b, s), = ports
             e, f = self.e[b.index], self.f[b.index]
             if sets[port]:
-                q = sp.Symbol(f"q_{name}", real=True)
+                q = sp.Symbol(self._unique(f"q_{name}"), real=True)
                 self.states.append(State(q, "q", name, elem.q0))
                 self._set(e, elem.law.xreplace({Q: q}), name)
                 self.rates[q] = s * f
                 self.quantity_map[("q", name)] = q
             else:
-                w = sp.Symbol(f"f_in_{name}", real=True)
+                w = sp.Symbol(self._unique(f"f_in_{name}"), real=True)
                 self._set(f, s * w, name)
                 q = _invert_law(elem.law, Q, e, name, "C")
                 self.dependent.append((w, q, name))
@@ -240,13 +243,13 @@ class _Deriver:
             (port, b, s), = ports
             e, f = self.e[b.index], self.f[b.index]
             if not sets[port]:
-                p = sp.Symbol(f"p_{name}", real=True)
+                p = sp.Symbol(self._unique(f"p_{name}"), real=True)
                 self.states.append(State(p, "p", name, elem.p0))
                 self._set(f, s * elem.law.xreplace({P: p}), name)
                 self.rates[p] = e
                 self.quantity_map[("p", name)] = p
             else:
-                w = sp.Symbol(f"e_in_{name}", real=True)
+                w = sp.Symbol(self._unique(f"e_in_{name}"), real=True)
                 self._set(e, w, name)
                 p = _invert_law(elem.law, P, s * f, name, "I")
                 self.dependent.append((w, p, name))
@@ -310,7 +313,7 @@ class _Deriver:
 
     def _cfield(self, name, elem: CField, ports, sets):
         efforts = elem.efforts()
-        qsym = {pn: sp.Symbol(f"q_{name}.{pn}", real=True) for pn in elem.ports}
+        qsym = {pn: sp.Symbol(self._unique(f"q_{name}.{pn}"), real=True) for pn in elem.ports}
         byport = {port: (b, s) for port, b, s in ports}
         deriv = [pn for pn in elem.ports if not sets[pn]]
         for pn in elem.ports:
@@ -337,7 +340,7 @@ class _Deriver:
         for pn in elem.ports:
             b, s = byport[pn]
             if pn in deriv:
-                w = sp.Symbol(f"f_in_{name}.{pn}", real=True)
+                w = sp.Symbol(self._unique(f"f_in_{name}.{pn}"), real=True)
                 self._set(self.f[b.index], s * w, f"{name}.{pn}")
                 self.dependent.append((w, dep[qsym[pn]], f"{name}.{pn}"))
                 self.quantity_map[("q", f"{name}.{pn}")] = dep[qsym[pn]]
@@ -379,7 +382,7 @@ class _Deriver:
         if rate_key not in self.quantity_map:
             raise ModelError(f"{self.m.name}: cannot integrate the {'flow' if q.what == 'q' else 'effort'}"
                              f" of '{q.endpoint}' (it has no single one)")
-        sym = sp.Symbol(f"{'x' if q.what == 'q' else 'p'}_{q.endpoint}", real=True)
+        sym = sp.Symbol(self._unique(f"{'x' if q.what == 'q' else 'p'}_{q.endpoint}"), real=True)
         self.states.append(State(sym, "x", q.endpoint, sp.Integer(0)))
         self.rates[sym] = self.quantity_map[rate_key]
         self.quantity_map[key] = sym

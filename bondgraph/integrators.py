@@ -1,4 +1,6 @@
-"""Compiled adaptive integrator (Dormand–Prince 5(4), scipy's RK45 tableau) with memory.
+"""Compiled kernels: input-signal evaluation and the adaptive integrator (Dormand–Prince 5(4),
+scipy's RK45 tableau) with memory.  They share this file so numba's on-disk cache, which is
+keyed by the source file, never pairs a cached integrator with a changed signal kernel.
 
 One numba function serves every model: the model's compiled functions are passed as
 first-class function values, so the integrator is compiled once and cached on disk.
@@ -16,11 +18,97 @@ Error weight per state: ``atol_i + rtol·max(|x_i|, peak_i)``, where ``peak_i`` 
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit, types
 from scipy.integrate import RK45
 
-from .signals import eval_inputs
+
+#: signal kinds (see bondgraph.signals) and the length of a signal's parameter row
+CONST, STEP, RAMP, SINE, CHIRP, TRIANGLE, PWL = range(7)
+NPAR = 6
+
+
+@njit(cache=True, inline="always")
+def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du):
+    """Write every input's value and time derivative at time t into u and du.
+
+    ``cur`` holds, per table input, the last table interval used: the integrator's times are
+    nearly monotone, so the interval is usually found in O(1) instead of a binary search."""
+    for i in range(kind.shape[0]):
+        k = kind[i]
+        if k == SINE:
+            w = 2.0 * math.pi * par[i, 1]
+            ph = w * t + par[i, 2]
+            u[i] = par[i, 3] + par[i, 0] * math.sin(ph)
+            du[i] = par[i, 0] * w * math.cos(ph)
+        elif k == PWL:
+            o = off[i]
+            last = o + ln[i] - 1
+            if t <= tt[o]:
+                u[i] = tv[o]
+                du[i] = 0.0
+            elif t >= tt[last]:
+                u[i] = tv[last]
+                du[i] = 0.0
+            else:
+                lo = cur[i]
+                if lo < o or lo >= last or not (tt[lo] <= t < tt[lo + 1]):
+                    if o <= lo < last - 1 and tt[lo + 1] <= t < tt[lo + 2]:
+                        lo += 1
+                    else:
+                        lo = o
+                        hi = last
+                        while hi - lo > 1:
+                            mid = (lo + hi) >> 1
+                            if tt[mid] <= t:
+                                lo = mid
+                            else:
+                                hi = mid
+                    cur[i] = lo
+                s = (tv[lo + 1] - tv[lo]) / (tt[lo + 1] - tt[lo])
+                u[i] = tv[lo] + s * (t - tt[lo])
+                du[i] = s
+        elif k == CONST:
+            u[i] = par[i, 0]
+            du[i] = 0.0
+        elif k == STEP:
+            u[i] = par[i, 2] + (par[i, 0] if t >= par[i, 1] else 0.0)
+            du[i] = 0.0
+        elif k == RAMP:
+            if t > par[i, 1]:
+                u[i] = par[i, 2] + par[i, 0] * (t - par[i, 1])
+                du[i] = par[i, 0]
+            else:
+                u[i] = par[i, 2]
+                du[i] = 0.0
+        elif k == CHIRP:
+            beta = (par[i, 2] - par[i, 1]) / par[i, 3]
+            ph = 2.0 * math.pi * (par[i, 1] * t + 0.5 * beta * t * t) + par[i, 4]
+            u[i] = par[i, 5] + par[i, 0] * math.cos(ph)
+            du[i] = -par[i, 0] * math.sin(ph) * 2.0 * math.pi * (par[i, 1] + beta * t)
+        else:  # TRIANGLE, as scipy.signal.sawtooth(x, 0.5): rises over [0, π), falls over [π, 2π)
+            y = 2.0 * math.pi * par[i, 1] * t + par[i, 2]
+            x = y - 2.0 * math.pi * math.floor(y / (2.0 * math.pi))
+            slope = 4.0 * par[i, 0] * par[i, 1]
+            if x < math.pi:
+                u[i] = par[i, 3] + par[i, 0] * (-1.0 + 2.0 * x / math.pi)
+                du[i] = slope
+            else:
+                u[i] = par[i, 3] + par[i, 0] * (3.0 - 2.0 * x / math.pi)
+                du[i] = -slope
+
+
+@njit(cache=True)
+def sample_inputs(t, kind, par, off, ln, tt, tv, cur, out):
+    """Values of all inputs at the times ``t`` into ``out`` (len(t) × n_inputs)."""
+    u = np.zeros(kind.shape[0])
+    du = np.zeros(kind.shape[0])
+    for k in range(t.shape[0]):
+        eval_inputs(t[k], kind, par, off, ln, tt, tv, cur, u, du)
+        out[k, :] = u
+
 
 _FN = types.FunctionType(types.void(types.float64, types.float64[::1], types.float64[::1], types.float64[::1],
                                     types.float64[::1], types.float64[::1], types.float64[::1]))
@@ -67,10 +155,10 @@ def _dense(x, K, h, theta, P, out):
         out[i] = x[i] + h * acc
 
 
-@njit(types.int64(_FN, _FN, _FN, _FN, _f1, _f1, _f1, types.int64, _i1, _f2, _i1, _i1, _f1, _f1, _f1, _f1,
+@njit(types.int64(_FN, _FN, _FN, _FN, _f1, _f1, _f1, types.int64, _i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1,
                   types.float64, _f1, types.float64, types.float64, types.int64, _f2, _f2, _i1),
       cache=True)
-def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, slen, stt, stv, t_out, t_break,
+def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, slen, stt, stv, scur, t_out, t_break,
            rtol, atol, h_init, h_max, max_steps, X, Y, stats):
     """Integrate from t_out[0] to t_out[-1]; write states X and outputs Y at t_out.
 
@@ -104,7 +192,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
     ib = 0
     while ib < t_break.shape[0] and t_break[ib] <= t:
         ib += 1
-    eval_inputs(t, skind, spar, soff, slen, stt, stv, u, du)
+    eval_inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du)
     rhs(t, x, u, du, th, mem, K[0])
     n_rhs = 1
     if nv:
@@ -131,7 +219,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
         h = min(h, h_max, t_end - t)
         for i in range(n):
             xn[i] = x[i] + h * K[0, i]
-        eval_inputs(t + h, skind, spar, soff, slen, stt, stv, u, du)
+        eval_inputs(t + h, skind, spar, soff, slen, stt, stv, scur, u, du)
         rhs(t + h, xn, u, du, th, mem, err)
         n_rhs += 1
         d2 = 0.0
@@ -175,7 +263,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             ts = t + C[s] * h
             if hit and ts >= t_stop:
                 ts = t_left  # inputs jump at a breakpoint: the step sees their left limit
-            eval_inputs(ts, skind, spar, soff, slen, stt, stv, u, du)
+            eval_inputs(ts, skind, spar, soff, slen, stt, stv, scur, u, du)
             rhs(ts, xs, u, du, th, mem, K[s])
         for i in range(n):
             acc = 0.0
@@ -184,7 +272,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             xn[i] = x[i] + h * acc
         t_new = t_stop if hit else t + h
         t_eval = t_left if hit else t_new
-        eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, u, du)
+        eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du)
         rhs(t_eval, xn, u, du, th, mem, K[ns])
         n_rhs += ns
         _weights(x, xn, peak, atol, rtol, w)
@@ -212,15 +300,15 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             continue
         # memory operators: reject steps whose operator inputs reverse inside the step
         if nv:
-            eval_inputs(t, skind, spar, soff, slen, stt, stv, u, du)
+            eval_inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du)
             opin(t, x, u, du, th, mem, v0)
             reversal = -1.0
-            eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, u, du)
+            eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du)
             opin(t_eval, xn, u, du, th, mem, v1)
             for c in range(1, _N_CHECK + 1):
                 theta = c / (_N_CHECK + 1.0)
                 _dense(x, K, h, theta, P, xd)
-                eval_inputs(t + theta * h, skind, spar, soff, slen, stt, stv, u, du)
+                eval_inputs(t + theta * h, skind, spar, soff, slen, stt, stv, scur, u, du)
                 opin(t + theta * h, xd, u, du, th, mem, vt)
                 for j in range(nv):
                     tol = 1e-9 * (abs(v0[j]) + abs(v1[j])) + 1e-300
@@ -238,19 +326,19 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
         while k_out < n_out and t_out[k_out] <= t_new:
             theta = (t_out[k_out] - t) / h
             _dense(x, K, h, theta, P, xd)
-            eval_inputs(t_out[k_out], skind, spar, soff, slen, stt, stv, u, du)
+            eval_inputs(t_out[k_out], skind, spar, soff, slen, stt, stv, scur, u, du)
             output(t_out[k_out], xd, u, du, th, mem, y)
             X[k_out, :] = xd
             Y[k_out, :ny] = y[:ny]
             k_out += 1
         if nv:
             if hit:  # follow the input up to the jump, then across it
-                eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, u, du)
+                eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du)
                 commit(t_eval, xn, u, du, th, mem, v1)
-            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, u, du)
+            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, scur, u, du)
             commit(t_new, xn, u, du, th, mem, v1)
         else:
-            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, u, du)
+            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, scur, u, du)
         for i in range(n):
             x[i] = xn[i]
             if abs(xn[i]) > peak[i]:

@@ -132,7 +132,6 @@ def linearize(eqs: Equations, input: str = "V", output: str = "x", params: dict 
         point[s] = 0.0
     for ob in eqs.operators:
         point[ob.symbol] = 0.0
-    point[sp.Symbol("t", real=True)] = 0.0
 
     def num(M):
         return np.array(M.xreplace(point).evalf(), dtype=float).reshape(M.shape)

@@ -41,6 +41,8 @@ class LoadedModel:
 def read_model_module(path: str | Path):
     """Import a model file as a fresh module; errors become one-line ModelErrors."""
     p = Path(path)
+    if p.is_dir():
+        raise UsageError(f"model file {path}: is a directory (give the path to a .py model file)")
     if not p.is_file():
         raise UsageError(f"model file {path}: not found (give the path to a .py model file)")
     name = f"bondgraph_model_{abs(hash(str(p.resolve())))}"
@@ -51,7 +53,7 @@ def read_model_module(path: str | Path):
     try:
         spec.loader.exec_module(module)
     except SyntaxError as exc:
-        raise ModelError(f"{path}:{exc.lineno}: syntax error: {exc.msg}") from None
+        raise ModelError(f"{path}:{exc.lineno or '?'}: syntax error: {exc.msg}") from None
     except BondGraphError as exc:
         raise type(exc)(f"{path}: {exc}") from None
     except Exception as exc:  # noqa: BLE001 - any failure of user code is reported as an input error
@@ -92,6 +94,10 @@ def load_model(path: str | Path, overrides: Mapping[str, Any] | None = None) -> 
         raise ModelError(f"model file {path}: build(p) must return a bondgraph.Model, got {type(model).__name__}")
     model.declared = declared
     model.values = values.as_dict()
+    try:
+        model.check()
+    except BondGraphError as exc:
+        raise type(exc)(f"{path}: {exc}") from None
     extra = {k: v for k, v in overrides.items() if k not in names}
     for k, v in extra.items():
         if k not in model.parameters:

@@ -22,12 +22,10 @@ from dataclasses import dataclass
 from typing import Mapping
 
 import numpy as np
-from numba import njit
 
 from .errors import SignalError
+from .integrators import CHIRP, CONST, NPAR, PWL, RAMP, SINE, STEP, TRIANGLE, sample_inputs
 
-CONST, STEP, RAMP, SINE, CHIRP, TRIANGLE, PWL = range(7)
-NPAR = 6
 
 
 @dataclass(frozen=True)
@@ -121,79 +119,15 @@ class SignalBank:
         self.breaks = sorted({b for s in sigs for b in s.breakpoints()})
 
     def args(self):
-        return self.kind, self.par, self.off, self.len, self.tt, self.tv
+        return self.kind, self.par, self.off, self.len, self.tt, self.tv, np.zeros(len(self.names), np.int64)
 
     def sample(self, t) -> np.ndarray:
         """Values of all inputs at times ``t``: array (len(t), n_inputs)."""
         t = np.atleast_1d(np.asarray(t, float))
         out = np.zeros((t.size, len(self.names)))
         if self.names:
-            _sample(t, *self.args(), out)
+            sample_inputs(t, *self.args(), out)
         return out
-
-
-@njit(cache=True)
-def eval_inputs(t, kind, par, off, ln, tt, tv, u, du):
-    """Write every input's value and time derivative at time t into u and du."""
-    for i in range(kind.shape[0]):
-        k = kind[i]
-        p = par[i]
-        if k == CONST:
-            u[i] = p[0]
-            du[i] = 0.0
-        elif k == STEP:
-            u[i] = p[2] + (p[0] if t >= p[1] else 0.0)
-            du[i] = 0.0
-        elif k == RAMP:
-            if t > p[1]:
-                u[i] = p[2] + p[0] * (t - p[1])
-                du[i] = p[0]
-            else:
-                u[i] = p[2]
-                du[i] = 0.0
-        elif k == SINE:
-            w = 2.0 * math.pi * p[1]
-            u[i] = p[3] + p[0] * math.sin(w * t + p[2])
-            du[i] = p[0] * w * math.cos(w * t + p[2])
-        elif k == CHIRP:
-            beta = (p[2] - p[1]) / p[3]
-            ph = 2.0 * math.pi * (p[1] * t + 0.5 * beta * t * t) + p[4]
-            u[i] = p[5] + p[0] * math.cos(ph)
-            du[i] = -p[0] * math.sin(ph) * 2.0 * math.pi * (p[1] + beta * t)
-        elif k == TRIANGLE:
-            # scipy.signal.sawtooth(x, 0.5): rises -1 -> 1 over [0, pi), falls over [pi, 2 pi)
-            x = (2.0 * math.pi * p[1] * t + p[2]) % (2.0 * math.pi)
-            slope = 2.0 * p[0] * 2.0 * p[1]
-            if x < math.pi:
-                u[i] = p[3] + p[0] * (-1.0 + 2.0 * x / math.pi)
-                du[i] = slope
-            else:
-                u[i] = p[3] + p[0] * (3.0 - 2.0 * x / math.pi)
-                du[i] = -slope
-        else:  # PWL
-            o = off[i]
-            n = ln[i]
-            if t <= tt[o]:
-                u[i] = tv[o]
-                du[i] = 0.0
-            elif t >= tt[o + n - 1]:
-                u[i] = tv[o + n - 1]
-                du[i] = 0.0
-            else:
-                j = np.searchsorted(tt[o:o + n], t, side="right") - 1
-                a = o + j
-                s = (tv[a + 1] - tv[a]) / (tt[a + 1] - tt[a])
-                u[i] = tv[a] + s * (t - tt[a])
-                du[i] = s
-
-
-@njit(cache=True)
-def _sample(t, kind, par, off, ln, tt, tv, out):
-    u = np.zeros(kind.shape[0])
-    du = np.zeros(kind.shape[0])
-    for k in range(t.shape[0]):
-        eval_inputs(t[k], kind, par, off, ln, tt, tv, u, du)
-        out[k, :] = u
 
 
 _CALL = re.compile(r"^\s*([a-z]+)\s*\((.*)\)\s*$", re.S)
@@ -206,13 +140,20 @@ def parse_signal(spec: str, base_dir: str | None = None) -> Signal:
 
     text = spec.strip()
     try:
-        return Constant(float(text))
+        value = float(text)
     except ValueError:
         pass
+    else:
+        if not math.isfinite(value):
+            raise SignalError(f"bad signal {spec!r}: a constant input must be finite")
+        return Constant(value)
     m = _CALL.match(text)
     if not m:
         raise SignalError(f"bad signal {spec!r}: write e.g. sine(amplitude=10, frequency=5) or a number")
     kind, body = m.group(1), m.group(2).strip()
+    if kind not in _FACTORIES and kind not in ("pwl", "csv"):
+        raise SignalError(f"unknown signal kind '{kind}' in {spec!r}; "
+                          f"known: {', '.join(list(_FACTORIES) + ['pwl', 'csv'])}")
     if kind == "pwl":
         try:
             pairs = [tuple(float(x) for x in item.split(":")) for item in body.split(",") if item.strip()]
@@ -238,15 +179,14 @@ def parse_signal(spec: str, base_dir: str | None = None) -> Signal:
         col = kwargs.get("column", "V")
         ds = read_csv(path, required=("t", col))
         return PiecewiseLinear(ds.t, ds.columns[col], label=f"csv({kwargs['file']}:{col})")
-    if kind not in _FACTORIES:
-        raise SignalError(f"unknown signal kind '{kind}' in {spec!r}; "
-                          f"known: {', '.join(list(_FACTORIES) + ['pwl', 'csv'])}")
     factory = _FACTORIES[kind]
     names = list(inspect.signature(factory).parameters)
     try:
         args = {k: float(v) for k, v in kwargs.items()}
     except ValueError:
         raise SignalError(f"bad signal {spec!r}: values must be numbers") from None
+    if not all(math.isfinite(v) for v in args.values()):
+        raise SignalError(f"bad signal {spec!r}: values must be finite")
     unknown = set(args) - set(names)
     if unknown:
         raise SignalError(f"bad signal {spec!r}: {kind} takes {', '.join(names)}; not {', '.join(sorted(unknown))}")

@@ -17,8 +17,8 @@ from .codegen import Compiled, compile_equations, parameter_vector
 from .equations import Equations, derive
 from .errors import BondGraphError, ParameterError, SignalError, did_you_mean
 from .graph import Model
-from .integrators import STATUS, dopri5
-from .signals import Constant, Signal, SignalBank, eval_inputs
+from .integrators import STATUS, dopri5, eval_inputs
+from .signals import Constant, Signal, SignalBank
 
 METHODS = ("auto", "dopri5", "radau", "bdf", "lsoda")
 _EXPLICIT_STEP_LIMIT = 3e6
@@ -127,7 +127,7 @@ class Simulator:
 
         ``params`` maps parameter names to values; ``progress(fraction)`` is called between
         chunks of long runs."""
-        t = np.asarray(t, float)
+        t = np.array(t, float)  # a private, writable, contiguous copy
         if t.ndim == 0:
             t = np.linspace(0.0, float(t), 1001)
         if t.size < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):

@@ -1,0 +1,306 @@
+"""Parameter identification: least squares of a model's output against measured data.
+
+One input signal (the data column driving the model, linearly interpolated) and one output
+are compared at the data's time stamps.  The data is split into a *fit* part and a
+*validation* part: by default interleaved time blocks (every third of ten blocks is held
+out), so every regime of a composite experiment appears in both, while the simulation runs
+open loop over the whole record from rest.  An output offset (sensor zero) is always solved
+by linear least squares.
+
+Parameters are fitted in a transformed space: positive parameters in log scale, the others
+scaled by a typical magnitude.  Groups of parameters the output depends on linearly (gains,
+operator weights) are solved exactly by bounded linear least squares (scipy ``lsq_linear``,
+non-negative where the bounds say so), alternating with ``scipy.optimize.least_squares`` for
+the nonlinear ones.  Uncertainties come from the Jacobian at the solution.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+from scipy.optimize import least_squares, lsq_linear
+
+from .data import Dataset
+from .errors import DataError, ParameterError, UsageError, did_you_mean
+from .graph import Model
+from .signals import PiecewiseLinear
+from .simulate import SimulationError, Simulator
+
+
+@dataclass
+class Spec:
+    """How one parameter is fitted: start value, bounds, scale, log transform, linearity."""
+
+    name: str
+    start: float
+    lower: float = -np.inf
+    upper: float = np.inf
+    scale: float = 1.0
+    log: bool = False
+    linear: bool = False
+
+    def to_z(self, v: float) -> float:
+        return math.log(v) if self.log else v / self.scale
+
+    def from_z(self, z: float) -> float:
+        return math.exp(z) if self.log else z * self.scale
+
+    def z_bounds(self) -> tuple[float, float]:
+        if self.log:
+            return (math.log(self.lower) if self.lower > 0 else -np.inf,
+                    math.log(self.upper) if np.isfinite(self.upper) else np.inf)
+        return self.lower / self.scale, self.upper / self.scale
+
+
+def default_spec(name: str, value: float, bounds=None, linear: bool = False) -> Spec:
+    """Log scale for positive parameters (bounded to ×/÷ 1000 unless given), linear otherwise."""
+    lo, hi = bounds if bounds is not None else (-np.inf, np.inf)
+    if value > 0 and lo >= 0 and not linear:
+        lo = max(lo, value / 1e3) if lo > 0 or bounds is None else value / 1e3
+        hi = min(hi, value * 1e3)
+        return Spec(name, value, lo, hi, log=True)
+    scale = abs(value) if value != 0 else 1.0
+    return Spec(name, value, lo, hi, scale=scale, linear=linear)
+
+
+@dataclass
+class FitResult:
+    """Outcome of a fit: values, standard errors, offset, RMS errors (output units)."""
+
+    values: dict[str, float]
+    stderr: dict[str, float]
+    offset: float
+    rms_fit: float
+    rms_validation: float
+    nfev: int
+    success: bool
+    message: str = ""
+    prediction: np.ndarray | None = field(default=None, repr=False)
+
+    def as_json(self) -> dict:
+        return {"params": self.values, "stderr": self.stderr, "offset": self.offset,
+                "rms_fit": self.rms_fit, "rms_validation": self.rms_validation,
+                "nfev": self.nfev, "success": self.success, "message": self.message}
+
+
+def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", blocks: int = 10):
+    """Boolean (fit, validation) masks over samples.
+
+    ``blocks``: ``blocks`` equal time blocks, a share ``validation`` of them (spread evenly,
+    never the first) held out; ``tail``: the last ``validation`` of the time span."""
+    if not 0.0 < validation < 1.0:
+        raise UsageError(f"validation share must be between 0 and 1, not {validation}")
+    span = t[-1] - t[0]
+    if mode == "tail":
+        val = t >= t[0] + (1 - validation) * span
+    elif mode == "blocks":
+        k = np.minimum(((t - t[0]) / span * blocks).astype(int), blocks - 1)
+        n_val = max(1, round(validation * blocks))
+        held = {int(round(blocks * (i + 0.5) / n_val + 0.5)) % blocks or 1 for i in range(n_val)}
+        held = sorted(held)[:n_val]
+        val = np.isin(k, held)
+    else:
+        raise UsageError(f"unknown split mode {mode!r}; use blocks or tail")
+    return ~val, val
+
+
+class Identification:
+    """A model, a data set and the machinery to simulate, score and fit it.
+
+    ``input``/``output`` name the model's input and output; ``data_input``/``data_output``
+    the data columns (default: the same names)."""
+
+    def __init__(self, model: Model | Simulator, data: Dataset, input: str = "V", output: str = "x",
+                 data_input: str | None = None, data_output: str | None = None,
+                 validation: float = 0.3, split: str = "blocks", max_fit_points: int = 20000,
+                 rtol: float = 1e-6, method: str = "auto"):
+        self.sim = model if isinstance(model, Simulator) else Simulator(model)
+        if input not in self.sim.input_names:
+            raise UsageError(f"model input: {did_you_mean(input, self.sim.input_names, 'input')}")
+        if output not in self.sim.output_names:
+            raise UsageError(f"model output: {did_you_mean(output, self.sim.output_names, 'output')}")
+        self.data = data
+        self.input, self.output = input, output
+        self.u = data.column(data_input or input)
+        self.y = data.column(data_output or output)
+        self.t = data.t
+        self.signal = PiecewiseLinear(self.t, self.u, label=f"data:{data_input or input}")
+        self.fit_mask, self.val_mask = split_masks(self.t, validation, split)
+        idx = np.nonzero(self.fit_mask)[0]
+        step = max(1, int(math.ceil(idx.size / max_fit_points)))
+        self.fit_idx = idx[::step]
+        self.rtol = rtol
+        self.method = method
+        self.nfev = 0
+
+    # ---- simulation and scores ---------------------------------------------------------------
+    def predict(self, values: Mapping[str, float] | None = None, inputs=None) -> np.ndarray:
+        """Model output at every data time, without offset."""
+        self.nfev += 1
+        res = self.sim.run(self.t, {self.input: self.signal, **(inputs or {})}, params=values,
+                           rtol=self.rtol, method=self.method)
+        return res.outputs[self.output]
+
+    def offset(self, pred: np.ndarray) -> float:
+        return float(np.mean(self.y[self.fit_idx] - pred[self.fit_idx]))
+
+    def scores(self, pred: np.ndarray) -> tuple[float, float, float]:
+        """(offset, rms on the fit part, rms on the validation part)."""
+        b = self.offset(pred)
+        r = self.y - pred - b
+        return b, float(np.sqrt(np.mean(r[self.fit_mask] ** 2))), float(np.sqrt(np.mean(r[self.val_mask] ** 2)))
+
+    def evaluate(self, values: Mapping[str, float] | None = None) -> FitResult:
+        pred = self.predict(values)
+        b, rf, rv = self.scores(pred)
+        return FitResult(dict(values or {}), {}, b, rf, rv, 1, True, "evaluated", pred + b)
+
+    def current(self, name: str) -> float:
+        table = {p.name: v for p, v in zip(self.sim.eqs.params, self.sim.theta())}
+        if name not in table:
+            raise ParameterError(did_you_mean(name, table, "parameter"))
+        return float(table[name])
+
+    # ---- fitting -----------------------------------------------------------------------------
+    def specs(self, names: Sequence[str], linear: Sequence[str] = ()) -> list[Spec]:
+        decl = self.sim.eqs.model.all_parameters()
+        out = []
+        for n in names:
+            if n not in decl:
+                raise ParameterError(did_you_mean(n, decl, "parameter"))
+            out.append(default_spec(n, self.current(n), decl[n].bounds, linear=n in linear))
+        return out
+
+    def fit(self, specs: Sequence[Spec], fixed: Mapping[str, float] | None = None, loss: str = "linear",
+            starts: int = 1, max_nfev: int = 60, rounds: int = 3, progress: Callable | None = None,
+            seed: int = 0) -> FitResult:
+        """Fit ``specs`` (others at their model values, or ``fixed``); see the module docstring."""
+        fixed = dict(fixed or {})
+        lin = [s for s in specs if s.linear]
+        non = [s for s in specs if not s.linear]
+        best: FitResult | None = None
+        rng = np.random.default_rng(seed)
+        for k in range(max(1, starts)):
+            z0 = np.array([s.to_z(s.start) for s in non])
+            if k > 0:
+                z0 = z0 + rng.normal(0.0, 0.5, z0.size) * np.array([1.0 if s.log else 0.5 for s in non])
+                z0 = np.clip(z0, *np.array([s.z_bounds() for s in non]).T) if non else z0
+            res = self._fit_once(non, lin, z0, fixed, loss, max_nfev, rounds, progress)
+            if best is None or res.rms_fit < best.rms_fit:
+                best = res
+        return best
+
+    def _values(self, non, z, lin, w, fixed):
+        vals = dict(fixed)
+        vals.update({s.name: s.from_z(zi) for s, zi in zip(non, z)})
+        vals.update({s.name: wi for s, wi in zip(lin, w)})
+        return vals
+
+    def _solve_linear(self, non, z, lin, fixed):
+        """Exact bounded LS for the linear parameters at the nonlinear ones ``z``."""
+        base_vals = self._values(non, z, lin, [0.0] * len(lin), fixed)
+        base = self.predict(base_vals)
+        cols = []
+        for s in lin:
+            v = dict(base_vals)
+            v[s.name] = s.scale
+            cols.append((self.predict(v) - base) / s.scale)
+        A = np.column_stack(cols + [np.ones_like(base)])[self.fit_idx]
+        rhs = (self.y - base)[self.fit_idx]
+        lo = np.array([s.lower for s in lin] + [-np.inf])
+        hi = np.array([s.upper for s in lin] + [np.inf])
+        norms = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
+        sol = lsq_linear(A / norms, rhs, bounds=(lo * norms, hi * norms), method="bvls")
+        return list(sol.x[:-1] / norms[:-1])
+
+    def _fit_once(self, non, lin, z0, fixed, loss, max_nfev, rounds, progress) -> FitResult:
+        w = [s.start for s in lin]
+        z = z0.copy()
+        y_fit = self.y[self.fit_idx]
+        scale_y = max(float(np.std(y_fit)), 1e-300)
+        n0 = self.nfev
+        message = ""
+        for _ in range(rounds if (non and lin) else 1):
+            if lin:
+                w = self._solve_linear(non, z, lin, fixed)
+            if non:
+                def resid(zz):
+                    try:
+                        pred = self.predict(self._values(non, zz, lin, w, fixed))
+                    except SimulationError:
+                        return np.full(self.fit_idx.size, 1e3)
+                    r = (pred - self.y)[self.fit_idx]
+                    r = r - r.mean()
+                    if progress:
+                        progress(self.nfev - n0)
+                    return r / scale_y
+                lb, ub = np.array([s.z_bounds() for s in non]).T
+                sol = least_squares(resid, np.clip(z, lb, ub), bounds=(lb, ub), loss=loss,
+                                    max_nfev=max_nfev, x_scale=1.0, diff_step=1e-4)
+                z, message = sol.x, sol.message
+        vals = self._values(non, z, lin, w, fixed)
+        pred = self.predict(vals)
+        b, rf, rv = self.scores(pred)
+        stderr = self._stderr(non, z, lin, w, fixed, pred, rf) if non else {}
+        fitted = {s.name: vals[s.name] for s in non + lin}
+        return FitResult(fitted, stderr, b, rf, rv, self.nfev - n0, True, message or "linear least squares",
+                         pred + b)
+
+    def _stderr(self, non, z, lin, w, fixed, pred, rms) -> dict[str, float]:
+        """Standard errors of the nonlinear parameters from a finite-difference Jacobian."""
+        J = []
+        for i, s in enumerate(non):
+            dz = 1e-4 * max(1.0, abs(z[i]))
+            zz = z.copy()
+            zz[i] += dz
+            try:
+                J.append(((self.predict(self._values(non, zz, lin, w, fixed)) - pred)[self.fit_idx]) / dz)
+            except SimulationError:
+                return {}
+        J = np.column_stack(J)
+        J = J - J.mean(axis=0)
+        m, n = J.shape
+        dof = max(m - n - 1, 1)
+        s2 = rms ** 2 * m / dof
+        try:
+            cov = s2 * np.linalg.pinv(J.T @ J)
+        except np.linalg.LinAlgError:
+            return {}
+        out = {}
+        for i, s in enumerate(non):
+            sd = math.sqrt(max(cov[i, i], 0.0))
+            out[s.name] = s.from_z(z[i]) * sd if s.log else sd * s.scale
+        return out
+
+
+def detect_linear(ident: Identification, names: Sequence[str], fixed: Mapping | None = None) -> list[str]:
+    """Parameters the output depends on linearly (superposition checked with two extra runs each)."""
+    fixed = dict(fixed or {})
+    base_vals = {n: ident.current(n) for n in names}
+    base_vals.update(fixed)
+    y0 = ident.predict(base_vals)
+    out = []
+    for n in names:
+        v0 = base_vals[n]
+        d = abs(v0) * 0.5 if v0 != 0 else 1.0
+        v1, v2 = dict(base_vals), dict(base_vals)
+        v1[n], v2[n] = v0 + d, v0 + 2 * d
+        try:
+            y1, y2 = ident.predict(v1), ident.predict(v2)
+        except SimulationError:
+            continue
+        second = np.max(np.abs(y2 - 2 * y1 + y0))
+        first = np.max(np.abs(y1 - y0))
+        if first > 0 and second < 1e-6 * first:
+            out.append(n)
+    return out
+
+
+def check_data_for_model(data: Dataset, input_col: str, output_col: str) -> None:
+    """One-line errors for data that cannot drive the model."""
+    for col in (input_col, output_col):
+        if col not in data.columns:
+            raise DataError(f"{data.path or 'data'}: no column '{col}' (columns: {', '.join(data.columns)}); "
+                            f"map one with --input COL / --output COL")

@@ -1,0 +1,263 @@
+"""Triangular-based piezoelectric drive (seed 004, Hassani & Tjahjowidodo 2013):
+library.triangular and models/triangular_drive.py.
+
+The reference values come from a hand derivation of the lumped linear model, written out
+here independently of the framework (no ``linearize``, no library formulas):
+
+* stack i (seed-002 'model 1', open-circuit stiffness K = K_i/(1 − k33²), free capacitance
+  C^T = N·ε33^T·A/h, free stroke per charge a = N·d33/C^T, N = l/h) behind the amplifier
+  resistance Re, elongation δ_i, charge Q_i:
+      V_i = jω·Re·Q_i − K·a·(δ_i − a·Q_i) + Q_i/C^T,   F_i = K·(a·Q_i − δ_i) − jω·c_s·δ_i
+  ⇒  F_i = G·V_i − K_s·δ_i,  G = K·a/D,  K_s = K·(jω·Re + 1/C^T)/D + jω·c_s,
+      D = jω·Re + K·a² + 1/C^T          (at ω = 0: K_s = K_i, G/K_s = N·d33 = U/V);
+* tip, stacks at ±θ from the vertical, δ1 = s·x + c·y, δ2 = −s·x + c·y (s = sin θ, c = cos θ),
+  Z_x = −ω²·M_x + jω·c_x + k_x, M_x = m_x + 2s²·m_s (likewise y with 2c²·m_s):
+      Z_x·X = s·(F1 − F2),  Z_y·Y = c·(F1 + F2)
+  ⇒  X = s·G·(V1 − V2)/(Z_x + 2s²·K_s),  Y = c·G·(V1 + V2)/(Z_y + 2c²·K_s).
+
+With V1 = A·sin ωt, V2 = A·sin(ωt + φ) the tip traces x = Im(X̂·e^{jωt}), y = Im(Ŷ·e^{jωt}),
+an ellipse whose semi-axes are the singular values of [[Re X̂, Im X̂], [Re Ŷ, Im Ŷ]]; the
+simulated steady-state ellipse comes from the eigenvalues of the x-y covariance over whole
+periods (λ = σ²/2).
+"""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import bondgraph as bg
+from bondgraph.cli import main
+from bondgraph.data import read_csv
+from bondgraph.modelfile import load_model
+from conftest import MODELS
+from library.triangular import static_tip_displacement
+
+TRI = str(MODELS / "triangular_drive.py")
+A = 50.0  # V, drive amplitude of the default EXPERIMENT
+
+
+# ---- the hand-derived lumped model ----------------------------------------------------------------
+def values(**overrides) -> dict:
+    return dict(load_model(TRI, overrides).model.values)
+
+
+def stack_numbers(p):
+    """(K_i, K, C^T, a, U per volt) of one stack from the data-sheet quantities."""
+    N = p["length"] / p["h"]
+    K_i = p["area"] / (p["length"] * p["s33E"])
+    k33sq = p["d33"] ** 2 / (p["s33E"] * p["eps33T"])
+    CT = N * p["eps33T"] * p["area"] / p["h"]
+    return K_i, K_i / (1 - k33sq), CT, N * p["d33"] / CT, N * p["d33"]
+
+
+def tip_phasors(p, w, V1, V2):
+    """Complex tip amplitudes (X̂, Ŷ) for drive phasors V1, V2 at ω = w (rad/s)."""
+    _, K, CT, a, _ = stack_numbers(p)
+    D = 1j * w * p["Re"] + K * a ** 2 + 1 / CT
+    G = K * a / D
+    Ks = K * (1j * w * p["Re"] + 1 / CT) / D + 1j * w * p["c_stack"]
+    th = math.radians(p["half_angle"])
+    s, c = math.sin(th), math.cos(th)
+    ms = p["rho"] * p["area"] * p["length"] / 3
+    Zx = -w ** 2 * (p["m_x"] + 2 * s * s * ms) + 1j * w * p["c_x"] + p["k_x"]
+    Zy = -w ** 2 * (p["m_y"] + 2 * c * c * ms) + 1j * w * p["c_y"] + p["k_y"]
+    return s * G * (V1 - V2) / (Zx + 2 * s * s * Ks), c * G * (V1 + V2) / (Zy + 2 * c * c * Ks)
+
+
+def analytic_axes(p, f, phase_deg, amplitude=A):
+    """Semi-axes (major, minor) of the steady-state tip ellipse, m."""
+    X, Y = tip_phasors(p, 2 * math.pi * f, amplitude, amplitude * np.exp(1j * math.radians(phase_deg)))
+    return np.linalg.svd(np.array([[X.real, X.imag], [Y.real, Y.imag]]), compute_uv=False)
+
+
+def analytic_poles(p):
+    """The six poles: per direction the roots of (M s² + c s + k)·D(s) + 2σ²·[K·(s Re + 1/C^T) + s c_s D(s)]."""
+    _, K, CT, a, _ = stack_numbers(p)
+    th = math.radians(p["half_angle"])
+    ms = p["rho"] * p["area"] * p["length"] / 3
+    D = np.poly1d([p["Re"], K * a ** 2 + 1 / CT])
+    out = []
+    for sig2, m, cc, k in ((math.sin(th) ** 2, p["m_x"], p["c_x"], p["k_x"]),
+                           (math.cos(th) ** 2, p["m_y"], p["c_y"], p["k_y"])):
+        body = np.poly1d([m + 2 * sig2 * ms, cc, k])
+        stacks = K * np.poly1d([p["Re"], 1 / CT]) + np.poly1d([p["c_stack"], 0]) * D
+        out += list((body * D + 2 * sig2 * stacks).roots)
+    return np.sort_complex(np.array(out))
+
+
+# ---- simulation helpers -------------------------------------------------------------------------------
+def ellipse_axes(x, y):
+    """Semi-axes (major, minor) and the major-axis direction of a closed x-y path sampled
+    uniformly over whole periods, from the covariance eigenvalues (λ = σ²/2)."""
+    z = np.vstack([x - x.mean(), y - y.mean()])
+    lam, vec = np.linalg.eigh(z @ z.T / z.shape[1])
+    return np.sqrt(2 * lam[::-1].clip(min=0)), vec[:, 1]
+
+
+def run(sim, p, f, phase=90.0, periods=2, n=200, settle=0.015, amplitude=A):
+    """Drive V1 = A sin ωt, V2 = A sin(ωt + phase) through the model's V/Vq inputs; return the
+    last ``periods`` periods (n samples each, endpoint excluded) after ``settle`` seconds."""
+    k0 = math.ceil(settle * f)
+    t = np.arange((k0 + periods) * n + 1) / (n * f)
+    u = {"V": bg.Sine(amplitude, f), "Vq": bg.Sine(amplitude, f, phase=90.0)}
+    known = {s.name for s in sim.eqs.params}   # the symbolic parameters (not half_angle, formulation)
+    r = sim.run(t, u, params={**{k: v for k, v in p.items() if k in known}, "phase": phase}, rtol=1e-10)
+    keep = slice(k0 * n, (k0 + periods) * n)
+    return r, keep
+
+
+@pytest.fixture(scope="module")
+def field():
+    lm = load_model(TRI)
+    return bg.Simulator(lm.model), dict(lm.model.values)
+
+
+# ---- phase 0: straight line; phase 180: horizontal line -------------------------------------------
+@pytest.mark.parametrize("f", [100.0, 7000.0])
+def test_in_phase_drive_gives_a_vertical_straight_line(field, f):
+    """Sec. 3: stacks excited in phase move the tip only vertically (δ1 = δ2), also near the
+    modes (7 kHz) and although the body is stiffer in y than in x."""
+    sim, p = field
+    r, keep = run(sim, p, f, phase=0.0)
+    (major, minor), direction = ellipse_axes(r["x"][keep], r["y"][keep])
+    assert minor / major < 1e-3
+    assert abs(direction[1]) > 1 - 1e-6          # along y (Sec. 3: in phase → vertical motion)
+    assert major == pytest.approx(analytic_axes(p, f, 0.0)[0], rel=1e-4)
+
+
+def test_antiphase_drive_gives_a_horizontal_straight_line(field):
+    sim, p = field
+    r, keep = run(sim, p, 100.0, phase=180.0)
+    (major, minor), direction = ellipse_axes(r["x"][keep], r["y"][keep])
+    assert minor / major < 1e-3
+    assert abs(direction[0]) > 1 - 1e-6
+
+
+# ---- phase 90: ellipse against the hand-derived frequency responses --------------------------------
+@pytest.mark.parametrize("phase, f", [(90.0, 100.0), (90.0, 3000.0), (90.0, 8000.0), (45.0, 3000.0)])
+def test_phase_shifted_drive_ellipse_matches_the_lumped_analytic_axes(field, phase, f):
+    """100 Hz (the paper's band, quasi-static: axis ratio (1 + r_x)/(1 + r_y) = 0.804),
+    3 kHz, 8 kHz (near the x mode at 8.4 kHz, where the x and y phases differ and the ellipse
+    tilts), and a 45° phase.  The simulation (rtol 1e-10) agrees to ~1e-12; asserted to 1e-6."""
+    sim, p = field
+    r, keep = run(sim, p, f, phase=phase)
+    (major, minor), _ = ellipse_axes(r["x"][keep], r["y"][keep])
+    amaj, amin = analytic_axes(p, f, phase)
+    print(f"phase {phase:g}, f = {f:g} Hz: axis ratio simulated {minor / major:.8f}, analytic {amin / amaj:.8f}; "
+          f"axes {major:.6e}, {minor:.6e} m vs {amaj:.6e}, {amin:.6e} m")
+    assert minor / major == pytest.approx(amin / amaj, rel=1e-6)
+    assert major == pytest.approx(amaj, rel=1e-6)
+    assert minor == pytest.approx(amin, rel=1e-6)
+
+
+def test_other_stack_angle_and_the_layer_formulation_match_the_analytic_ellipse():
+    """Stacks at ±30° from the vertical (half_angle is structural: a new graph), phase 60°."""
+    for formulation in ("field", "layers"):
+        lm = load_model(TRI, {"half_angle": 30.0, "formulation": formulation})
+        p = dict(lm.model.values)
+        r, keep = run(bg.Simulator(lm.model), p, 3000.0, phase=60.0)
+        (major, minor), _ = ellipse_axes(r["x"][keep], r["y"][keep])
+        amaj, amin = analytic_axes(p, 3000.0, 60.0)
+        assert (major, minor) == pytest.approx((amaj, amin), rel=1e-6), formulation
+
+
+def test_quasi_static_tip_amplitudes_follow_the_free_stroke_mapping(field):
+    """5 Hz, phase 90: x = (U1 − U2)/(√2·(1 + r_x)), y = (U1 + U2)/(√2·(1 + r_y)) with
+    U = d33·(V/h)·l and r_x = k_x/K_i, r_y = k_y/K_i (seed 004 eqs. 3-5, 17 at γl → 0); with
+    a body of no stiffness the tip follows the stacks' free strokes, |x| = |y| = U."""
+    sim, p = field
+    K_i, _, _, _, U_per_V = stack_numbers(p)
+    U = U_per_V * A
+    assert U == pytest.approx(400e-12 * (A / 60e-6) * 36e-3)   # d33·E·l, 12 µm
+    assert K_i == pytest.approx(1e-4 / (36e-3 * 20.7e-12))     # A/(l·s33^E), 134 N/µm
+    # the library's closed forms say the same (static, stack 1 alone)
+    assert [float(v) for v in static_tip_displacement(U, 0.0, K_i=K_i, k_x=p["k_x"], k_y=p["k_y"])] == \
+        pytest.approx([tip_phasors(p, 0.0, A, 0.0)[0].real, tip_phasors(p, 0.0, A, 0.0)[1].real], rel=1e-9)
+    for kx, ky in ((p["k_x"], p["k_y"]), (0.0, 0.0)):
+        q = {**p, "k_x": kx, "k_y": ky}
+        r, keep = run(sim, q, 5.0, periods=1, n=400)
+        x, y = r["x"][keep], r["y"][keep]
+        x_amp, y_amp = math.sqrt(2) * x.std(), math.sqrt(2) * y.std()
+        assert x_amp == pytest.approx(U / (1 + kx / K_i), rel=1e-4)
+        assert y_amp == pytest.approx(U / (1 + ky / K_i), rel=1e-4)
+        # and the stacks' elongations map onto the tip as x = (δ1 − δ2)/√2, y = (δ1 + δ2)/√2
+        d1, d2 = r["delta1"][keep], r["delta2"][keep]
+        assert np.max(np.abs((d1 - d2) / math.sqrt(2) - x)) < 1e-9 * x_amp
+        assert np.max(np.abs((d1 + d2) / math.sqrt(2) - y)) < 1e-9 * y_amp
+
+
+# ---- the seed-002 layer formulation agrees with the C-field -------------------------------------
+def test_piezo_layer_formulation_matches_the_field_formulation(field):
+    sim, p = field
+    layers = bg.Simulator(load_model(TRI, {"formulation": "layers"}).model)
+    assert len(layers.state_names) == 8 and len(sim.state_names) == 6
+    t = np.linspace(0.0, 0.01, 1001)
+    u = {"V": bg.Sine(A, 3000.0), "Vq": bg.Sine(A, 3000.0, phase=90.0)}
+    a, b = layers.run(t, u, rtol=1e-10), sim.run(t, u, rtol=1e-10)
+    for name in ("x", "y", "delta1", "delta2", "i1", "i2"):
+        assert np.max(np.abs(a[name] - b[name])) < 1e-7 * np.max(np.abs(b[name])), name
+
+
+# ---- every CLI command on the model file ------------------------------------------------------------
+def cli(capsys, *argv: str) -> str:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    assert code == 0, f"bondgraph {' '.join(argv)} exited {code}: {err}"
+    return out
+
+
+def test_cli_params_equations_causality(capsys):
+    out = cli(capsys, "params", TRI)
+    for name in ("phase", "offset", "d33", "s33E", "k_x", "k_y", "formulation"):
+        assert name in out
+    md = cli(capsys, "equations", TRI, "--format", "markdown")
+    assert "## State equations (6 states)" in md and "cos" in md and "phase" in md
+    assert "(8 states)" in cli(capsys, "equations", TRI, "--set", "formulation=layers")
+    out = cli(capsys, "causality", TRI)
+    assert "derivative causality" not in out and "body.head1" not in out and "body.F1" in out
+    assert main(["params", TRI, "--set", "formulation=bogus"]) == 2
+    assert "formulation" in capsys.readouterr().err
+
+
+def test_cli_simulate_default_experiment_and_phase_override(capsys, tmp_path):
+    p = values()
+    out = tmp_path / "tri.csv"
+    cli(capsys, "simulate", TRI, "--out", str(out), "--quiet")
+    ds = read_csv(str(out))
+    assert ds.names[:3] == ("t", "V", "Vq") and {"x", "y", "delta1", "delta2", "V1", "V2"} <= set(ds.names)
+    last = slice(-1001, -1)  # the third 100 Hz period, 1000 samples: steady state
+    col = ds.columns
+    np.testing.assert_allclose(col["V2"][last], p["offset"] + A * np.sin(2 * np.pi * 100 * ds.t[last] + np.pi / 2),
+                               atol=1e-9)
+    (major, minor), _ = ellipse_axes(col["x"][last], col["y"][last])
+    amaj, amin = analytic_axes(p, 100.0, 90.0)
+    assert minor / major == pytest.approx(amin / amaj, rel=1e-3)
+    # --set phase=0 reaches the drive of stack 2: a straight vertical line
+    cli(capsys, "simulate", TRI, "--set", "phase=0", "--out", str(out), "--quiet")
+    col = read_csv(str(out)).columns
+    np.testing.assert_allclose(col["V2"], col["V1"], atol=1e-12)
+    (major, minor), _ = ellipse_axes(col["x"][last], col["y"][last])
+    assert minor / major < 1e-3
+
+
+def test_cli_linearize_json_against_the_analytic_poles_and_gain(capsys):
+    p = values()
+    res = json.loads(cli(capsys, "linearize", TRI, "--json"))
+    assert res["input"] == "V" and res["output"] == "x"
+    wn = res["natural_frequencies_rad_s"]
+    assert wn == sorted(wn) and len(wn) == 4      # x and y modes, two electrical poles
+    poles = np.array([complex(*z) for z in res["poles"]])
+    expect = analytic_poles(p)
+    assert np.max(np.abs(np.sort_complex(poles) - expect) / np.abs(expect)) < 1e-6
+    assert np.all(poles.real < 0) and res["rhp_zeros"] == 0
+    # input V drives stack 1 only at phase 90: static x/V1 = sin θ·G/(k_x + 2 sin²θ·K_i)
+    assert res["dc_gain"] == pytest.approx(tip_phasors(p, 0.0, 1.0, 0.0)[0].real, rel=1e-6)
+    # the layer formulation: the same six poles; its two conserved combinations of states show
+    # up as (numerically) zero eigenvalues as long as the framework keeps dependent states
+    lay = json.loads(cli(capsys, "linearize", TRI, "--set", "formulation=layers", "--json"))
+    np.testing.assert_allclose(lay["natural_frequencies_rad_s"], wn, rtol=1e-6)
+    nonzero = np.array([complex(*z) for z in lay["poles"] if abs(complex(*z)) > 1e-3])
+    assert np.max(np.abs(np.sort_complex(nonzero) - expect) / np.abs(expect)) < 1e-6
