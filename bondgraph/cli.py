@@ -180,6 +180,68 @@ def _linearize(args):
             plot_bode(w, H, args.plot, title=f"{lm.model.name}: {args.output}/{args.input}")
 
 
+def _read_data(args):
+    from .data import read_csv
+
+    rename = {}
+    if args.input:
+        rename[args.input] = args.model_input
+    if args.output:
+        rename[args.output] = args.model_output
+    return read_csv(args.data, required=("t", args.model_input, args.model_output), rename=rename or None)
+
+
+@command("fit", "fit parameters to measured data (least squares, uncertainty, validation split)")
+def _fit(args):
+    from .atomic import atomic_write
+    from .identify import Identification, detect_linear
+
+    lm = _load(args)
+    data = _read_data(args)
+    names = [n.strip() for n in (args.params or "").split(",") if n.strip()]
+    if not names:
+        raise UsageError("fit: give the parameters to fit, e.g. --params a,c,K")
+    ident = Identification(lm.model, data, args.model_input, args.model_output, validation=args.validation,
+                           split=args.split)
+    seed = getattr(lm.module, "seed", None)
+    if seed is not None:  # the model file's seeding procedure (e.g. Bouc–Wen, seed 002 §5.2)
+        start = seed(lm.params, data)
+        lm.model.values.update({k: v for k, v in start.items() if k in names})
+        ident = Identification(lm.model, data, args.model_input, args.model_output,
+                               validation=args.validation, split=args.split)
+    linear = detect_linear(ident, names)
+    report = _progress("fitting")
+    res = ident.fit(ident.specs(names, linear), loss=args.loss, starts=args.starts, progress=lambda n: report(0.0))
+    out = {"model": str(args.model), "data": str(args.data), "linear": linear, **res.as_json()}
+    for n in names:
+        sd = res.stderr.get(n)
+        print(f"{n:<14} = {res.values[n]:.6g}" + (f" ± {sd:.2g}" if sd else "") + ("  (linear)" if n in linear else ""))
+    print(f"rms: fit {res.rms_fit:.4g}, validation {res.rms_validation:.4g} ({res.nfev} simulations)")
+    if args.out:
+        with atomic_write(args.out, "w", encoding="utf-8") as fh:
+            json.dump(out, fh, indent=1)
+        print(f"wrote {args.out}", file=sys.stderr)
+
+
+@command("diagnose", "find the effect the model misses in measured data, extend it and measure the gain")
+def _diagnose(args):
+    from .diagnose import calibration_names, diagnose, load_candidates
+
+    lm = _load(args)
+    data = _read_data(args)
+    say = (lambda s: None) if args.quiet else (lambda s: print(f"diagnose: {s}", file=sys.stderr, flush=True))
+    report = diagnose(lm.model, data, calibration_names(lm.module, lm.model), load_candidates(),
+                      args.model_input, args.model_output, validation=args.validation,
+                      workers=args.workers, progress=say, source=str(args.model))
+    if args.json:
+        print(json.dumps(report.as_json()))
+    else:
+        sys.stdout.write(report.text())
+    if args.plot:
+        from .plotting import plot_diagnosis
+        plot_diagnosis(report, data, args.model_input, args.model_output, args.plot)
+
+
 def _bode_grid(lin):
     import numpy as np
     wn = lin.natural_frequencies
@@ -238,6 +300,26 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("--plot", metavar="FILE.png", help="plot inputs and outputs (needs matplotlib)")
             p.add_argument("--states", action="store_true", help="include the states in the CSV")
             p.add_argument("--quiet", action="store_true", help="no progress or summary on stderr")
+        elif name in ("fit", "diagnose"):
+            p.add_argument("data", metavar="DATA", help="measured data (CSV: t, V, x)")
+            p.add_argument("--input", metavar="COL", help="data column that drives the model (default: the model input name)")
+            p.add_argument("--output", metavar="COL", help="data column to compare with the model output")
+            p.add_argument("--model-input", default="V", help="model input (default V)")
+            p.add_argument("--model-output", default="x", help="model output (default x)")
+            p.add_argument("--validation", type=float, default=0.3, help="share of the data held out (default 0.3)")
+            if name == "fit":
+                p.add_argument("--params", metavar="A,B,...", help="parameters to fit")
+                p.add_argument("--split", choices=("blocks", "tail"), default="blocks",
+                               help="held-out part: interleaved blocks (default) or the last part")
+                p.add_argument("--loss", choices=("linear", "soft_l1", "huber", "cauchy"), default="linear",
+                               help="robust loss (scipy least_squares)")
+                p.add_argument("--starts", type=int, default=1, help="multi-start count for non-convex fits")
+                p.add_argument("--out", metavar="FILE.json", help="write the fitted parameters (for --params-file)")
+            else:
+                p.add_argument("--json", action="store_true", help="print the CONTRACT JSON object")
+                p.add_argument("--plot", metavar="FILE.png", help="measured vs baseline vs extended, residuals")
+                p.add_argument("--workers", type=int, default=2, help="parallel worker processes (default 2)")
+                p.add_argument("--quiet", action="store_true", help="no progress on stderr")
         elif name == "linearize":
             p.add_argument("--input", default="V", help="input name (default V)")
             p.add_argument("--output", default="x", help="output name (default x)")

@@ -56,6 +56,8 @@ class Element:
     symbolic_attrs: tuple[str, ...] = ()
     #: storage elements hold a state per port (C, I, C-field)
     is_storage = False
+    #: what the element stands for in the physics ("stiffness", "damping", ...); see Component.tag
+    role: str | None = None
 
     def __init__(self, name: str):
         if not isinstance(name, str) or not name or any(c in name for c in " ,=()[]"):

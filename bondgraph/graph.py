@@ -12,6 +12,7 @@ exposed ports of components.
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -82,8 +83,8 @@ class Quantity(sp.Symbol):
         obj.what, obj.endpoint = what, endpoint
         return obj
 
-    def __getnewargs__(self):
-        return (self.what, self.endpoint)
+    def __getnewargs_ex__(self):
+        return (self.what, self.endpoint), {}
 
     def _hashable_content(self):
         return (self.name, "quantity")
@@ -147,6 +148,8 @@ class Component:
         """Make ``endpoint`` reachable from outside as ``<component>.<port>``."""
         if port in self.ports:
             raise ModelError(f"{self.name}: port '{port}' exposed twice")
+        if port in self.elements and endpoint != port:
+            raise ModelError(f"{self.name}: port '{port}' would hide the element of that name")
         self.resolve(endpoint)
         self.ports[port] = endpoint
 
@@ -154,7 +157,7 @@ class Component:
         """(element, port) for an endpoint string; port None means 'a new junction port'."""
         if not isinstance(endpoint, str):
             raise ModelError(f"{self.name}: endpoint must be a string like 'm' or 'tf.p1', got {endpoint!r}")
-        if endpoint in self.ports:
+        if endpoint in self.ports and self.ports[endpoint] != endpoint:
             return self.resolve(self.ports[endpoint])
         if endpoint in self.elements:
             elem = self.elements[endpoint]
@@ -287,6 +290,42 @@ class Component:
             syms |= ob.input.free_symbols
         return syms
 
+    # ---- roles and rewriting ----------------------------------------------------------------------
+    def tag(self, element: str, role: str) -> None:
+        """Give an element a role (e.g. "stiffness", "damping", "polarization") that model
+        extensions (diagnosis) use to find where an effect belongs."""
+        if element not in self.elements:
+            raise ModelError(f"{self.name}: " + did_you_mean(element, self.elements, "element"))
+        self.elements[element].role = role
+
+    def with_role(self, role: str) -> list[str]:
+        """Names of the elements tagged ``role``, in insertion order."""
+        return [n for n, e in self.elements.items() if getattr(e, "role", None) == role]
+
+    def replace(self, element: Element) -> None:
+        """Swap an element for another of the same name and ports (e.g. a new law)."""
+        old = self.elements.get(element.name)
+        if old is None:
+            raise ModelError(f"{self.name}: " + did_you_mean(element.name, self.elements, "element"))
+        if old.ports != element.ports:
+            raise ModelError(f"{self.name}: replacement for '{element.name}' must have ports {old.ports}")
+        element.role = getattr(old, "role", None)
+        self.elements[element.name] = element
+
+    def substitute(self, mapping: dict) -> None:
+        """Replace symbols everywhere (element laws, internal states, operator inputs, outputs)."""
+        self.elements = {n: e.xreplace(mapping) for n, e in self.elements.items()}
+        for st in self.internal_states.values():
+            st.rate, st.x0 = st.rate.xreplace(mapping), st.x0.xreplace(mapping)
+        for ob in self.operators.values():
+            ob.input = ob.input.xreplace(mapping)
+        for o in getattr(self, "outputs", {}).values():
+            o.expr = o.expr.xreplace(mapping)
+
+    def copy(self):
+        """An independent copy (rewrites of the copy leave this model untouched)."""
+        return copy.deepcopy(self)
+
     # ---- views ---------------------------------------------------------------------------------
     def bonds_of(self, name: str) -> list[Bond]:
         return [b for b in self.bonds if b.tail[0] == name or b.head[0] == name]
@@ -331,6 +370,12 @@ class Model(Component):
         sym = sp.Symbol(name, real=True)
         self.inputs[name] = Input(name, sym, unit, doc)
         return sym
+
+    def input_rate(self, name: str) -> sp.Symbol:
+        """Symbol of the time derivative of input ``name`` (for rate-dependent laws and states)."""
+        if name not in self.inputs:
+            raise ModelError(f"{self.name}: " + did_you_mean(name, self.inputs, "input"))
+        return sp.Symbol(f"d{name}/dt", real=True)
 
     def output(self, name: str, expr, unit: str = "", doc: str = "") -> None:
         """Declare a named output; ``expr`` may use port quantities, states, inputs, parameters.

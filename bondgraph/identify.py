@@ -23,8 +23,9 @@ import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
 from .data import Dataset
-from .errors import DataError, ParameterError, UsageError, did_you_mean
+from .errors import ParameterError, UsageError, did_you_mean
 from .graph import Model
+from .lti import LTI
 from .signals import PiecewiseLinear
 from .simulate import SimulationError, Simulator
 
@@ -123,6 +124,8 @@ class Identification:
             raise UsageError(f"model output: {did_you_mean(output, self.sim.output_names, 'output')}")
         self.data = data
         self.input, self.output = input, output
+        self.data_input, self.data_output = data_input, data_output
+        self.validation, self.split_mode = validation, split
         self.u = data.column(data_input or input)
         self.y = data.column(data_output or output)
         self.t = data.t
@@ -134,11 +137,27 @@ class Identification:
         self.rtol = rtol
         self.method = method
         self.nfev = 0
+        self.max_fit_points = max_fit_points
+        self.dt = _uniform_step(self.t)
+        lti = LTI(self.sim.eqs, input, output) if self.dt is not None else None
+        self.lti = lti if lti is not None and lti.exact else None
+
+    def like(self, model: Model | Simulator, **kw) -> "Identification":
+        """The same data, input/output mapping and split for another (e.g. extended) model."""
+        args = dict(input=self.input, output=self.output, data_input=self.data_input,
+                    data_output=self.data_output, validation=self.validation, split=self.split_mode,
+                    max_fit_points=self.max_fit_points, rtol=self.rtol, method=self.method)
+        args.update(kw)
+        return Identification(model, self.data, **args)
 
     # ---- simulation and scores ---------------------------------------------------------------
     def predict(self, values: Mapping[str, float] | None = None, inputs=None) -> np.ndarray:
-        """Model output at every data time, without offset."""
+        """Model output at every data time, without offset (exact LTI recursion when the model
+        is linear and the data uniformly sampled, else the compiled integrator)."""
         self.nfev += 1
+        if self.lti is not None and not inputs:
+            th = self.sim.theta(values)
+            return self.lti.response(th, self.dt, self.u, self.sim.initial_state(th))[:, 0]
         res = self.sim.run(self.t, {self.input: self.signal, **(inputs or {})}, params=values,
                            rtol=self.rtol, method=self.method)
         return res.outputs[self.output]
@@ -275,6 +294,12 @@ class Identification:
         return out
 
 
+def _uniform_step(t: np.ndarray) -> float | None:
+    d = np.diff(t)
+    mean = float(np.mean(d))
+    return mean if float(np.max(d) - np.min(d)) <= 1e-6 * mean else None
+
+
 def detect_linear(ident: Identification, names: Sequence[str], fixed: Mapping | None = None) -> list[str]:
     """Parameters the output depends on linearly (superposition checked with two extra runs each)."""
     fixed = dict(fixed or {})
@@ -296,11 +321,3 @@ def detect_linear(ident: Identification, names: Sequence[str], fixed: Mapping | 
         if first > 0 and second < 1e-6 * first:
             out.append(n)
     return out
-
-
-def check_data_for_model(data: Dataset, input_col: str, output_col: str) -> None:
-    """One-line errors for data that cannot drive the model."""
-    for col in (input_col, output_col):
-        if col not in data.columns:
-            raise DataError(f"{data.path or 'data'}: no column '{col}' (columns: {', '.join(data.columns)}); "
-                            f"map one with --input COL / --output COL")

@@ -178,6 +178,8 @@ def add_bimorph_modes(m: Model, beam: Bimorph, n_modes: int = 2, target: float =
         m.bond(se, j)
         for e in (ms, sp_, dm):
             m.bond(j, e)
+        for e, role in ((ms, "inertia"), (sp_, "stiffness"), (dm, "damping")):
+            m.tag(e, role)
         q = m.displacement(sp_)
         out.omega.append(omega)
         out.zeta.append(zeta)

@@ -349,3 +349,28 @@ def fit_pi_weights(v, y, thresholds, offset: bool = False):
     if offset:
         return sol[:n], float(sol[n] - sol[n + 1])
     return sol[:n]
+
+
+@numba.njit(cache=True)
+def _bouc_wen_path(v, beta, gamma, n, z0, out):
+    z = z0
+    out[0] = z
+    for k in range(1, v.shape[0]):
+        dv = v[k] - v[k - 1]
+        # sub-steps keep each explicit update small against the loop's curvature
+        m = 1 + int(abs(dv) * (abs(beta) + abs(gamma) + 1.0) * 8.0)
+        h = dv / m
+        for _ in range(m):
+            az = abs(z)
+            z += h - beta * abs(h) * az ** (n - 1.0) * z - gamma * h * az ** n
+        out[k] = z
+
+
+def bouc_wen_response(v, beta: float, gamma: float, n: float, z0: float = 0.0) -> np.ndarray:
+    """Bouc–Wen variable z along a sampled input path (rate independent):
+    dz = dv − β·|dv|·|z|^(n−1)·z − γ·dv·|z|^n, from z0 (units of v; z saturates near
+    (β + γ)^(−1/n)).  For identification: z depends on the path only, not on time."""
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    out = np.empty_like(v)
+    _bouc_wen_path(v, float(beta), float(gamma), float(n), float(z0), out)
+    return out

@@ -101,6 +101,9 @@ def piezo_layer(name: str, *, l, a, K, polarization, T=1, R_NL=None, Re=None, do
             c.add(R("R_NL", R_NL))
             c.bond("v", "R_NL")
     c.expose("mech", "v")
+    for name, role in (("C_NL", "polarization"), ("K", "stiffness"), ("R_NL", "damping")):
+        if name in c.elements:
+            c.tag(name, role)
     return c
 
 

@@ -31,6 +31,9 @@ PARAMETERS = [
 EXPERIMENT = Experiment(t_end=0.4, dt=1e-4, inputs={"V": Sine(amplitude=60.0, frequency=5.0, phase=-90.0, offset=60.0)})
 
 
+#: linear parameters the diagnosis calibrates to data before looking for missing effects
+CALIBRATE = ["a", "K", "c"]
+
 def build(p):
     g = Model("APA-120ML", __doc__.splitlines()[0])
     V = g.input("V", "V", "drive voltage")

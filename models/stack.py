@@ -30,6 +30,9 @@ PARAMETERS = [
 EXPERIMENT = Experiment(t_end=0.02, dt=1e-5, inputs={"V": Step(100.0, t0=1e-3)})
 
 
+#: linear parameters the diagnosis calibrates to data before looking for missing effects
+CALIBRATE = ["a", "K", "c"]
+
 def build(p):
     n = p.layers
     g = Model(f"stack of {n} layers" + (" (lumped)" if p.lumped else ""), __doc__.splitlines()[0])
