@@ -126,7 +126,7 @@ class Component:
         tail, head = self.resolve(a), self.resolve(b)
         if tail[0] == head[0]:
             raise ModelError(f"{self.name}: bond {a} → {b} connects element '{tail[0]}' to itself")
-        index = len(self.bonds) + 1
+        index = max((b.index for b in self.bonds), default=0) + 1
         tail = (tail[0], tail[1] if tail[1] is not None else f"#{index}")
         head = (head[0], head[1] if head[1] is not None else f"#{index}")
         for end in (tail, head):
@@ -139,6 +139,16 @@ class Component:
         bd = Bond(index, tail, head)
         self.bonds.append(bd)
         return bd
+
+    def unbond(self, a: str, b: str) -> None:
+        """Remove the bond a → b (to splice elements into an existing graph)."""
+        ta, hb = self.resolve(a), self.resolve(b)
+        for bd in self.bonds:
+            if bd.tail[0] == ta[0] and bd.head[0] == hb[0] and (ta[1] is None or bd.tail[1] == ta[1]) \
+                    and (hb[1] is None or bd.head[1] == hb[1]):
+                self.bonds.remove(bd)
+                return
+        raise ModelError(f"{self.name}: there is no bond {a} → {b}")
 
     def chain(self, *endpoints: str) -> list[Bond]:
         """Bond a → b → c ... in sequence."""
@@ -247,7 +257,7 @@ class Component:
         for name, elem in comp.elements.items():
             self._check_new_name(prefix + name)
             self.elements[prefix + name] = elem.renamed(prefix + name).xreplace(mapping)
-        offset = len(self.bonds)
+        offset = max((b.index for b in self.bonds), default=0)
         for bd in comp.bonds:
             k = bd.index + offset
             tail, head = ((prefix + e[0], f"#{k}" if e[1].startswith("#") else e[1]) for e in (bd.tail, bd.head))

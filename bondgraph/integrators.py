@@ -46,15 +46,15 @@ def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du):
         elif k == PWL:
             o = off[i]
             last = o + ln[i] - 1
-            if t <= tt[o]:
+            if t < tt[o] or last == o:
                 u[i] = tv[o]
                 du[i] = 0.0
-            elif t >= tt[last]:
+            elif t > tt[last]:
                 u[i] = tv[last]
                 du[i] = 0.0
-            else:
-                lo = cur[i]
-                if lo < o or lo >= last or not (tt[lo] <= t < tt[lo + 1]):
+            else:  # inside the table (ends included: the slope of the first/last interval)
+                lo = cur[i]  # intervals are [t_k, t_k+1): at a knot, the slope that follows it
+                if lo < o or lo >= last or not (tt[lo] <= t < tt[lo + 1] or (t == tt[last] and lo == last - 1)):
                     if o <= lo < last - 1 and tt[lo + 1] <= t < tt[lo + 2]:
                         lo += 1
                     else:
@@ -66,6 +66,8 @@ def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du):
                                 lo = mid
                             else:
                                 hi = mid
+                        if lo >= last:
+                            lo = last - 1
                     cur[i] = lo
                 s = (tv[lo + 1] - tv[lo]) / (tt[lo + 1] - tt[lo])
                 u[i] = tv[lo] + s * (t - tt[lo])
@@ -357,7 +359,8 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
                 for i in range(n):
                     K[0, i] = K[ns, i]
         fac = _MAX_FACTOR if en == 0.0 else min(_MAX_FACTOR, _SAFETY * en ** -0.2)
-        h = min((h_full if hit else h) * fac, h_max)
+        # a step shortened to land on a breakpoint keeps the size the controller had proposed
+        h = min(h_full, h_max) if hit else min(h * fac, h_max)
     stats[0] = n_steps
     stats[1] = n_rej
     stats[2] = n_rhs

@@ -38,9 +38,14 @@ class Signal:
     table_v: tuple = ()
     label: str = ""
 
-    def breakpoints(self) -> list[float]:
-        """Times where the signal jumps (the integrator restarts there)."""
-        return [self.par[1]] if self.kind == STEP else []
+    def breakpoints(self, kinks: bool = False) -> list[float]:
+        """Times where the signal jumps (the integrator restarts there); with ``kinks`` also
+        where its slope jumps (table knots), for models whose laws use the input's rate."""
+        if self.kind == STEP:
+            return [self.par[1]]
+        if self.kind == RAMP and kinks:
+            return [self.par[1]]
+        return list(self.table_t) if self.kind == PWL and kinks else []
 
     def value(self, t) -> np.ndarray:
         """Signal value at times ``t`` (array), evaluated by the compiled code."""
@@ -106,7 +111,7 @@ def _row(*vals) -> tuple:
 class SignalBank:
     """All inputs of a model packed into arrays for the compiled integrator."""
 
-    def __init__(self, signals: Mapping[str, Signal]):
+    def __init__(self, signals: Mapping[str, Signal], kinks: bool = False):
         sigs = list(signals.values())
         self.names = list(signals)
         self.kind = np.array([s.kind for s in sigs], np.int64)
@@ -116,7 +121,7 @@ class SignalBank:
         self.off = np.concatenate([[0], np.cumsum(lens)[:-1]]).astype(np.int64) if sigs else np.zeros(0, np.int64)
         self.tt = np.array([x for s in sigs for x in s.table_t] or [0.0], float)
         self.tv = np.array([x for s in sigs for x in s.table_v] or [0.0], float)
-        self.breaks = sorted({b for s in sigs for b in s.breakpoints()})
+        self.breaks = np.unique(np.array([b for s in sigs for b in s.breakpoints(kinks)], float))
 
     def args(self):
         return self.kind, self.par, self.off, self.len, self.tt, self.tv, np.zeros(len(self.names), np.int64)

@@ -84,6 +84,10 @@ class Simulator:
         self.state_names = [str(s) for s in self.eqs.state_symbols]
         self.output_names = list(self.eqs.outputs)
         self.input_names = [str(u) for u in self.eqs.inputs]
+        used = set().union(*(e.free_symbols for e in [*self.eqs.rates.values(), *self.eqs.outputs.values(),
+                                                       *(st.expr for st in self.eqs.program)]))
+        #: laws use input rates, so slope jumps of the inputs are discontinuities to stop at
+        self.uses_input_rates = bool(used & set(self.eqs.input_rates))
 
     # ---- setup -------------------------------------------------------------------------------
     def theta(self, params: Mapping | None = None) -> np.ndarray:
@@ -102,7 +106,7 @@ class Simulator:
         unknown = set(inputs) - set(self.input_names)
         if unknown:
             raise SignalError(f"model has no input {sorted(unknown)[0]!r}; inputs: {', '.join(self.input_names) or 'none'}")
-        return SignalBank({n: inputs.get(n, Constant(0.0)) for n in self.input_names})
+        return SignalBank({n: inputs.get(n, Constant(0.0)) for n in self.input_names}, kinks=self.uses_input_rates)
 
     def initial_memory(self, t0, x0, th, bank: SignalBank) -> np.ndarray:
         lay = self.compiled.layout
@@ -149,7 +153,7 @@ class Simulator:
         bounds = np.linspace(0, t.size - 1, n_chunks + 1).round().astype(int)
         for a, b in zip(bounds[:-1], bounds[1:]):
             tc = t[a:b + 1]
-            breaks = np.array([br for br in bank.breaks if tc[0] < br < tc[-1]], float)
+            breaks = bank.breaks[(bank.breaks > tc[0]) & (bank.breaks < tc[-1])]
             Xc, Yc, st = X[a:b + 1], Y[a:b + 1], np.zeros(4, np.int64)
             if method == "dopri5":
                 c = self.compiled

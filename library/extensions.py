@@ -25,7 +25,7 @@ from scipy.optimize import least_squares
 
 from bondgraph import C, I, J0, J1, Quantity, R, Se
 from bondgraph.diagnose import Candidate, Context, empirical_frf, model_frf
-from bondgraph.elements import F as F_PLACEHOLDER, Q as Q_PLACEHOLDER
+from bondgraph.elements import F as F_PLACEHOLDER, P as P_PLACEHOLDER, Q as Q_PLACEHOLDER
 from bondgraph.identify import Spec
 from library.hysteresis import PrandtlIshlinskii, bouc_wen_response, play_outputs, threshold_grid
 
@@ -138,16 +138,20 @@ class InputBoucWen(Candidate):
         for s0 in (2.0, 8.0, 30.0):
             z0 = np.array([math.log(s0), 0.0, 1.5])
 
+            base = ctx.responses([ctx.u])[:, 0]
+            idx = ctx.ident.fit_idx
+            scale = max(float(np.std(ctx.y)), 1e-300)
+
             def resid(z3):
                 beta, gamma, n = shape(z3)
-                zb = bouc_wen_response(v, beta, gamma, n)
-                kappa, calib = ctx.fit_input_basis([Vr * zb], [-np.inf], [np.inf], refit=False)
-                Y = ctx.responses([ctx.u, Vr * zb])
-                r = (ctx.y - Y[:, 0] - kappa[0] * Y[:, 1])[ctx.ident.fit_idx]
-                return (r - r.mean()) / max(float(np.std(ctx.y)), 1e-300)
+                d = ctx.responses([Vr * bouc_wen_response(v, beta, gamma, n)])[:, 0][idx]
+                r = (ctx.y - base)[idx]
+                d, r = d - d.mean(), r - r.mean()
+                kappa = (d @ r) / max(d @ d, 1e-300)
+                return (r - kappa * d) / scale
 
             sol = least_squares(resid, z0, bounds=([math.log(0.05), -3.0, 1.0], [math.log(500.0), 3.0, 4.0]),
-                                max_nfev=40, diff_step=1e-3)
+                                max_nfev=25, diff_step=1e-3)
             if best is None or sol.cost < best.cost:
                 best = sol
         beta, gamma, n = shape(best.x)
@@ -401,6 +405,61 @@ class ParallelMode(Candidate):
         return m
 
 
+class OutputMode(Candidate):
+    """A mode of the output structure: a mass m2 on a spring k2 with damper c2 riding on the
+    element tagged ``inertia`` (an APA's output plate or shell), the sensor on m2:
+    k2 = m2·ω², c2 = 2ζ·m2·ω."""
+
+    cause = "higher-mode"
+    label = "compliant output stage (mass on a spring) on the inertia element"
+
+    def applies(self, ctx):
+        return ctx.fast() and bool(ctx.model.with_role("inertia"))
+
+    def _mass(self, ctx) -> tuple[str, float]:
+        el = ctx.model.with_role("inertia")[0]
+        M = _number(ctx, 1 / sp.diff(ctx.model.elements[el].law, P_PLACEHOLDER))
+        return el, M
+
+    def fit(self, ctx):
+        w, mis = ParallelMode()._mismatch(ctx)
+        peaks, _ = signal.find_peaks(mis)
+        order = peaks[np.argsort(-mis[peaks])][:3] if peaks.size else np.array([int(np.argmax(mis))])
+        _, M = self._mass(ctx)
+        best = None
+        for k in order:
+            om = float(w[k])
+            starts = {"om.omega": Spec("om.omega", om, om / 3, om * 3, log=True),
+                      "om.zeta": Spec("om.zeta", 0.03, 1e-4, 1.0, log=True),
+                      "om.m2": Spec("om.m2", 0.2 * M, 1e-3 * M, 10 * M, log=True)}
+            model = self.build(ctx, {n: s.start for n, s in starts.items()})
+            fitted = ctx.fit_model(model, list(starts), starts, max_nfev=30)
+            ident = ctx.ident.like(model)
+            score = ident.scores(ident.predict(fitted))[1]
+            if best is None or score < best[0]:
+                best = (score, fitted)
+        return best[1]
+
+    def build(self, ctx, values):
+        el, _ = self._mass(ctx)
+        m = ctx.model.copy()
+        m.values.update(_calib_only(ctx, values))
+        om = m.parameter("om.omega", values["om.omega"], "rad/s", "natural frequency of the output stage")
+        ze = m.parameter("om.zeta", values["om.zeta"], "", "damping ratio of the output stage")
+        m2 = m.parameter("om.m2", values["om.m2"], "kg", "mass of the output stage")
+        junction = next(b.tail[0] if b.head[0] == el else b.head[0] for b in m.bonds_of(el))
+        m.add(J0("om.k"), C("om.spring", 1 / (m2 * om ** 2)), J1("om.plate"), I("om.mass", m2),
+              R("om.damper", 2 * ze * m2 * om))
+        m.bond(junction, "om.k")
+        m.bond("om.k", "om.spring")
+        m.bond("om.k", "om.plate")
+        m.bond("om.plate", "om.mass")
+        m.bond("om.plate", "om.damper")
+        out = m.outputs[ctx.ident.output]
+        out.expr = out.expr - Quantity("q", "om.spring")  # the sensor sits on the plate
+        return m
+
+
 # ---- effects inside the structure ---------------------------------------------------------------------
 def _peak_states(ctx: Context) -> dict[str, float]:
     """Largest |state| of the calibrated nominal model over the record (by state name)."""
@@ -431,8 +490,7 @@ class StiffnessSoftening(Candidate):
             scale = abs(k_lin) / qmax ** 2
             n = f"soft.k3_{el}"
             starts[n] = Spec(n, 0.05 * scale, 0.0, 2.0 * scale, scale=scale)
-        model = self.build(ctx, {n: s.start for n, s in starts.items()})
-        return ctx.fit_model(model, list(starts), starts, max_nfev=20)
+        return _screen_then_fit(ctx, self, starts)
 
     def build(self, ctx, values):
         m = ctx.model.copy()
@@ -445,6 +503,22 @@ class StiffnessSoftening(Candidate):
         return m
 
 
+def _screen_then_fit(ctx: Context, cand: Candidate, starts: Mapping[str, Spec]) -> dict[str, float]:
+    """Fit a structural extension with the integrator only when a Gauss–Newton screen says it
+    can gain something; otherwise keep the screen's small step (the candidate then scores ~1)."""
+    probes = {n: s.scale * 0.2 for n, s in starts.items()}
+    model = cand.build(ctx, {n: 0.0 for n in starts})
+    gain, step = ctx.screen(model, probes)
+    if gain < 1.05:
+        return {**ctx.calibrated, **{n: step[n] for n in starts}}
+    starts = {n: Spec(n, min(max(step[n], s.lower + 1e-3 * s.scale), s.upper), s.lower, s.upper, s.scale)
+              for n, s in starts.items()}
+    for n in ctx.calibrate:
+        starts[n] = Spec(n, step[n], ctx.calibrated[n] / 10, ctx.calibrated[n] * 10, log=True) \
+            if ctx.calibrated[n] > 0 else Spec(n, step[n], scale=abs(step[n]) or 1.0)
+    return ctx.fit_model(model, list(starts), starts, max_nfev=15)
+
+
 def _number(ctx: Context, expr: sp.Expr) -> float:
     """Value of a parameter expression with the calibrated parameters."""
     return float(expr.xreplace(dict(zip(ctx.eqs.params, ctx.theta()))))
@@ -453,15 +527,22 @@ def _number(ctx: Context, expr: sp.Expr) -> float:
 class NonlinearDamping(Candidate):
     """Amplitude-dependent damping (Stanton type, seed 001): every element tagged ``damping``
     gets e = (c + μ1·q²)·f with q the displacement of the stiffness element on its junction
-    (or e = c·f + μ1·f³ when there is none), μ1 ≥ 0."""
+    (or, with ``velocity`` or when there is none, e = c·f + μ1·f³), μ1 ≥ 0."""
 
     cause = "nonlinear-damping"
-    label = "amplitude-dependent damping of the damping elements"
+    label = "amplitude-dependent (Stanton) damping of the damping elements"
+
+    def __init__(self, velocity: bool = False):
+        self.velocity = velocity
+        if velocity:
+            self.label = "velocity-cubic damping of the damping elements"
 
     def applies(self, ctx):
         return bool(ctx.model.with_role("damping"))
 
     def _partner(self, ctx, el):
+        if self.velocity:
+            return None
         m = ctx.model
         for b in m.bonds_of(el):
             j = b.tail[0] if b.head[0] == el else b.head[0]
@@ -485,8 +566,7 @@ class NonlinearDamping(Candidate):
             scale = abs(c_lin) / amp ** 2
             n = f"nld.mu1_{el}"
             starts[n] = Spec(n, 0.05 * scale, 0.0, 50.0 * scale, scale=scale)
-        model = self.build(ctx, {n: s.start for n, s in starts.items()})
-        return ctx.fit_model(model, list(starts), starts, max_nfev=20)
+        return _screen_then_fit(ctx, self, starts)
 
     def build(self, ctx, values):
         m = ctx.model.copy()
@@ -508,4 +588,4 @@ class NonlinearDamping(Candidate):
 def candidates() -> list[Candidate]:
     """The piezo candidate set (entry point ``bondgraph.diagnosis``: ``piezo``)."""
     return [InputHysteresis(), InputBoucWen(), InputCreep(), InputSaturation(), InputExpansion(), StiffnessSoftening(),
-            ParallelMode(), NonlinearDamping(), InputRC()]
+            ParallelMode(), OutputMode(), NonlinearDamping(), NonlinearDamping(velocity=True), InputRC()]

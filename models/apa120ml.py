@@ -9,6 +9,7 @@ Table 1 gives K, M and a after amplification, so T = 1 reproduces the paper's nu
 """
 from bondgraph import Experiment, I, J1, Model, Parameter, Se, Sine
 from library.hysteresis import apa120ml_modified_pi
+from library.identification import bouc_wen_seed
 from library.piezo import (bouc_wen_polarization, layer_extension, linear_polarization,
                            operator_polarization, piezo_layer)
 
@@ -51,9 +52,20 @@ def build(p):
     g.chain("amp", "i", "stack.elec")
     g.bond("i", "Re")
     g.bond("stack.mech", "M")
+    g.tag("M", "inertia")
     g.bond("load", "stack.mech")
     g.output("x", layer_extension("stack", p.a, p.l, p.T), "m", "output displacement")
     g.output("i", g.flow("Re"), "A", "drive current")
     g.output("p", g.displacement("stack.C_NL"), "C*m", "dipole (polarization domain)")
     g.output("E", g.effort("stack.C_NL"), "V/m", "field E2 on the polarization capacitor")
     return g
+
+
+def seed(p, data):
+    """Start values for `bondgraph fit`: with Bouc-Wen hysteresis, seed 002 §5.2 read off the
+    quasi-static E-P curve of the data, P = x*l/(a*T) and E = V/l (Re drop and E3 neglected)."""
+    if p.hysteresis != "bouc-wen":
+        return {}
+    l, a, T = p.value("l"), p.value("a"), p.value("T")
+    s = bouc_wen_seed(data.column("x") * l / (a * T), data.column("V") / l, p.value("kx"))
+    return {"kw": s["kw"], "q_bw": s["q"], "r_bw": s["r"], "n_bw": s["n"]}

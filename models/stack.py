@@ -47,6 +47,7 @@ def build(p):
         g.add(I("M", (n + 1) / 2 * p.M_layer))
         g.bond("i", "stack.elec")
         g.bond("stack.mech", "M")
+        g.tag("M", "inertia")
         g.bond("load", "stack.mech")
         g.output("x", layer_extension("stack", p.a, p.l), "m", "top displacement")
         return g
