@@ -99,7 +99,7 @@ class Context:
         return self.lti.response(self.theta(values), self.dt, U)
 
     def fit_input_basis(self, basis: Sequence[np.ndarray], lower: Sequence[float], upper: Sequence[float],
-                        identity: bool = True, refit: bool = True, max_nfev: int = 40):
+                        identity: bool = True, refit: bool = True, max_nfev: int = 15):
         """Fit u_eff = [u] + Σ θ_k·basis_k through the nominal linear dynamics (a Hammerstein
         model): θ by bounded linear least squares (non-negative where ``lower`` is 0), jointly
         with the calibration parameters by variable projection.  Returns (θ, calibration values)."""
@@ -126,7 +126,9 @@ class Context:
         lb, ub = np.array([s.z_bounds() for s in specs]).T
         best = None
         # from the calibration (which may have bent to mimic the missing effect) and from nominal
-        for start in (self.calibrated, self.nominal):
+        far = any(abs(math.log(self.calibrated[n] / self.nominal[n])) > 0.3 for n in self.calibrate
+                  if self.calibrated[n] > 0 and self.nominal[n] > 0)
+        for start in (self.calibrated, self.nominal) if far else (self.calibrated,):
             z0 = np.clip([s.to_z(start[s.name]) for s in specs], lb, ub)
             sol = least_squares(resid, z0, bounds=(lb, ub), max_nfev=max_nfev, diff_step=1e-4)
             if best is None or sol.cost < best.cost:
@@ -402,7 +404,7 @@ def evaluate_extension(ctx: Context, model: Model, values: Mapping[str, float], 
     """Simulate the extended bond graph over the whole record (the authoritative score): by the
     exact linear recursion when the extension keeps the model linear, else (or with ``ode``)
     by the compiled integrator."""
-    ident = ctx.ident.like(model, rtol=1e-7)
+    ident = ctx.ident.like(model, rtol=1e-6)
     if ode:
         ident.lti = None
     known = {p.name for p in ident.sim.eqs.params}

@@ -31,7 +31,7 @@ NPAR = 6
 
 
 @njit(cache=True, inline="always")
-def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du):
+def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du=True):
     """Write every input's value and time derivative at time t into u and du.
 
     ``cur`` holds, per table input, the last table interval used: the integrator's times are
@@ -42,7 +42,7 @@ def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du):
             w = 2.0 * math.pi * par[i, 1]
             ph = w * t + par[i, 2]
             u[i] = par[i, 3] + par[i, 0] * math.sin(ph)
-            du[i] = par[i, 0] * w * math.cos(ph)
+            du[i] = par[i, 0] * w * math.cos(ph) if with_du else 0.0
         elif k == PWL:
             o = off[i]
             last = o + ln[i] - 1
@@ -89,7 +89,7 @@ def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du):
             beta = (par[i, 2] - par[i, 1]) / par[i, 3]
             ph = 2.0 * math.pi * (par[i, 1] * t + 0.5 * beta * t * t) + par[i, 4]
             u[i] = par[i, 5] + par[i, 0] * math.cos(ph)
-            du[i] = -par[i, 0] * math.sin(ph) * 2.0 * math.pi * (par[i, 1] + beta * t)
+            du[i] = -par[i, 0] * math.sin(ph) * 2.0 * math.pi * (par[i, 1] + beta * t) if with_du else 0.0
         else:  # TRIANGLE, as scipy.signal.sawtooth(x, 0.5): rises over [0, π), falls over [π, 2π)
             y = 2.0 * math.pi * par[i, 1] * t + par[i, 2]
             x = y - 2.0 * math.pi * math.floor(y / (2.0 * math.pi))
@@ -108,7 +108,7 @@ def sample_inputs(t, kind, par, off, ln, tt, tv, cur, out):
     u = np.zeros(kind.shape[0])
     du = np.zeros(kind.shape[0])
     for k in range(t.shape[0]):
-        eval_inputs(t[k], kind, par, off, ln, tt, tv, cur, u, du)
+        eval_inputs(t[k], kind, par, off, ln, tt, tv, cur, u, du, False)
         out[k, :] = u
 
 
@@ -143,34 +143,44 @@ def _weights(x0, x1, peak, atol, rtol, w):
 
 
 @njit(cache=True)
-def _dense(x, K, h, theta, P, out):
-    n = x.shape[0]
-    for i in range(n):
-        acc = 0.0
-        th = theta
-        for j in range(P.shape[1]):
+def _coeffs(K, P, Q):
+    """Q = Pᵀ·K: the dense-output polynomial of a step, computed once per step."""
+    for j in range(P.shape[1]):
+        for i in range(K.shape[1]):
             q = 0.0
             for s in range(K.shape[0]):
                 q += K[s, i] * P[s, j]
-            acc += q * th
-            th *= theta
+            Q[j, i] = q
+
+
+@njit(cache=True)
+def _dense(x, Q, h, theta, out):
+    """x(t + θh) = x + h·Σ_j Q_j·θ^(j+1)."""
+    for i in range(x.shape[0]):
+        acc = 0.0
+        for j in range(Q.shape[0] - 1, -1, -1):
+            acc = (acc + Q[j, i]) * theta
         out[i] = x[i] + h * acc
 
 
 @njit(types.int64(_FN, _FN, _FN, _FN, _f1, _f1, _f1, types.int64, _i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1,
-                  types.float64, _f1, types.float64, types.float64, types.int64, _f2, _f2, _i1),
+                  types.float64, _f1, types.float64, types.float64, types.int64, _f2, _f2, _i1, _i1),
       cache=True)
 def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, slen, stt, stv, scur, t_out, t_break,
-           rtol, atol, h_init, h_max, max_steps, X, Y, stats):
+           rtol, atol, h_init, h_max, max_steps, X, Y, stats, flags):
     """Integrate from t_out[0] to t_out[-1]; write states X and outputs Y at t_out.
 
     Returns a status code (0 ok, see STATUS); ``stats`` receives steps, rejections,
-    right-hand-side calls and reversal rejections.
+    right-hand-side calls and reversal rejections.  ``flags``: [the laws use input rates,
+    the outputs use inputs, the operator inputs use inputs].
     """
     n = x0.shape[0]
     nu = skind.shape[0]
     ny = Y.shape[1]
     nv = n_ops
+    rates = flags[0] != 0
+    out_inputs = flags[1] != 0
+    opin_inputs = flags[2] != 0
     A, B, C, E, P = _A, _B, _C, _E, _P
     ns = B.shape[0]
     u = np.zeros(max(nu, 1))
@@ -180,6 +190,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
     xs = np.empty(n)
     xd = np.empty(n)
     K = np.zeros((ns + 1, n))
+    Q = np.zeros((P.shape[1], n))
     w = np.empty(n)
     peak = np.abs(x0)
     err = np.empty(n)
@@ -194,7 +205,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
     ib = 0
     while ib < t_break.shape[0] and t_break[ib] <= t:
         ib += 1
-    eval_inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du)
+    eval_inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
     rhs(t, x, u, du, th, mem, K[0])
     n_rhs = 1
     if nv:
@@ -221,7 +232,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
         h = min(h, h_max, t_end - t)
         for i in range(n):
             xn[i] = x[i] + h * K[0, i]
-        eval_inputs(t + h, skind, spar, soff, slen, stt, stv, scur, u, du)
+        eval_inputs(t + h, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
         rhs(t + h, xn, u, du, th, mem, err)
         n_rhs += 1
         d2 = 0.0
@@ -265,7 +276,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             ts = t + C[s] * h
             if hit and ts >= t_stop:
                 ts = t_left  # inputs jump at a breakpoint: the step sees their left limit
-            eval_inputs(ts, skind, spar, soff, slen, stt, stv, scur, u, du)
+            eval_inputs(ts, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
             rhs(ts, xs, u, du, th, mem, K[s])
         for i in range(n):
             acc = 0.0
@@ -274,7 +285,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             xn[i] = x[i] + h * acc
         t_new = t_stop if hit else t + h
         t_eval = t_left if hit else t_new
-        eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du)
+        eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
         rhs(t_eval, xn, u, du, th, mem, K[ns])
         n_rhs += ns
         _weights(x, xn, peak, atol, rtol, w)
@@ -302,15 +313,19 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             continue
         # memory operators: reject steps whose operator inputs reverse inside the step
         if nv:
-            eval_inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du)
+            if opin_inputs:
+                eval_inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
             opin(t, x, u, du, th, mem, v0)
             reversal = -1.0
-            eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du)
+            if opin_inputs:
+                eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
             opin(t_eval, xn, u, du, th, mem, v1)
+            _coeffs(K, P, Q)
             for c in range(1, _N_CHECK + 1):
                 theta = c / (_N_CHECK + 1.0)
-                _dense(x, K, h, theta, P, xd)
-                eval_inputs(t + theta * h, skind, spar, soff, slen, stt, stv, scur, u, du)
+                _dense(x, Q, h, theta, xd)
+                if opin_inputs:
+                    eval_inputs(t + theta * h, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
                 opin(t + theta * h, xd, u, du, th, mem, vt)
                 for j in range(nv):
                     tol = 1e-9 * (abs(v0[j]) + abs(v1[j])) + 1e-300
@@ -325,22 +340,25 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
                 n_rej += 1
                 continue
         # accepted: dense outputs (memory still frozen), then commit
+        if k_out < n_out and t_out[k_out] <= t_new:
+            _coeffs(K, P, Q)
         while k_out < n_out and t_out[k_out] <= t_new:
             theta = (t_out[k_out] - t) / h
-            _dense(x, K, h, theta, P, xd)
-            eval_inputs(t_out[k_out], skind, spar, soff, slen, stt, stv, scur, u, du)
+            _dense(x, Q, h, theta, xd)
+            if out_inputs:
+                eval_inputs(t_out[k_out], skind, spar, soff, slen, stt, stv, scur, u, du, rates)
             output(t_out[k_out], xd, u, du, th, mem, y)
             X[k_out, :] = xd
             Y[k_out, :ny] = y[:ny]
             k_out += 1
         if nv:
             if hit:  # follow the input up to the jump, then across it
-                eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du)
+                eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
                 commit(t_eval, xn, u, du, th, mem, v1)
-            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, scur, u, du)
+            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
             commit(t_new, xn, u, du, th, mem, v1)
         else:
-            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, scur, u, du)
+            eval_inputs(t_new, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
         for i in range(n):
             x[i] = xn[i]
             if abs(xn[i]) > peak[i]:

@@ -88,6 +88,18 @@ class Simulator:
                                                        *(st.expr for st in self.eqs.program)]))
         #: laws use input rates, so slope jumps of the inputs are discontinuities to stop at
         self.uses_input_rates = bool(used & set(self.eqs.input_rates))
+        signals = set(self.eqs.inputs) | set(self.eqs.input_rates)
+        outs = self._uses(self.eqs.outputs.values()) & signals
+        opins = self._uses(st.expr for st in self.eqs.program if st.op is not None) & signals
+        self._flags = np.array([int(self.uses_input_rates), int(bool(outs)), int(bool(opins))], np.int64)
+
+    def _uses(self, exprs) -> set:
+        """Symbols the given expressions depend on through the program."""
+        need = set().union(set(), *(e.free_symbols for e in exprs))
+        for st in reversed(self.eqs.program):
+            if st.var in need:
+                need |= st.expr.free_symbols
+        return need
 
     # ---- setup -------------------------------------------------------------------------------
     def theta(self, params: Mapping | None = None) -> np.ndarray:
@@ -159,7 +171,7 @@ class Simulator:
                 c = self.compiled
                 status = dopri5(c.rhs, c.output, c.opin, c.commit, x, th, mem, len(self.eqs.operators),
                                 *bank.args(), np.ascontiguousarray(tc), breaks, float(rtol), atol_v, 0.0,
-                                float(max_step), int(max_steps), Xc, Yc, st)
+                                float(max_step), int(max_steps), Xc, Yc, st, self._flags)
                 if status != 0:
                     raise SimulationError(f"integration failed ({STATUS[int(status)]}) near t = "
                                           f"{_last_time(tc, Xc):.6g} s; check parameters or try --method radau")

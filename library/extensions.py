@@ -27,6 +27,7 @@ from bondgraph import C, I, J0, J1, Quantity, R, Se
 from bondgraph.diagnose import Candidate, Context, empirical_frf, model_frf
 from bondgraph.elements import F as F_PLACEHOLDER, P as P_PLACEHOLDER, Q as Q_PLACEHOLDER
 from bondgraph.identify import Spec
+from bondgraph.simulate import SimulationError
 from library.hysteresis import PrandtlIshlinskii, bouc_wen_response, play_outputs, threshold_grid
 
 
@@ -135,7 +136,7 @@ class InputBoucWen(Candidate):
             return s * (1 + rho) / 2, s * (1 - rho) / 2, n
 
         best = None
-        for s0 in (2.0, 8.0, 30.0):
+        for s0 in (3.0, 30.0):
             z0 = np.array([math.log(s0), 0.0, 1.5])
 
             base = ctx.responses([ctx.u])[:, 0]
@@ -151,7 +152,7 @@ class InputBoucWen(Candidate):
                 return (r - kappa * d) / scale
 
             sol = least_squares(resid, z0, bounds=([math.log(0.05), -3.0, 1.0], [math.log(500.0), 3.0, 4.0]),
-                                max_nfev=25, diff_step=1e-3)
+                                max_nfev=20, diff_step=1e-3)
             if best is None or sol.cost < best.cost:
                 best = sol
         beta, gamma, n = shape(best.x)
@@ -504,18 +505,24 @@ class StiffnessSoftening(Candidate):
 
 
 def _screen_then_fit(ctx: Context, cand: Candidate, starts: Mapping[str, Spec]) -> dict[str, float]:
-    """Fit a structural extension with the integrator only when a Gauss–Newton screen says it
-    can gain something; otherwise keep the screen's small step (the candidate then scores ~1)."""
-    probes = {n: s.scale * 0.2 for n, s in starts.items()}
+    """Fit a structural extension with the integrator.  Nonlinear resonances (jumps, shifted
+    peaks) defeat a local start at zero, so the new parameters are first scanned together on a
+    coarse grid of their scales; the best grid point starts the local fit (with the
+    calibration), unless no grid point beats the nominal model by 1 %."""
     model = cand.build(ctx, {n: 0.0 for n in starts})
-    gain, step = ctx.screen(model, probes)
-    if gain < 1.05:
-        return {**ctx.calibrated, **{n: step[n] for n in starts}}
-    starts = {n: Spec(n, min(max(step[n], s.lower + 1e-3 * s.scale), s.upper), s.lower, s.upper, s.scale)
-              for n, s in starts.items()}
-    for n in ctx.calibrate:
-        starts[n] = Spec(n, step[n], ctx.calibrated[n] / 10, ctx.calibrated[n] * 10, log=True) \
-            if ctx.calibrated[n] > 0 else Spec(n, step[n], scale=abs(step[n]) or 1.0)
+    ident = ctx.ident.like(model, rtol=1e-6)
+    best_f, best_rms = 0.0, ident.scores(ident.predict({**ctx.calibrated, **{n: 0.0 for n in starts}}))[1]
+    base_rms = best_rms
+    for f in (0.01, 0.03, 0.1, 0.3, 1.0):
+        try:
+            rms = ident.scores(ident.predict({**ctx.calibrated, **{n: f * s.scale for n, s in starts.items()}}))[1]
+        except SimulationError:
+            break
+        if rms < best_rms:
+            best_f, best_rms = f, rms
+    if best_rms > 0.99 * base_rms:
+        return {**ctx.calibrated, **{n: 0.0 for n in starts}}
+    starts = {n: Spec(n, best_f * s.scale, s.lower, s.upper, s.scale) for n, s in starts.items()}
     return ctx.fit_model(model, list(starts), starts, max_nfev=15)
 
 

@@ -47,20 +47,21 @@ def apa_drive(t: np.ndarray) -> np.ndarray:
 
 
 def bimorph_drive(t: np.ndarray, omega_n: float) -> np.ndarray:
-    """A broadband chirp, then stepped sine dwells around resonance at three amplitudes (volts)."""
+    """A broadband chirp through the first two modes, then sine dwells at and around resonance
+    at three amplitudes (volts)."""
     T = t[-1]
     v = np.zeros_like(t)
     f_n = omega_n / (2 * np.pi)
-    t1 = 0.25 * T
+    t1 = 0.4 * T
     a = t < t1
-    v[a] = 0.4 * np.sin(2 * np.pi * (0.1 * f_n * t[a] + 0.5 * (8 * f_n - 0.1 * f_n) / t1 * t[a] ** 2))
+    v[a] = 1.0 * np.sin(2 * np.pi * (0.1 * f_n * t[a] + 0.5 * (8 * f_n - 0.1 * f_n) / t1 * t[a] ** 2))
     rest = ~a
     tr = t[rest] - t1
-    n_dwell = 12
+    n_dwell = 9
     dwell = (T - t1) / n_dwell
     k = np.minimum((tr / dwell).astype(int), n_dwell - 1)
-    amps = np.array([0.5, 2.0, 4.0])[k // 4]
-    freqs = f_n * np.array([0.88, 0.94, 0.98, 1.02])[k % 4]
+    amps = np.array([0.2, 0.5, 1.0])[k // 3]
+    freqs = f_n * np.array([0.95, 1.0, 1.03])[k % 3]
     ph = 2 * np.pi * np.cumsum(freqs) * (t[1] - t[0])
     v[rest] = amps * np.sin(ph)
     return _smooth_edges(t, v)
@@ -167,7 +168,7 @@ def t226_truth(effect: str) -> bg.Model:
         g.add(C("spring", 1 / w ** 2))
     if effect == "nonlinear-damping":  # damping growing with the amplitude |q| (loss per cycle ∝ q³)
         q = Quantity("q", "spring")
-        g.add(R("damper", law=lambda f: (2 * z * w + 3.0e6 * sp.Abs(q)) * f))
+        g.add(R("damper", law=lambda f: (2 * z * w + 2.0e7 * sp.Abs(q)) * f))
     else:
         g.add(R("damper", 2 * z * w))
     g.bond("force", "mode")
@@ -176,7 +177,7 @@ def t226_truth(effect: str) -> bg.Model:
     x = phi * g.displacement("spring")
     if effect == "higher-mode":  # the second bending mode of the same beam, ratio 6.27 (uniform beam)
         w2, z2 = 6.27 * w, 0.012
-        g.add(Se("force2", -0.55 * mp * drive), J1("mode2"), I("mass2", 1), C("spring2", 1 / w2 ** 2),
+        g.add(Se("force2", -1.5 * mp * drive), J1("mode2"), I("mass2", 1), C("spring2", 1 / w2 ** 2),
               R("damper2", 2 * z2 * w2))
         g.bond("force2", "mode2")
         for e in ("mass2", "spring2", "damper2"):
@@ -186,7 +187,7 @@ def t226_truth(effect: str) -> bg.Model:
     return g
 
 
-def t226_data(effect: str, duration: float = 2.0, rate: float = 20000.0, noise: float = 2e-7, seed: int = 0):
+def t226_data(effect: str, duration: float = 2.0, rate: float = 20000.0, noise: float = 5e-8, seed: int = 0):
     t = np.arange(int(duration * rate) + 1) / rate
     base = load_model(MODELS / "bimorph_t226.py").model
     w = {str(k): v for k, v in base.parameter_table().items()}["omega_1"] * T226_CHANGES["omega_1"]
