@@ -136,33 +136,27 @@ class Context:
         vals = {s.name: s.from_z(zi) for s, zi in zip(specs, best.x)}
         return solve(vals)[0], vals
 
-    def screen(self, model: Model, probes: Mapping[str, float]) -> tuple[float, dict[str, float]]:
-        """Gauss–Newton look at new parameters before a full fit.  The output changes d_k for
-        each probe value and for a small change of each calibration parameter are combined by
-        bounded least squares (new parameters ≥ 0) to explain the residual; returns the gain
-        that step reaches and the step's values (calibration included)."""
-        ident = self.ident.like(model, rtol=1e-6)
-        zero = {**self.calibrated, **{k: 0.0 for k in probes}}
-        base = ident.predict(zero)
-        steps = dict(probes)
-        for n in self.calibrate:
-            steps[n] = 0.02 * self.calibrated[n]
-        cols = [ident.predict({**zero, k: zero[k] + v}) - base for k, v in steps.items()]
+    def screen(self, ident: Identification, at: Mapping[str, float], steps: Mapping[str, float],
+               nonneg: Sequence[str] = ()) -> tuple[float, dict[str, float]]:
+        """One Gauss–Newton step from ``at``: output changes for each parameter step are combined
+        by bounded least squares (``nonneg`` parameters stay ≥ 0) to explain the residual.
+        Returns the RMS (fit part) that the linearised step predicts, and the step's values."""
+        base = ident.predict(at)
+        cols = [ident.predict({**at, k: at[k] + v}) - base for k, v in steps.items()]
         idx = self.ident.fit_idx
         A = np.column_stack(cols + [np.ones(len(base))])[idx]
         r = (self.y - base)[idx]
-        lo = [0.0 if k in probes else -np.inf for k in steps] + [-np.inf]
+        lo = [-at[k] / v if k in nonneg else -np.inf for k, v in steps.items()] + [-np.inf]
         coef = bounded_lstsq(A, r, lo, [np.inf] * (len(steps) + 1))
-        after = np.sqrt(np.mean((r - A @ coef) ** 2))
-        before = np.sqrt(np.mean((r - r.mean()) ** 2))
-        values = {k: zero[k] + float(c) * v for (k, v), c in zip(steps.items(), coef)}
-        for n in self.calibrate:  # keep the linearised calibration step modest
-            values[n] = float(np.clip(values[n], 0.5 * self.calibrated[n], 2 * self.calibrated[n])) \
-                if self.calibrated[n] > 0 else values[n]
-        return before / max(after, 1e-300), values
+        values = dict(at)
+        for (k, v), c in zip(steps.items(), coef):
+            values[k] = at[k] + float(c) * v
+            if k in self.calibrated and self.calibrated[k] > 0:  # keep calibration steps modest
+                values[k] = float(np.clip(values[k], 0.5 * at[k], 2 * at[k]))
+        return float(np.sqrt(np.mean((r - A @ coef) ** 2))), values
 
     def fit_model(self, model: Model, names: Sequence[str], starts: Mapping[str, Spec] | None = None,
-                  linear: Sequence[str] = (), max_nfev: int = 30, rtol: float = 1e-5) -> dict[str, float]:
+                  linear: Sequence[str] = (), max_nfev: int = 30, rtol: float = 1e-4) -> dict[str, float]:
         """Fit ``names`` of an extended ``model`` (plus the calibration parameters) to the data."""
         ident = self.ident.like(model, rtol=rtol)
         fixed = dict(self.calibrated)
@@ -175,7 +169,7 @@ class Context:
             else:
                 specs.extend(ident.specs([n], linear))
             fixed.pop(n, None)
-        res = ident.fit(specs, fixed=fixed, max_nfev=max_nfev, rounds=2)
+        res = ident.fit(specs, fixed=fixed, max_nfev=max_nfev, rounds=2, stderr=False)
         return {**fixed, **res.values}
 
 
@@ -211,6 +205,8 @@ class Candidate(ABC):
     cause: str = ""
     #: a short description of the extension
     label: str = ""
+    #: relative cost; costly candidates start first so parallel workers finish together
+    cost: int = 1
 
     def applies(self, ctx: Context) -> bool:
         return True
@@ -429,7 +425,8 @@ def run_candidates(ctx: Context, candidates: Sequence[Candidate], workers: int =
     results: list[CandidateResult] = []
     if workers > 1 and len(_CANDIDATES) > 1 and "fork" in mp.get_all_start_methods():
         with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("fork")) as pool:
-            futures = {pool.submit(_run_one, i): i for i in range(len(_CANDIDATES))}
+            order = sorted(range(len(_CANDIDATES)), key=lambda i: -_CANDIDATES[i].cost)
+            futures = {pool.submit(_run_one, i): i for i in order}
             for fut in as_completed(futures):
                 results.append(fut.result())
                 if progress:

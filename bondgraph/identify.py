@@ -86,7 +86,7 @@ class FitResult:
                 "nfev": self.nfev, "success": self.success, "message": self.message}
 
 
-def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", blocks: int = 10):
+def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", blocks: int = 30):
     """Boolean (fit, validation) masks over samples.
 
     ``blocks``: ``blocks`` equal time blocks, a share ``validation`` of them (spread evenly,
@@ -194,7 +194,7 @@ class Identification:
 
     def fit(self, specs: Sequence[Spec], fixed: Mapping[str, float] | None = None, loss: str = "linear",
             starts: int = 1, max_nfev: int = 60, rounds: int = 3, progress: Callable | None = None,
-            seed: int = 0) -> FitResult:
+            seed: int = 0, stderr: bool = True) -> FitResult:
         """Fit ``specs`` (others at their model values, or ``fixed``); see the module docstring."""
         fixed = dict(fixed or {})
         lin = [s for s in specs if s.linear]
@@ -206,7 +206,7 @@ class Identification:
             if k > 0:
                 z0 = z0 + rng.normal(0.0, 0.5, z0.size) * np.array([1.0 if s.log else 0.5 for s in non])
                 z0 = np.clip(z0, *np.array([s.z_bounds() for s in non]).T) if non else z0
-            res = self._fit_once(non, lin, z0, fixed, loss, max_nfev, rounds, progress)
+            res = self._fit_once(non, lin, z0, fixed, loss, max_nfev, rounds, progress, stderr)
             if best is None or res.rms_fit < best.rms_fit:
                 best = res
         return best
@@ -234,7 +234,7 @@ class Identification:
         sol = lsq_linear(A / norms, rhs, bounds=(lo * norms, hi * norms), method="bvls")
         return list(sol.x[:-1] / norms[:-1])
 
-    def _fit_once(self, non, lin, z0, fixed, loss, max_nfev, rounds, progress) -> FitResult:
+    def _fit_once(self, non, lin, z0, fixed, loss, max_nfev, rounds, progress, want_stderr) -> FitResult:
         w = [s.start for s in lin]
         z = z0.copy()
         y_fit = self.y[self.fit_idx]
@@ -262,7 +262,7 @@ class Identification:
         vals = self._values(non, z, lin, w, fixed)
         pred = self.predict(vals)
         b, rf, rv = self.scores(pred)
-        stderr = self._stderr(non, z, lin, w, fixed, pred, rf) if non else {}
+        stderr = self._stderr(non, z, lin, w, fixed, pred, rf) if non and want_stderr else {}
         fitted = {s.name: vals[s.name] for s in non + lin}
         return FitResult(fitted, stderr, b, rf, rv, self.nfev - n0, True, message or "linear least squares",
                          pred + b)

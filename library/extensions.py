@@ -87,6 +87,7 @@ class InputHysteresis(Candidate):
 
     cause = "hysteresis"
     label = "Prandtl-Ishlinskii operator on the drive"
+    cost = 2
     n_plays = 10
 
     def applies(self, ctx):
@@ -123,6 +124,7 @@ class InputBoucWen(Candidate):
 
     cause = "hysteresis"
     label = "Bouc-Wen state on the drive"
+    cost = 2
 
     def applies(self, ctx):
         return ctx.fast()
@@ -462,10 +464,14 @@ class OutputMode(Candidate):
 
 
 # ---- effects inside the structure ---------------------------------------------------------------------
-def _peak_states(ctx: Context) -> dict[str, float]:
-    """Largest |state| of the calibrated nominal model over the record (by state name)."""
+def _state_stats(ctx: Context) -> tuple[dict[str, float], dict[str, float]]:
+    """(largest |state|, mean square of each state) of the calibrated nominal model, by name;
+    also the output velocity under the key ``"output rate"``."""
     res = ctx.ident.sim.run(ctx.t, {ctx.ident.input: ctx.ident.signal}, params=ctx.calibrated, rtol=1e-5)
-    return {k: float(np.max(np.abs(v))) or 1.0 for k, v in res.states.items()}
+    series = dict(res.states)
+    series["output rate"] = np.gradient(res.outputs[ctx.ident.output], ctx.t)
+    return ({k: float(np.max(np.abs(v))) or 1.0 for k, v in series.items()},
+            {k: float(np.mean(v ** 2)) for k, v in series.items()})
 
 
 def _state_of(ctx: Context, element: str) -> str:
@@ -473,57 +479,78 @@ def _state_of(ctx: Context, element: str) -> str:
 
 
 class StiffnessSoftening(Candidate):
-    """Amplitude-dependent stiffness: every element tagged ``stiffness`` gets
-    e = q/C − k3·q³ (k3 ≥ 0, softening; seed 001's cubic term, seed 003's k_a(E))."""
+    """Amplitude-dependent stiffness: every element tagged ``stiffness`` gets a cubic softening
+    term (seed 001's k1·q³, seed 003's k_a(E)), written centred on the data's amplitude,
+    e = law(q) − k3·q·(q² − r²) with r² = 1.5·⟨q²⟩ of the calibrated model: the describing-
+    function stiffness at the data's amplitude stays the calibrated one, so k3 (≥ 0) only
+    moves the stiffness with amplitude and does not fight the calibration."""
 
     cause = "softening"
     label = "cubic softening of the stiffness elements"
+    cost = 3
 
     def applies(self, ctx):
         return bool(ctx.model.with_role("stiffness"))
 
-    def fit(self, ctx):
-        peaks = _peak_states(ctx)
-        starts = {}
+    def refs(self, ctx) -> dict[str, tuple[float, float]]:
+        """(scale of k3, r²) per stiffness element."""
+        peaks, ms = _state_stats(ctx)
+        out = {}
         for el in ctx.model.with_role("stiffness"):
             k_lin = _number(ctx, sp.diff(ctx.model.elements[el].law, Q_PLACEHOLDER).subs(Q_PLACEHOLDER, 0))
-            qmax = peaks[_state_of(ctx, el)]
-            scale = abs(k_lin) / qmax ** 2
-            n = f"soft.k3_{el}"
-            starts[n] = Spec(n, 0.05 * scale, 0.0, 2.0 * scale, scale=scale)
+            name = _state_of(ctx, el)
+            out[el] = (abs(k_lin) / peaks[name] ** 2, 1.5 * ms[name])
+        return out
+
+    def fit(self, ctx):
+        self._refs = self.refs(ctx)
+        starts = {f"soft.k3_{el}": Spec(f"soft.k3_{el}", 0.0, 0.0, 2.0 * sc, scale=sc)
+                  for el, (sc, _) in self._refs.items()}
         return _screen_then_fit(ctx, self, starts)
 
     def build(self, ctx, values):
+        refs = getattr(self, "_refs", None) or self.refs(ctx)
         m = ctx.model.copy()
         m.values.update(_calib_only(ctx, values))
         Qp = Q_PLACEHOLDER
         for el in ctx.model.with_role("stiffness"):
             k3 = m.parameter(f"soft.k3_{el}", values[f"soft.k3_{el}"], "", f"cubic softening of {el}", bounds=(0, 1e40))
+            r2 = m.parameter(f"soft.r2_{el}", refs[el][1], "", f"centring amplitude² of {el} (1.5·mean q²)")
             law = m.elements[el].law
-            m.replace(C(el, law=lambda q, law=law: law.xreplace({Qp: q}) - k3 * q ** 3))
+            m.replace(C(el, law=lambda q, law=law: law.xreplace({Qp: q}) - k3 * q * (q ** 2 - r2)))
         return m
 
 
 def _screen_then_fit(ctx: Context, cand: Candidate, starts: Mapping[str, Spec]) -> dict[str, float]:
-    """Fit a structural extension with the integrator.  Nonlinear resonances (jumps, shifted
-    peaks) defeat a local start at zero, so the new parameters are first scanned together on a
-    coarse grid of their scales; the best grid point starts the local fit (with the
-    calibration), unless no grid point beats the nominal model by 1 %."""
-    model = cand.build(ctx, {n: 0.0 for n in starts})
-    ident = ctx.ident.like(model, rtol=1e-6)
-    best_f, best_rms = 0.0, ident.scores(ident.predict({**ctx.calibrated, **{n: 0.0 for n in starts}}))[1]
-    base_rms = best_rms
-    for f in (0.01, 0.03, 0.1, 0.3, 1.0):
+    """Fit a structural extension with the integrator.  A nonlinear resonance (jumps, shifted
+    peaks) defeats a local fit from zero and biases the linear calibration, so the new
+    parameters are scanned on a log grid of their scales, each grid point improved by one
+    Gauss–Newton step that also moves the calibration; the best predicted point, if it beats
+    the calibrated model by 2 %, starts the local fit."""
+    new = list(starts)
+    model = cand.build(ctx, {n: 0.0 for n in new})
+    ident = ctx.ident.like(model, rtol=1e-5)
+    base = {**ctx.calibrated, **{n: 0.0 for n in new}}
+    base_rms = ident.scores(ident.predict(base))[1]
+    best = (base_rms, base)
+    for f in (0.003, 0.01, 0.03, 0.1, 0.3):
+        at = {**ctx.calibrated, **{n: f * starts[n].scale for n in new}}
+        steps = {**{n: 0.3 * f * starts[n].scale for n in new}, **{n: 0.01 * ctx.calibrated[n] for n in ctx.calibrate}}
         try:
-            rms = ident.scores(ident.predict({**ctx.calibrated, **{n: f * s.scale for n, s in starts.items()}}))[1]
+            rms, values = ctx.screen(ident, at, steps, nonneg=new)
         except SimulationError:
-            break
-        if rms < best_rms:
-            best_f, best_rms = f, rms
-    if best_rms > 0.99 * base_rms:
-        return {**ctx.calibrated, **{n: 0.0 for n in starts}}
-    starts = {n: Spec(n, best_f * s.scale, s.lower, s.upper, s.scale) for n, s in starts.items()}
-    return ctx.fit_model(model, list(starts), starts, max_nfev=15)
+            continue
+        if rms < best[0]:
+            best = (rms, values)
+    if best[0] > 0.98 * base_rms:
+        return base
+    point = best[1]
+    specs = {n: Spec(n, min(max(point[n], 0.0), starts[n].upper), starts[n].lower, starts[n].upper, starts[n].scale)
+             for n in new}
+    for n in ctx.calibrate:
+        v = point[n]
+        specs[n] = Spec(n, v, v / 10, v * 10, log=True) if v > 0 else Spec(n, v, scale=abs(v) or 1.0)
+    return ctx.fit_model(model, list(specs), specs, max_nfev=15)
 
 
 def _number(ctx: Context, expr: sp.Expr) -> float:
@@ -538,6 +565,7 @@ class NonlinearDamping(Candidate):
 
     cause = "nonlinear-damping"
     label = "amplitude-dependent (Stanton) damping of the damping elements"
+    cost = 3
 
     def __init__(self, velocity: bool = False):
         self.velocity = velocity
@@ -559,36 +587,43 @@ class NonlinearDamping(Candidate):
                     return other
         return None
 
-    def fit(self, ctx):
-        peaks = _peak_states(ctx)
-        res = ctx.ident.sim.run(ctx.t, {ctx.ident.input: ctx.ident.signal}, params=ctx.calibrated, rtol=1e-5)
-        starts = {}
+    def refs(self, ctx) -> dict[str, tuple[float, float]]:
+        """(scale of μ1, r²) per damping element; the law is centred like the softening one:
+        (c + μ1·(a² − r²))·f with r² = ⟨a²⟩/2 for a = q, 1.5·⟨f²⟩ for the velocity-cubic form."""
+        peaks, ms = _state_stats(ctx)
+        out = {}
         for el in ctx.model.with_role("damping"):
             c_lin = _number(ctx, sp.diff(ctx.model.elements[el].law, F_PLACEHOLDER).subs(F_PLACEHOLDER, 0))
             partner = self._partner(ctx, el)
             if partner is not None:
-                amp = peaks[_state_of(ctx, partner)]
+                name = _state_of(ctx, partner)
+                out[el] = (abs(c_lin) / peaks[name] ** 2, 0.5 * ms[name])
             else:
-                amp = float(np.max(np.abs(np.gradient(res.outputs[ctx.ident.output], ctx.t)))) or 1.0
-            scale = abs(c_lin) / amp ** 2
-            n = f"nld.mu1_{el}"
-            starts[n] = Spec(n, 0.05 * scale, 0.0, 50.0 * scale, scale=scale)
+                out[el] = (abs(c_lin) / peaks["output rate"] ** 2, 1.5 * ms["output rate"])
+        return out
+
+    def fit(self, ctx):
+        self._refs = self.refs(ctx)
+        starts = {f"nld.mu1_{el}": Spec(f"nld.mu1_{el}", 0.0, 0.0, 50.0 * sc, scale=sc)
+                  for el, (sc, _) in self._refs.items()}
         return _screen_then_fit(ctx, self, starts)
 
     def build(self, ctx, values):
+        refs = getattr(self, "_refs", None) or self.refs(ctx)
         m = ctx.model.copy()
         m.values.update(_calib_only(ctx, values))
         for el in ctx.model.with_role("damping"):
             mu1 = m.parameter(f"nld.mu1_{el}", values[f"nld.mu1_{el}"], "", f"nonlinear damping of {el}",
                               bounds=(0, 1e40))
+            r2 = m.parameter(f"nld.r2_{el}", refs[el][1], "", f"centring amplitude² of {el}")
             law = m.elements[el].law
             c_lin = sp.diff(law, F_PLACEHOLDER)
             partner = self._partner(ctx, el)
-            amp = Quantity("q", partner) if partner is not None else None
-            if amp is not None:
-                m.replace(R(el, law=lambda f, c=c_lin, a=amp, mu=mu1: (c + mu * a ** 2) * f))
+            if partner is not None:
+                a = Quantity("q", partner)
+                m.replace(R(el, law=lambda f, c=c_lin, a=a, mu=mu1, r2=r2: (c + mu * (a ** 2 - r2)) * f))
             else:
-                m.replace(R(el, law=lambda f, c=c_lin, mu=mu1: c * f + mu * f ** 3))
+                m.replace(R(el, law=lambda f, c=c_lin, mu=mu1, r2=r2: (c + mu * (f ** 2 - r2)) * f))
         return m
 
 
