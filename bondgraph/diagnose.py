@@ -445,7 +445,7 @@ def _progress_line(r: CandidateResult, k: int, n: int) -> str:
     return f"[{k}/{n}] {r.cause} ({r.label}): {state}, {r.seconds:.1f} s"
 
 
-def decide(ctx: Context, results: Sequence[CandidateResult]) -> CandidateResult | None:
+def decide(results: Sequence[CandidateResult]) -> CandidateResult | None:
     ok = [r for r in results if not r.error and np.isfinite(r.gain)]
     if not ok:
         return None
@@ -484,7 +484,7 @@ def diagnose(model: Model, data: Dataset, calibrate_names: Sequence[str], candid
     calibrate(ctx)
     say(f"calibrated in {time.time() - started:.1f} s: validation RMS {ctx.baseline.rms_validation:.4g}")
     results = run_candidates(ctx, candidates, workers, say)
-    winner = decide(ctx, results)
+    winner = decide(results)
     report = Report(
         cause=winner.cause if winner else "none",
         gain=winner.gain if winner else 1.0,

@@ -187,7 +187,7 @@ def t226_truth(effect: str) -> bg.Model:
     return g
 
 
-def t226_data(effect: str, duration: float = 2.0, rate: float = 20000.0, noise: float = 5e-8, seed: int = 0):
+def t226_data(effect: str, duration: float = 2.0, rate: float = 20000.0, noise: float = 1e-8, seed: int = 0):
     t = np.arange(int(duration * rate) + 1) / rate
     base = load_model(MODELS / "bimorph_t226.py").model
     w = {str(k): v for k, v in base.parameter_table().items()}["omega_1"] * T226_CHANGES["omega_1"]
