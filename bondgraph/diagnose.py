@@ -136,27 +136,37 @@ class Context:
         vals = {s.name: s.from_z(zi) for s, zi in zip(specs, best.x)}
         return solve(vals)[0], vals
 
+    def calibration_sensitivities(self, rel: float = 0.01) -> dict[str, np.ndarray]:
+        """Output change of the calibrated nominal model for a relative step of each calibration
+        parameter (exact linear route when available)."""
+        base = self.ident.predict(self.calibrated)
+        return {n: self.ident.predict({**self.calibrated, n: self.calibrated[n] * (1 + rel)}) - base
+                for n in self.calibrate if self.calibrated[n] != 0}
+
     def screen(self, ident: Identification, at: Mapping[str, float], steps: Mapping[str, float],
-               nonneg: Sequence[str] = ()) -> tuple[float, dict[str, float]]:
-        """One Gauss–Newton step from ``at``: output changes for each parameter step are combined
-        by bounded least squares (``nonneg`` parameters stay ≥ 0) to explain the residual.
-        Returns the RMS (fit part) that the linearised step predicts, and the step's values."""
+               extra: Mapping[str, tuple[float, np.ndarray]] | None = None) -> tuple[float, dict[str, float]]:
+        """One Gauss–Newton step from ``at``: the output changes for each (non-negative) new
+        parameter's step, and the given ``extra`` columns (name → (step, change), e.g. the
+        calibration sensitivities), are combined by bounded least squares to explain the
+        residual.  Returns the RMS (fit part) the linearised step predicts, and its values."""
         base = ident.predict(at)
         cols = [ident.predict({**at, k: at[k] + v}) - base for k, v in steps.items()]
+        extra = dict(extra or {})
+        cols += [c for _, c in extra.values()]
         idx = self.ident.fit_idx
         A = np.column_stack(cols + [np.ones(len(base))])[idx]
         r = (self.y - base)[idx]
-        lo = [-at[k] / v if k in nonneg else -np.inf for k, v in steps.items()] + [-np.inf]
-        coef = bounded_lstsq(A, r, lo, [np.inf] * (len(steps) + 1))
+        lo = [-at[k] / v for k, v in steps.items()] + [-np.inf] * (len(extra) + 1)
+        coef = bounded_lstsq(A, r, lo, [np.inf] * len(lo))
         values = dict(at)
-        for (k, v), c in zip(steps.items(), coef):
+        for (k, v), c in zip(list(steps.items()) + [(k, st) for k, (st, _) in extra.items()], coef):
             values[k] = at[k] + float(c) * v
             if k in self.calibrated and self.calibrated[k] > 0:  # keep calibration steps modest
                 values[k] = float(np.clip(values[k], 0.5 * at[k], 2 * at[k]))
         return float(np.sqrt(np.mean((r - A @ coef) ** 2))), values
 
     def fit_model(self, model: Model, names: Sequence[str], starts: Mapping[str, Spec] | None = None,
-                  linear: Sequence[str] = (), max_nfev: int = 30, rtol: float = 1e-4) -> dict[str, float]:
+                  linear: Sequence[str] = (), max_nfev: int = 30, rtol: float = 1e-7) -> dict[str, float]:
         """Fit ``names`` of an extended ``model`` (plus the calibration parameters) to the data."""
         ident = self.ident.like(model, rtol=rtol)
         fixed = dict(self.calibrated)

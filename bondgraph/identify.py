@@ -257,7 +257,7 @@ class Identification:
                     return r / scale_y
                 lb, ub = np.array([s.z_bounds() for s in non]).T
                 sol = least_squares(resid, np.clip(z, lb, ub), bounds=(lb, ub), loss=loss,
-                                    max_nfev=max_nfev, x_scale=1.0, diff_step=1e-4)
+                                    max_nfev=max_nfev, x_scale=1.0, diff_step=1e-3)
                 z, message = sol.x, sol.message
         vals = self._values(non, z, lin, w, fixed)
         pred = self.predict(vals)

@@ -17,8 +17,8 @@ from bondgraph.modelfile import load_model
 from conftest import MODELS
 from truth import apa_data, t226_data
 
-APA = dict(duration=4.0, rate=2500.0)
-BIMORPH = dict(duration=1.2, rate=12500.0)
+APA = dict(duration=3.0, rate=2000.0)
+BIMORPH = dict(duration=1.0, rate=10000.0)
 
 CASES = [
     ("apa120ml", "none"),
@@ -67,7 +67,7 @@ def test_decision_rule():
 
 
 def test_cli_diagnose_json_contract(tmp_path, capsys):
-    data = apa_data("creep", duration=3.0, rate=2000.0)
+    data = apa_data("creep", duration=2.0, rate=2000.0)
     path = tmp_path / "apa.csv"
     write_csv(path, data.t, data.columns, data.metadata)
     assert main(["diagnose", str(MODELS / "apa120ml.py"), str(path), "--json", "--quiet", "--workers", "1"]) == 0

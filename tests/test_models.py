@@ -15,21 +15,26 @@ def test_contract_model_files_exist():
         assert name in MODEL_FILES
 
 
+#: keep the N-layer stack small here (its size is a benchmark workload, not a test)
+SETTINGS = {"stack.py": ["--set", "layers=6"]}
+
+
 @pytest.mark.parametrize("name", MODEL_FILES)
 def test_every_command_runs(name, tmp_path, capsys):
     path = str(MODELS / name)
-    assert main(["params", path]) == 0
+    s = SETTINGS.get(name, [])
+    assert main(["params", path, *s]) == 0
     for fmt in ("text", "latex", "markdown"):
-        assert main(["equations", path, "--format", fmt]) == 0
-    assert main(["causality", path, "--json"]) == 0
-    assert main(["causality", path, "--plot", str(tmp_path / "bg.png")]) == 0
+        assert main(["equations", path, "--format", fmt, *s]) == 0
+    assert main(["causality", path, "--json", *s]) == 0
+    assert main(["causality", path, "--plot", str(tmp_path / "bg.png"), *s]) == 0
     capsys.readouterr()
-    assert main(["linearize", path, "--json"]) == 0
+    assert main(["linearize", path, "--json", *s]) == 0
     lin = json.loads(capsys.readouterr().out)
     assert lin["natural_frequencies_rad_s"] == sorted(lin["natural_frequencies_rad_s"])
     assert {"poles", "zeros", "rhp_zeros"} <= set(lin)
     out = tmp_path / "sim.csv"
-    assert main(["simulate", path, "--out", str(out), "--quiet"]) == 0
+    assert main(["simulate", path, "--out", str(out), "--quiet", *s]) == 0
     ds = read_csv(out)
     assert "x" in ds.columns and len(ds) > 10
     assert (tmp_path / "bg.png").stat().st_size > 1000
