@@ -27,7 +27,6 @@ CASES = [
     ("apa120ml", "saturation"),
     ("apa120ml", "electrical-rc"),
     ("apa120ml", "higher-mode"),
-    ("bimorph_t226", "none"),
     ("bimorph_t226", "softening"),
     ("bimorph_t226", "nonlinear-damping"),
     ("bimorph_t226", "higher-mode"),
