@@ -177,8 +177,39 @@ class Compiled:
         raise AttributeError(name)
 
 
-def compile_equations(eqs: Equations, with_jacobian: bool = False) -> Compiled:
-    """Generate, cache and load the compiled functions of ``eqs``."""
+@dataclass
+class Taped:
+    """A large model run by the tape interpreter (see :mod:`bondgraph.tape`): the same function
+    interface as :class:`Compiled`, with the tape as the initial ``mem``."""
+
+    layout: Layout
+    tape: np.ndarray
+
+    def __getattr__(self, name):
+        from . import tape
+        if name in ("rhs", "output"):
+            return getattr(tape, name)
+        if name in ("opin", "commit"):
+            return tape.nothing
+        raise AttributeError(name)
+
+
+#: programs longer than this run on the tape interpreter instead of being compiled by numba
+TAPE_THRESHOLD = 300
+
+
+def compile_equations(eqs: Equations, with_jacobian: bool = False) -> Compiled | Taped:
+    """Generate, cache and load the compiled functions of ``eqs`` (large models: a tape)."""
+    if len(eqs.program) > TAPE_THRESHOLD and not with_jacobian:
+        from .tape import TapeUnsupported, build_tape
+        try:
+            tape = build_tape(eqs)
+        except TapeUnsupported:
+            pass
+        else:
+            lay = layout(eqs)
+            lay.n_mem = tape.size
+            return Taped(lay, tape)
     src = generate_source(eqs, with_jacobian)
     key = hashlib.sha256(src.encode()).hexdigest()[:20]
     path = cache_dir() / f"bg_{key}.py"

@@ -144,12 +144,14 @@ class Context:
                 for n in self.calibrate if self.calibrated[n] != 0}
 
     def screen(self, ident: Identification, at: Mapping[str, float], steps: Mapping[str, float],
-               extra: Mapping[str, tuple[float, np.ndarray]] | None = None) -> tuple[float, dict[str, float]]:
+               extra: Mapping[str, tuple[float, np.ndarray]] | None = None,
+               base: np.ndarray | None = None) -> tuple[float, dict[str, float]]:
         """One Gauss–Newton step from ``at``: the output changes for each (non-negative) new
         parameter's step, and the given ``extra`` columns (name → (step, change), e.g. the
         calibration sensitivities), are combined by bounded least squares to explain the
-        residual.  Returns the RMS (fit part) the linearised step predicts, and its values."""
-        base = ident.predict(at)
+        residual (``base``: the prediction at ``at``, if already simulated).  Returns the RMS
+        (fit part) the linearised step predicts, and its values."""
+        base = ident.predict(at) if base is None else base
         cols = [ident.predict({**at, k: at[k] + v}) - base for k, v in steps.items()]
         extra = dict(extra or {})
         cols += [c for _, c in extra.values()]

@@ -233,7 +233,7 @@ def _invert(law: sp.Expr, var: sp.Symbol, new: sp.Symbol) -> sp.Expr | None:
     """Solve new = law(var) for var; None if there is not exactly one real solution."""
     if law.is_polynomial(var) and sp.degree(law, var) == 1:
         a = sp.diff(law, var)
-        return sp.simplify((new - law.subs(var, 0)) / a)
+        return (new - law.subs(var, 0)) / a
     try:
         sols = sp.solve(sp.Eq(law, new), var)
     except NotImplementedError:

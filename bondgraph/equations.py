@@ -294,13 +294,13 @@ class _Deriver:
             (sp_port, sb, ss), = strong
             common = self.e if common_is_effort else self.f
             summed = self.f if common_is_effort else self.e
-            total = 0
+            terms = []
             for port, b, s in ports:
                 if b is sb:
                     continue
                 self._set(common[b.index], common[sb.index], name)
-                total += s * summed[b.index]
-            self._set(summed[sb.index], -ss * total, name)
+                terms.append(s * summed[b.index])
+            self._set(summed[sb.index], -ss * sp.Add(*terms), name)
             self.quantity_map[("e" if common_is_effort else "f", name)] = common[sb.index]
         elif isinstance(elem, CField):
             self._cfield(name, elem, ports, sets)

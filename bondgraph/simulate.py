@@ -13,7 +13,7 @@ from typing import Mapping
 import numpy as np
 import scipy.integrate as si
 
-from .codegen import Compiled, compile_equations, parameter_vector
+from .codegen import Compiled, Taped, compile_equations, parameter_vector
 from .equations import Equations, derive
 from .errors import BondGraphError, ParameterError, SignalError, did_you_mean
 from .graph import Model
@@ -79,7 +79,7 @@ class Simulator:
 
     def __init__(self, model: Model | Equations):
         self.eqs = model if isinstance(model, Equations) else derive(model)
-        self.compiled: Compiled = compile_equations(self.eqs)
+        self.compiled: Compiled | Taped = compile_equations(self.eqs)
         self._jac: Compiled | None = None
         self.state_names = [str(s) for s in self.eqs.state_symbols]
         self.output_names = list(self.eqs.outputs)
@@ -122,6 +122,8 @@ class Simulator:
 
     def initial_memory(self, t0, x0, th, bank: SignalBank) -> np.ndarray:
         lay = self.compiled.layout
+        if hasattr(self.compiled, "tape"):
+            return self.compiled.tape.copy()
         mem = np.zeros(max(lay.n_mem, 1))
         if not self.eqs.operators:
             return mem
