@@ -5,8 +5,13 @@ import shlex
 
 import pytest
 
+import numpy as np
+
+import bondgraph as bg
 from bondgraph.cli import main
+from bondgraph.data import write_csv
 from conftest import ROOT
+from truth import apa_data
 
 README = (ROOT / "README.md").read_text()
 
@@ -16,15 +21,16 @@ def blocks(lang):
 
 
 def readme_commands():
-    cmds = []
+    """The bondgraph commands of each shell block (a block's commands run in order)."""
+    out = []
     for block in blocks("sh"):
+        cmds = []
         for line in block.splitlines():
-            line = line.split("#")[0].strip()
-            for part in line.split("&&"):
-                part = part.strip()
-                if part.startswith("bondgraph "):
-                    cmds.append(part)
-    return cmds
+            line = line.split("  #")[0].strip()
+            cmds += [part.strip() for part in line.split("&&") if part.strip().startswith("bondgraph ")]
+        if cmds:
+            out.append(cmds)
+    return out
 
 
 def test_readme_starts_with_install_run_and_test_commands():
@@ -35,16 +41,17 @@ def test_readme_starts_with_install_run_and_test_commands():
     assert second.strip() in ci.splitlines()
 
 
-@pytest.mark.parametrize("cmd", readme_commands())
-def test_readme_command_runs(cmd, tmp_path, monkeypatch, capsys):
-    argv = shlex.split(cmd)[1:]
-    argv = [str(ROOT / a) if a.startswith("models/") else a for a in argv]
-    argv = [str(tmp_path / a) if a.endswith((".csv", ".png")) else a for a in argv]
+@pytest.mark.parametrize("cmds", readme_commands(), ids=lambda c: c[0][:40])
+def test_readme_commands_run(cmds, tmp_path, monkeypatch, capsys):
+    data = apa_data("creep", duration=2.0, rate=2000.0)  # the README's data.csv: a creeping APA
+    write_csv(tmp_path / "data.csv", data.t, data.columns, data.metadata)
     monkeypatch.chdir(tmp_path)
-    assert main(argv) == 0, capsys.readouterr().err
-    for a in argv:
-        if a.endswith((".csv", ".png")):
-            assert (tmp_path / a).exists() or (tmp_path / a.split("/")[-1]).exists()
+    for cmd in cmds:
+        argv = [str(ROOT / a) if a.startswith("models/") else a for a in shlex.split(cmd)[1:]]
+        assert main(argv) == 0, (cmd, capsys.readouterr().err)
+        for a in argv:
+            if a.endswith((".csv", ".png", ".json")) and not a.startswith("-"):
+                assert (tmp_path / a).exists(), a
 
 
 def test_readme_model_file_prints_the_equations_shown(tmp_path, capsys):
@@ -55,3 +62,21 @@ def test_readme_model_file_prints_the_equations_shown(tmp_path, capsys):
     assert shown, "README shows the equations"
     for line in shown:
         assert line in out
+
+
+def test_readme_operator_example_makes_a_backlash_loop(tmp_path, monkeypatch):
+    (tmp_path / "backlash_example.py").write_text(blocks("python")[1])
+    monkeypatch.syspath_prepend(str(tmp_path))
+    from backlash_example import Backlash
+    g = bg.Model("gap")
+    V = g.input("V")
+    h = g.operator("gap", Backlash(0.5), V)
+    g.add(bg.Se("drive", h), bg.J1("j"), bg.R("r", 1.0))
+    g.bond("drive", "j")
+    g.bond("j", "r")
+    g.output("y", g.effort("r"))
+    t = np.linspace(0, 2, 801)
+    res = bg.simulate(g, t, {"V": bg.Triangle(2.0, 1.0)})
+    up = res["y"][(t > 0.3) & (t < 0.45)] - res["V"][(t > 0.3) & (t < 0.45)]
+    down = res["y"][(t > 0.8) & (t < 0.95)] - res["V"][(t > 0.8) & (t < 0.95)]
+    assert np.allclose(up, -0.5, atol=1e-9) and np.allclose(down, 0.5, atol=1e-9)  # lags by r each way
