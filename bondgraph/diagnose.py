@@ -40,7 +40,7 @@ from .data import Dataset
 from .equations import Equations, derive
 from .errors import BondGraphError, UsageError
 from .graph import Model
-from .identify import FitResult, Identification, Spec, default_spec
+from .identify import FitResult, Identification, Spec, default_spec, uniform_step
 from .lti import LTI
 from .signals import PiecewiseLinear
 from .simulate import SimulationError, Simulator
@@ -487,6 +487,10 @@ def diagnose(model: Model, data: Dataset, calibrate_names: Sequence[str], candid
              source: str = "") -> Report:
     """Run the whole diagnosis (see the module docstring)."""
     say = progress or (lambda s: None)
+    if uniform_step(data.t) is None:  # the exact linear route needs a uniform grid: resample at the median step
+        dt = float(np.median(np.diff(data.t)))
+        say(f"data not uniformly sampled: resampled at its median step {dt:.4g} s")
+        data = data.resample(dt)
     eqs = derive(model)
     ident = Identification(Simulator(eqs), data, input, output, data_input, data_output, validation)
     lti = LTI(eqs, input, output)

@@ -86,11 +86,13 @@ class FitResult:
                 "nfev": self.nfev, "success": self.success, "message": self.message}
 
 
-def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", blocks: int = 30):
+def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", blocks: int = 30,
+                skip: float = 0.02):
     """Boolean (fit, validation) masks over samples.
 
     ``blocks``: ``blocks`` equal time blocks, a share ``validation`` of them (spread evenly,
-    never the first) held out; ``tail``: the last ``validation`` of the time span."""
+    never the first) held out; ``tail``: the last ``validation`` of the time span.  The first
+    ``skip`` of the span is in neither: the model starts at rest, a measured device may not."""
     if not 0.0 < validation < 1.0:
         raise UsageError(f"validation share must be between 0 and 1, not {validation}")
     span = t[-1] - t[0]
@@ -104,7 +106,8 @@ def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", bl
         val = np.isin(k, held)
     else:
         raise UsageError(f"unknown split mode {mode!r}; use blocks or tail")
-    return ~val, val
+    settled = t >= t[0] + skip * span
+    return ~val & settled, val & settled
 
 
 class Identification:
@@ -138,7 +141,7 @@ class Identification:
         self.method = method
         self.nfev = 0
         self.max_fit_points = max_fit_points
-        self.dt = _uniform_step(self.t)
+        self.dt = uniform_step(self.t)
         lti = LTI(self.sim.eqs, input, output) if self.dt is not None else None
         self.lti = lti if lti is not None and lti.exact else None
 
@@ -294,7 +297,8 @@ class Identification:
         return out
 
 
-def _uniform_step(t: np.ndarray) -> float | None:
+def uniform_step(t: np.ndarray) -> float | None:
+    """The sample interval if ``t`` is uniformly spaced (to 1e-6), else None."""
     d = np.diff(t)
     mean = float(np.mean(d))
     return mean if float(np.max(d) - np.min(d)) <= 1e-6 * mean else None

@@ -20,7 +20,7 @@ from .errors import UsageError, did_you_mean
 
 
 @njit(cache=True)
-def _recursion(Ad, Bd, Cd, Dd, x0, U, Y):
+def recursion(Ad, Bd, Cd, Dd, x0, U, Y):
     """x[k+1] = Ad x[k] + Bd u[k], y[k] = Cd x[k] + Dd u[k] for every column of U (one input each)."""
     n = Ad.shape[0]
     N, m = U.shape
@@ -103,7 +103,7 @@ class LTI:
             col = np.ascontiguousarray(U[:, j:j + 1])
             out = np.empty_like(col)
             # the discrete state is ξ = x − Γ1·u (as in scipy.signal.cont2discrete, method 'foh')
-            _recursion(Phi, Gam, Cd, Dd, x0 - G1[:, 0] * col[0, 0], col, out)
+            recursion(Phi, Gam, Cd, Dd, x0 - G1[:, 0] * col[0, 0], col, out)
             Y[:, j] = out[:, 0]
         return Y
 

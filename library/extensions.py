@@ -27,6 +27,7 @@ from bondgraph import C, I, J0, J1, Quantity, R, Se
 from bondgraph.diagnose import Candidate, Context, empirical_frf, model_frf
 from bondgraph.elements import F as F_PLACEHOLDER, P as P_PLACEHOLDER, Q as Q_PLACEHOLDER
 from bondgraph.identify import Spec
+from bondgraph.lti import foh, recursion
 from bondgraph.simulate import SimulationError
 from library.hysteresis import PrandtlIshlinskii, bouc_wen_response, play_outputs, threshold_grid
 
@@ -51,6 +52,16 @@ def lowpass(u: np.ndarray, tau: float, dt: float) -> np.ndarray:
     b0 = tau / dt * (1.0 - a) - a
     zi = signal.lfiltic([b1, b0], [1.0, -a], [u[0]], [u[0]])
     return signal.lfilter([b1, b0], [1.0, -a], u, zi=zi)[0]
+
+
+def resonator_response(u: np.ndarray, dt: float, omega: float, zeta: float) -> np.ndarray:
+    """Displacement of q̈ + 2ζω·q̇ + ω²·q = u for u linear between samples, from rest (exact)."""
+    A = np.array([[0.0, 1.0], [-omega ** 2, -2 * zeta * omega]])
+    Phi, Gam, G1 = foh(A, np.array([[0.0], [1.0]]), dt)
+    Y = np.empty((len(u), 1))
+    U = np.ascontiguousarray(u, float).reshape(-1, 1)
+    recursion(Phi, Gam, np.array([[1.0, 0.0]]), np.array([[G1[0, 0]]]), -G1[:, 0] * u[0], U, Y)
+    return Y[:, 0]
 
 
 def _calib_only(ctx: Context, values: Mapping[str, float]) -> dict[str, float]:
@@ -376,16 +387,26 @@ class ParallelMode(Candidate):
         w, mis = self._mismatch(ctx)
         peaks, _ = signal.find_peaks(mis)
         order = peaks[np.argsort(-mis[peaks])][:3] if peaks.size else np.array([int(np.argmax(mis))])
-        best = None
+        # scan frequency and damping around each peak: the mode's output g·V/(s² + 2ζωs + ω²)
+        # is a fixed filter of the drive, so each trial costs one small linear recursion
+        r = ctx.residual[ctx.ident.fit_idx]
+        trials = []
         for k in order:
-            om = float(w[k])
-            values = {"hm.omega": om, "hm.zeta": 0.02, "hm.g": 0.0}
+            for om in float(w[k]) * np.geomspace(0.85, 1.15, 9):
+                for ze in (0.005, 0.02, 0.06):
+                    d = resonator_response(ctx.u, ctx.dt, om, ze)[ctx.ident.fit_idx]
+                    d, rr = d - d.mean(), r - r.mean()
+                    g = (d @ rr) / max(d @ d, 1e-300)
+                    trials.append((float(np.sum((rr - g * d) ** 2)), om, ze, g))
+        best = None
+        for _, om, ze, g in sorted(trials)[:2]:
+            values = {"hm.omega": om, "hm.zeta": ze, "hm.g": g}
             model = self.build(ctx, values)
-            starts = {"hm.omega": Spec("hm.omega", om, om / 3, om * 3, log=True),
-                      "hm.zeta": Spec("hm.zeta", 0.02, 1e-4, 1.0, log=True),
-                      "hm.g": Spec("hm.g", 0.0, -np.inf, np.inf, scale=1.0, linear=True)}
+            starts = {"hm.omega": Spec("hm.omega", om, om / 2, om * 2, log=True),
+                      "hm.zeta": Spec("hm.zeta", ze, 1e-4, 1.0, log=True),
+                      "hm.g": Spec("hm.g", g, -np.inf, np.inf, scale=abs(g) or 1.0, linear=True)}
             fitted = ctx.fit_model(model, list(starts), starts, linear=["hm.g"], max_nfev=30)
-            ident = ctx.ident.like(self.build(ctx, fitted))
+            ident = ctx.ident.like(model)
             score = ident.scores(ident.predict(fitted))[1]
             if best is None or score < best[0]:
                 best = (score, fitted)
@@ -539,8 +560,9 @@ def _screen_then_fit(ctx: Context, cand: Candidate, starts: Mapping[str, Spec]) 
     for f in (0.001, 0.003, 0.01, 0.03, 0.1, 0.3):
         at = {**ctx.calibrated, **{n: f * starts[n].scale for n in new}}
         try:
-            rms_at = ident.scores(ident.predict(at))[1]
-            rms_pred, values = ctx.screen(ident, at, {n: 0.3 * f * starts[n].scale for n in new}, extra)
+            pred_at = ident.predict(at)
+            rms_at = ident.scores(pred_at)[1]
+            rms_pred, values = ctx.screen(ident, at, {n: 0.3 * f * starts[n].scale for n in new}, extra, pred_at)
         except SimulationError:
             continue
         best = min(best, (rms_at, at), key=lambda b: b[0])
