@@ -16,6 +16,7 @@ compiled integrator.
 from __future__ import annotations
 
 import math
+from abc import abstractmethod
 from typing import Mapping
 
 import numpy as np
@@ -37,10 +38,16 @@ def _drive(ctx: Context) -> sp.Symbol:
     return ctx.model.inputs[ctx.ident.input].symbol
 
 
-def _with_input(ctx: Context, u_eff: sp.Expr):
-    """Copy of the nominal model whose elements see ``u_eff`` instead of the drive input."""
+def _copy(ctx: Context, values: Mapping[str, float]):
+    """Copy of the nominal model carrying the calibration values among ``values``."""
     m = ctx.model.copy()
-    m.values.update(ctx.calibrated)
+    m.values.update(_calib_only(ctx, values))
+    return m
+
+
+def _with_input(ctx: Context, u_eff: sp.Expr, values: Mapping[str, float]):
+    """Copy of the nominal model whose elements see ``u_eff`` instead of the drive input."""
+    m = _copy(ctx, values)
     m.substitute({_drive(ctx): u_eff})
     return m
 
@@ -122,8 +129,7 @@ class InputHysteresis(Candidate):
     def build(self, ctx, values):
         r = self.thresholds(ctx)
         w = [values[f"H.w{i + 1}"] for i in range(len(r))]
-        m = _with_input(ctx, sp.Symbol("H", real=True))
-        m.values.update(_calib_only(ctx, values))
+        m = _with_input(ctx, sp.Symbol("H", real=True), values)
         m.operator("H", PrandtlIshlinskii(r, w), _drive(ctx))
         return m
 
@@ -177,8 +183,7 @@ class InputBoucWen(Candidate):
     def build(self, ctx, values):
         V = _drive(ctx)
         Vr_val = _scale(ctx)
-        m = ctx.model.copy()
-        m.values.update(_calib_only(ctx, values))
+        m = _copy(ctx, values)
         kappa = m.parameter("bw.kappa", values["bw.kappa"], "", "weight of the Bouc-Wen state in the drive")
         beta = m.parameter("bw.beta", values["bw.beta"], "", "Bouc-Wen beta")
         gamma = m.parameter("bw.gamma", values["bw.gamma"], "", "Bouc-Wen gamma")
@@ -235,8 +240,7 @@ class InputCreep(Candidate):
     def build(self, ctx, values):
         n = sum(1 for k in values if k.startswith("creep.c"))
         V = _drive(ctx)
-        m = _with_input(ctx, V + sum(Quantity("q", f"creep.C{k}") for k in range(1, n + 1)))
-        m.values.update(_calib_only(ctx, values))
+        m = _with_input(ctx, V + sum(Quantity("q", f"creep.C{k}") for k in range(1, n + 1)), values)
         m.add(Se("creep.src", V), J0("creep.node"))
         m.bond("creep.src", "creep.node")
         for k in range(1, n + 1):
@@ -290,8 +294,7 @@ class _InputPolynomial(Candidate):
 
     def build(self, ctx, values):
         V = _drive(ctx)
-        m = ctx.model.copy()
-        m.values.update(_calib_only(ctx, values))
+        m = _copy(ctx, values)
         a3 = m.parameter(f"{self.prefix}.a3", values[f"{self.prefix}.a3"], "", "cubic drive coefficient",
                          bounds=(0, 1e6))
         a5 = m.parameter(f"{self.prefix}.a5", values[f"{self.prefix}.a5"], "", "quintic drive coefficient",
@@ -352,8 +355,7 @@ class InputRC(Candidate):
 
     def build(self, ctx, values):
         V = _drive(ctx)
-        m = _with_input(ctx, Quantity("e", "rc.C"))
-        m.values.update(_calib_only(ctx, values))
+        m = _with_input(ctx, Quantity("e", "rc.C"), values)
         Rin = m.parameter("rc.R", values["rc.R"], "ohm", "series resistance of the input stage", bounds=(0, 1e12))
         Cin = m.parameter("rc.C", self.cap, "F", "capacitance of the input stage (only R·C matters)")
         m.add(Se("rc.src", V), J1("rc.i"), R("rc.Rs", Rin), J0("rc.node"), C("rc.C", Cin))
@@ -414,8 +416,7 @@ class ParallelMode(Candidate):
 
     def build(self, ctx, values):
         V = _drive(ctx)
-        m = ctx.model.copy()
-        m.values.update(_calib_only(ctx, values))
+        m = _copy(ctx, values)
         om = m.parameter("hm.omega", values["hm.omega"], "rad/s", "natural frequency of the added mode")
         ze = m.parameter("hm.zeta", values["hm.zeta"], "", "damping ratio of the added mode")
         g = m.parameter("hm.g", values["hm.g"], "m*s^-2/V", "input gain of the added mode (unit modal mass)")
@@ -466,8 +467,7 @@ class OutputMode(Candidate):
 
     def build(self, ctx, values):
         el, _ = self._mass(ctx)
-        m = ctx.model.copy()
-        m.values.update(_calib_only(ctx, values))
+        m = _copy(ctx, values)
         om = m.parameter("om.omega", values["om.omega"], "rad/s", "natural frequency of the output stage")
         ze = m.parameter("om.zeta", values["om.zeta"], "", "damping ratio of the output stage")
         m2 = m.parameter("om.m2", values["om.m2"], "kg", "mass of the output stage")
@@ -499,7 +499,29 @@ def _state_of(ctx: Context, element: str) -> str:
     return next(str(s.symbol) for s in ctx.eqs.states if s.origin == element)
 
 
-class StiffnessSoftening(Candidate):
+class _Centred(Candidate):
+    """A structural nonlinearity, one coefficient per element of ``role``, centred on the
+    data's amplitude (see the subclasses); fitted by :func:`_screen_then_fit`."""
+
+    role = ""
+    prefix = ""
+    cost = 3
+
+    def applies(self, ctx):
+        return bool(ctx.model.with_role(self.role))
+
+    @abstractmethod
+    def refs(self, ctx) -> dict[str, tuple[float, float]]:
+        """(scale of the coefficient, centring amplitude²) per element."""
+
+    def fit(self, ctx):
+        self._refs = self.refs(ctx)
+        starts = {f"{self.prefix}_{el}": Spec(f"{self.prefix}_{el}", 0.0, 0.0, self.upper * sc, scale=sc)
+                  for el, (sc, _) in self._refs.items()}
+        return _screen_then_fit(ctx, self, starts)
+
+
+class StiffnessSoftening(_Centred):
     """Amplitude-dependent stiffness: every element tagged ``stiffness`` gets a cubic softening
     term (seed 001's k1·q³, seed 003's k_a(E)), written centred on the data's amplitude,
     e = law(q) − k3·q·(q² − r²) with r² = 1.5·⟨q²⟩ of the calibrated model: the describing-
@@ -508,10 +530,7 @@ class StiffnessSoftening(Candidate):
 
     cause = "softening"
     label = "cubic softening of the stiffness elements"
-    cost = 3
-
-    def applies(self, ctx):
-        return bool(ctx.model.with_role("stiffness"))
+    role, prefix, upper = "stiffness", "soft.k3", 2.0
 
     def refs(self, ctx) -> dict[str, tuple[float, float]]:
         """(scale of k3, r²) per stiffness element."""
@@ -523,16 +542,9 @@ class StiffnessSoftening(Candidate):
             out[el] = (abs(k_lin) / peaks[name] ** 2, 1.5 * ms[name])
         return out
 
-    def fit(self, ctx):
-        self._refs = self.refs(ctx)
-        starts = {f"soft.k3_{el}": Spec(f"soft.k3_{el}", 0.0, 0.0, 2.0 * sc, scale=sc)
-                  for el, (sc, _) in self._refs.items()}
-        return _screen_then_fit(ctx, self, starts)
-
     def build(self, ctx, values):
         refs = getattr(self, "_refs", None) or self.refs(ctx)
-        m = ctx.model.copy()
-        m.values.update(_calib_only(ctx, values))
+        m = _copy(ctx, values)
         Qp = Q_PLACEHOLDER
         for el in ctx.model.with_role("stiffness"):
             k3 = m.parameter(f"soft.k3_{el}", values[f"soft.k3_{el}"], "", f"cubic softening of {el}", bounds=(0, 1e40))
@@ -592,22 +604,20 @@ def _number(ctx: Context, expr: sp.Expr) -> float:
     return float(expr.xreplace(dict(zip(ctx.eqs.params, ctx.theta()))))
 
 
-class NonlinearDamping(Candidate):
+class NonlinearDamping(_Centred):
     """Amplitude-dependent damping (Stanton type, seed 001): every element tagged ``damping``
     gets e = (c + μ1·q²)·f with q the displacement of the stiffness element on its junction
     (or, with ``velocity`` or when there is none, e = c·f + μ1·f³), μ1 ≥ 0."""
 
     cause = "nonlinear-damping"
     label = "amplitude-dependent (Stanton) damping of the damping elements"
-    cost = 3
+    role, prefix, upper = "damping", "nld.mu1", 50.0
 
     def __init__(self, velocity: bool = False):
         self.velocity = velocity
         if velocity:
             self.label = "velocity-cubic damping of the damping elements"
 
-    def applies(self, ctx):
-        return bool(ctx.model.with_role("damping"))
 
     def _partner(self, ctx, el):
         if self.velocity:
@@ -636,16 +646,9 @@ class NonlinearDamping(Candidate):
                 out[el] = (abs(c_lin) / peaks["output rate"] ** 2, 1.5 * ms["output rate"])
         return out
 
-    def fit(self, ctx):
-        self._refs = self.refs(ctx)
-        starts = {f"nld.mu1_{el}": Spec(f"nld.mu1_{el}", 0.0, 0.0, 50.0 * sc, scale=sc)
-                  for el, (sc, _) in self._refs.items()}
-        return _screen_then_fit(ctx, self, starts)
-
     def build(self, ctx, values):
         refs = getattr(self, "_refs", None) or self.refs(ctx)
-        m = ctx.model.copy()
-        m.values.update(_calib_only(ctx, values))
+        m = _copy(ctx, values)
         for el in ctx.model.with_role("damping"):
             mu1 = m.parameter(f"nld.mu1_{el}", values[f"nld.mu1_{el}"], "", f"nonlinear damping of {el}",
                               bounds=(0, 1e40))
