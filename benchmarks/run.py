@@ -400,9 +400,14 @@ def goal_rows(res):
         ct = median(c["compile"].get("compile_s", []))
         rows.append((f"compilation of the N={nmax} chain < {GOALS['compile_chain320_s']:.0f} s", fmt_s(ct),
                      ct < GOALS["compile_chain320_s"]))
-        cc = median(c["compile"].get("cached_compile_s", []))
-        rows.append(("second run of the same model skips compilation (cached)",
-                     f"{fmt_s(cc)} vs {fmt_s(ct)} cold", cc < 0.2 * ct))
+        # the cache matters for models numba compiles (larger ones run on the tape interpreter,
+        # which has nothing to compile): judge it on the largest chain compiled by numba
+        compiled = [n for n in sorted(d["chain"]) if median(d["chain"][n]["compile"].get("compile_s", [0])) > 0.5]
+        nc = compiled[-1] if compiled else nmax
+        cold = median(d["chain"][nc]["compile"].get("compile_s", []))
+        cc = median(d["chain"][nc]["compile"].get("cached_compile_s", []))
+        rows.append((f"second run of the same model skips compilation (cached; N={nc}, numba-compiled)",
+                     f"{fmt_s(cc)} vs {fmt_s(cold)} cold", cc < 0.2 * cold))
     for s in res.get("simulate") or []:
         rows.append((f"simulation {s['case']}: >= {GOALS['sim_vs_naive']:.0f}x faster than the naive route",
                      f"{s['speedup_vs_naive']:.1f}x", s["speedup_vs_naive"] >= GOALS["sim_vs_naive"]))

@@ -201,17 +201,14 @@ def _fit(args):
     names = [n.strip() for n in (args.params or "").split(",") if n.strip()]
     if not names:
         raise UsageError("fit: give the parameters to fit, e.g. --params a,c,K")
-    ident = Identification(lm.model, data, args.model_input, args.model_output, validation=args.validation,
-                           split=args.split)
     seed = getattr(lm.module, "seed", None)
     if seed is not None:  # the model file's seeding procedure (e.g. Bouc–Wen, seed 002 §5.2)
         start = seed(lm.params, data)
         lm.model.values.update({k: v for k, v in start.items() if k in names})
-        ident = Identification(lm.model, data, args.model_input, args.model_output,
-                               validation=args.validation, split=args.split)
+    ident = Identification(lm.model, data, args.model_input, args.model_output, validation=args.validation,
+                           split=args.split)
     linear = detect_linear(ident, names)
-    report = _progress("fitting")
-    res = ident.fit(ident.specs(names, linear), loss=args.loss, starts=args.starts, progress=lambda n: report(0.0))
+    res = ident.fit(ident.specs(names, linear), loss=args.loss, starts=args.starts, progress=_counter("fitting"))
     out = {"model": str(args.model), "data": str(args.data), "linear": linear, **res.as_json()}
     for n in names:
         sd = res.stderr.get(n)
@@ -268,6 +265,18 @@ def _progress(label: str):
         state["last"], state["shown"] = now, True
         end = "\n" if fraction >= 1.0 else "\r"
         print(f"{label}: {100 * fraction:5.1f} %  ({now - state['t0']:.1f} s)", end=end, file=sys.stderr, flush=True)
+    return report
+
+
+def _counter(label: str):
+    """A progress callback for iterative work: prints the evaluation count every 2 s."""
+    state = {"t0": time.time(), "last": time.time()}
+
+    def report(count: int):
+        now = time.time()
+        if now - state["last"] >= 2.0:
+            state["last"] = now
+            print(f"{label}: {count} simulations ({now - state['t0']:.0f} s)", file=sys.stderr, flush=True)
     return report
 
 

@@ -227,11 +227,7 @@ def compile_equations(eqs: Equations, with_jacobian: bool = False) -> Compiled |
     return Compiled(module, layout(eqs), path)
 
 
-def parameter_vector(eqs: Equations, overrides: dict | None = None) -> np.ndarray:
-    """θ in the order of ``eqs.params`` from the model's values and ``overrides`` (symbol or name → value)."""
+def parameter_vector(eqs: Equations) -> np.ndarray:
+    """θ in the order of ``eqs.params`` from the model's parameter values."""
     table = eqs.model.parameter_table()
-    vals = []
-    by_name = {str(k): v for k, v in (overrides or {}).items()}
-    for p in eqs.params:
-        vals.append(float(by_name.get(p.name, table[p])))
-    return np.array(vals, float)
+    return np.array([float(table[p]) for p in eqs.params], float)

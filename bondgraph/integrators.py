@@ -171,7 +171,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
     """Integrate from t_out[0] to t_out[-1]; write states X and outputs Y at t_out.
 
     Returns a status code (0 ok, see STATUS); ``stats`` receives steps, rejections,
-    right-hand-side calls and reversal rejections.  ``flags``: [the laws use input rates,
+    right-hand-side calls, reversal rejections and output samples written.  ``flags``: [the laws use input rates,
     the outputs use inputs, the operator inputs use inputs].
     """
     n = x0.shape[0]
@@ -383,5 +383,6 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
     stats[1] = n_rej
     stats[2] = n_rhs
     stats[3] = n_rev
+    stats[4] = k_out  # output samples written (the failure time when status != 0)
     return status
 

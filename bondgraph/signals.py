@@ -38,14 +38,26 @@ class Signal:
     table_v: tuple = ()
     label: str = ""
 
-    def breakpoints(self, kinks: bool = False) -> list[float]:
-        """Times where the signal jumps (the integrator restarts there); with ``kinks`` also
-        where its slope jumps (table knots), for models whose laws use the input's rate."""
+    def breakpoints(self, t0: float, t1: float, kinks: bool = False) -> list[float]:
+        """Times in (t0, t1) where the signal jumps (the integrator restarts there); with
+        ``kinks`` also where its slope jumps (ramp start, table knots, triangle corners), for
+        models whose laws use input rates or whose memory operators reverse there."""
         if self.kind == STEP:
-            return [self.par[1]]
-        if self.kind == RAMP and kinks:
-            return [self.par[1]]
-        return list(self.table_t) if self.kind == PWL and kinks else []
+            out = [self.par[1]]
+        elif not kinks:
+            out = []
+        elif self.kind == RAMP:
+            out = [self.par[1]]
+        elif self.kind == PWL:
+            tt = np.asarray(self.table_t)
+            out = tt[(tt > t0) & (tt < t1)].tolist()
+        elif self.kind == TRIANGLE and self.par[1] > 0:  # corners where 2πf·t + φ is a multiple of π
+            k0 = math.ceil((2 * math.pi * self.par[1] * t0 + self.par[2]) / math.pi)
+            k1 = math.floor((2 * math.pi * self.par[1] * t1 + self.par[2]) / math.pi)
+            out = [(k * math.pi - self.par[2]) / (2 * math.pi * self.par[1]) for k in range(k0, k1 + 1)]
+        else:
+            out = []
+        return [b for b in out if t0 < b < t1]
 
     def value(self, t) -> np.ndarray:
         """Signal value at times ``t`` (array), evaluated by the compiled code."""
@@ -112,6 +124,8 @@ class SignalBank:
     """All inputs of a model packed into arrays for the compiled integrator."""
 
     def __init__(self, signals: Mapping[str, Signal], kinks: bool = False):
+        self.signals = list(signals.values())
+        self.kinks = kinks
         sigs = list(signals.values())
         self.names = list(signals)
         self.kind = np.array([s.kind for s in sigs], np.int64)
@@ -121,7 +135,10 @@ class SignalBank:
         self.off = np.concatenate([[0], np.cumsum(lens)[:-1]]).astype(np.int64) if sigs else np.zeros(0, np.int64)
         self.tt = np.array([x for s in sigs for x in s.table_t] or [0.0], float)
         self.tv = np.array([x for s in sigs for x in s.table_v] or [0.0], float)
-        self.breaks = np.unique(np.array([b for s in sigs for b in s.breakpoints(kinks)], float))
+
+    def breaks(self, t0: float, t1: float) -> np.ndarray:
+        """Sorted breakpoints of all inputs in (t0, t1)."""
+        return np.unique(np.array([b for s in self.signals for b in s.breakpoints(t0, t1, self.kinks)], float))
 
     def args(self):
         return self.kind, self.par, self.off, self.len, self.tt, self.tv, np.zeros(len(self.names), np.int64)

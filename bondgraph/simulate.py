@@ -84,6 +84,8 @@ class Simulator:
         self.state_names = [str(s) for s in self.eqs.state_symbols]
         self.output_names = list(self.eqs.outputs)
         self.input_names = [str(u) for u in self.eqs.inputs]
+        self._theta = parameter_vector(self.eqs)
+        self._index = {p.name: i for i, p in enumerate(self.eqs.params)}
         used = set().union(*(e.free_symbols for e in [*self.eqs.rates.values(), *self.eqs.outputs.values(),
                                                        *(st.expr for st in self.eqs.program)]))
         #: laws use input rates, so slope jumps of the inputs are discontinuities to stop at
@@ -103,11 +105,13 @@ class Simulator:
 
     # ---- setup -------------------------------------------------------------------------------
     def theta(self, params: Mapping | None = None) -> np.ndarray:
-        known = {p.name for p in self.eqs.params}
-        for k in params or {}:
-            if str(k) not in known:
-                raise ParameterError(did_you_mean(str(k), known, "parameter"))
-        return parameter_vector(self.eqs, params)
+        """θ from the model's values with ``params`` (name → value) overriding some."""
+        th = self._theta.copy()
+        for k, v in (params or {}).items():
+            if str(k) not in self._index:
+                raise ParameterError(did_you_mean(str(k), self._index, "parameter"))
+            th[self._index[str(k)]] = float(v)
+        return th
 
     def initial_state(self, th: np.ndarray) -> np.ndarray:
         values = dict(zip(self.eqs.params, th))
@@ -118,7 +122,8 @@ class Simulator:
         unknown = set(inputs) - set(self.input_names)
         if unknown:
             raise SignalError(f"model has no input {sorted(unknown)[0]!r}; inputs: {', '.join(self.input_names) or 'none'}")
-        return SignalBank({n: inputs.get(n, Constant(0.0)) for n in self.input_names}, kinks=self.uses_input_rates)
+        return SignalBank({n: inputs.get(n, Constant(0.0)) for n in self.input_names},
+                          kinks=self.uses_input_rates or bool(self.eqs.operators))
 
     def initial_memory(self, t0, x0, th, bank: SignalBank) -> np.ndarray:
         lay = self.compiled.layout
@@ -160,15 +165,15 @@ class Simulator:
         atol_v = np.broadcast_to(np.asarray(atol, float), (n,)).copy()
         if method == "auto":
             method = self.choose_method(t, x, th, mem, bank)
-        X = np.zeros((t.size, n))
-        Y = np.zeros((t.size, len(self.output_names)))
-        stats = np.zeros(4, np.int64)
+        X = np.empty((t.size, n))
+        Y = np.empty((t.size, len(self.output_names)))
+        stats = np.zeros(5, np.int64)
         n_chunks = 1 if progress is None else int(min(50, max(1, t.size // 20000)))
         bounds = np.linspace(0, t.size - 1, n_chunks + 1).round().astype(int)
         for a, b in zip(bounds[:-1], bounds[1:]):
             tc = t[a:b + 1]
-            breaks = bank.breaks[(bank.breaks > tc[0]) & (bank.breaks < tc[-1])]
-            Xc, Yc, st = X[a:b + 1], Y[a:b + 1], np.zeros(4, np.int64)
+            breaks = bank.breaks(tc[0], tc[-1])
+            Xc, Yc, st = X[a:b + 1], Y[a:b + 1], np.zeros(5, np.int64)
             if method == "dopri5":
                 c = self.compiled
                 status = dopri5(c.rhs, c.output, c.opin, c.commit, x, th, mem, len(self.eqs.operators),
@@ -176,7 +181,7 @@ class Simulator:
                                 float(max_step), int(max_steps), Xc, Yc, st, self._flags)
                 if status != 0:
                     raise SimulationError(f"integration failed ({STATUS[int(status)]}) near t = "
-                                          f"{_last_time(tc, Xc):.6g} s; check parameters or try --method radau")
+                                          f"{tc[max(int(st[4]) - 1, 0)]:.6g} s; check parameters or try --method radau")
             else:
                 self._run_scipy(method, tc, x, th, mem, bank, breaks, rtol, atol_v, max_step, Xc, Yc, st)
             stats += st
@@ -290,11 +295,6 @@ class Simulator:
                 peak = np.maximum(peak, np.abs(s.y))
             xx = s.y
         return np.maximum(rtol * peak, ATOL_FLOOR)
-
-
-def _last_time(t, X):
-    nz = np.nonzero(np.any(X != 0, axis=1))[0]
-    return t[nz[-1]] if nz.size else t[0]
 
 
 def simulate(model: Model | Equations, t, inputs: Mapping[str, Signal] | None = None, **kw) -> SimResult:

@@ -69,7 +69,10 @@ def test_cli_diagnose_json_contract(tmp_path, capsys):
     data = apa_data("creep", duration=2.0, rate=2000.0)
     path = tmp_path / "apa.csv"
     write_csv(path, data.t, data.columns, data.metadata)
-    assert main(["diagnose", str(MODELS / "apa120ml.py"), str(path), "--json", "--quiet", "--workers", "1"]) == 0
+    png = tmp_path / "diag.png"
+    assert main(["diagnose", str(MODELS / "apa120ml.py"), str(path), "--json", "--quiet", "--workers", "1",
+                 "--plot", str(png)]) == 0
+    assert png.stat().st_size > 10_000
     out = json.loads(capsys.readouterr().out)
     assert out["cause"] == "creep"
     assert out["gain"] == pytest.approx(out["baseline_rms"] / out["extended_rms"])
