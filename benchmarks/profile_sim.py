@@ -109,43 +109,28 @@ def profile_case(case, t_end: float):
         m = mem.copy()
         cost[name] = _per_call(lambda n, fn=fn, m=m: loop(fn, n, 0.0, x, u, du, th, m, out))
     args = tuple(bank.args())
-    import inspect
-    try:
-        n_params = len(inspect.signature(integ.eval_inputs.py_func).parameters)
-    except (AttributeError, ValueError):
-        n_params = 9
-    if n_params - 3 > len(args):  # a newer signature with a table cursor after the tables
-        args = args + (np.zeros(len(args[0]), np.int64),)
-    if len(args) == 7:
-        @njit
-        def loop_inputs(n, a, u, du):
-            acc = 0.0
-            for k in range(n):
-                integ.eval_inputs(k * 1e-7, a[0], a[1], a[2], a[3], a[4], a[5], a[6], u, du)
-                acc += u[0]
-            return acc
-    else:
-        @njit
-        def loop_inputs(n, a, u, du):
-            acc = 0.0
-            for k in range(n):
-                integ.eval_inputs(k * 1e-7, a[0], a[1], a[2], a[3], a[4], a[5], u, du)
-                acc += u[0]
-            return acc
+
+    @njit
+    def loop_inputs(n, a, u, du):
+        acc = 0.0
+        for k in range(n):
+            integ.eval_inputs(k * 1e-7, a[0], a[1], a[2], a[3], a[4], a[5], a[6], u, du)
+            acc += u[0]
+        return acc
 
     cost["eval_inputs"] = _per_call(lambda n: loop_inputs(n, args, u, du))
-    K = np.random.rand(7, len(x))
+    Q = np.random.rand(4, len(x))  # the step's interpolant, computed once per step
     xd = np.zeros(len(x))
 
     @njit
-    def loop_dense(n, x, K, P, out):
+    def loop_dense(n, x, Q, out):
         acc = 0.0
         for k in range(n):
-            integ._dense(x, K, 1e-4, (k % 100) / 100.0, P, out)
+            integ._dense(x, Q, 1e-4, (k % 100) / 100.0, out)
             acc += out[0]
         return acc
 
-    cost["_dense"] = _per_call(lambda n: loop_dense(n, x, K, integ._P, xd))
+    cost["_dense"] = _per_call(lambda n: loop_dense(n, x, Q, xd))
 
     samples = t.size
     attempts = st["steps"] + st["rejected"]
