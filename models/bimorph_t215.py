@@ -60,6 +60,7 @@ EXPERIMENT = Experiment(t_end=0.5, dt=5e-5, inputs={"V": Chirp(0.3, f0=10.0, f1=
 #: linear parameters the diagnosis calibrates to data before looking for missing effects
 CALIBRATE = ["mp_*", "omega_*", "zeta_*"]
 
+
 def build(p):
     beam = Bimorph(L=p.L, b=p.b, t_p=p.t_p, t_b=p.t_b, rho_p=p.rho_p, rho_b=p.rho_b, c_p=p.c_p, c_b=p.c_b,
                    e31=p.e31)
