@@ -140,6 +140,12 @@ class SignalBank:
         """Sorted breakpoints of all inputs in (t0, t1)."""
         return np.unique(np.array([b for s in self.signals for b in s.breakpoints(t0, t1, self.kinks)], float))
 
+    def table_spacing(self) -> float:
+        """Median sample interval of the tabulated inputs (s); inf when there are none."""
+        gaps = [np.median(np.diff(self.tt[o:o + n])) for k, o, n in zip(self.kind, self.off, self.len)
+                if k == PWL and n > 1]
+        return float(min(gaps)) if gaps else math.inf
+
     def args(self):
         return self.kind, self.par, self.off, self.len, self.tt, self.tv, np.zeros(len(self.names), np.int64)
 

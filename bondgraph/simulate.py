@@ -4,6 +4,11 @@ Methods: ``dopri5`` (compiled Dormand–Prince 5(4), the default), and scipy's s
 ``radau``, ``bdf``, ``lsoda`` fed with the compiled right-hand side and Jacobian.  ``auto``
 picks ``radau`` when the Jacobian's eigenvalues at the start make the explicit method
 stability-bound for more than a few million steps.
+
+An integrator sees the inputs only where it evaluates them, and a step the error test allows
+can stride over a feature of a tabulated input that falls between two stages (a pulse reaching
+a model at rest, whose error estimate is zero): with tables, every method's step is capped at
+``TABLE_STEPS`` sample intervals of the tables.
 """
 from __future__ import annotations
 
@@ -22,6 +27,8 @@ from .signals import Constant, Signal, SignalBank
 
 METHODS = ("auto", "dopri5", "radau", "bdf", "lsoda")
 _EXPLICIT_STEP_LIMIT = 3e6
+#: largest step, in sample intervals (median) of the tabulated inputs
+TABLE_STEPS = 10
 #: default absolute error floor: states start at exactly zero, where a purely relative error
 #: test would chase rounding noise; 1e-20 is far below any SI state magnitude of interest
 ATOL_FLOOR = 1e-20
@@ -165,6 +172,7 @@ class Simulator:
         atol_v = np.broadcast_to(np.asarray(atol, float), (n,)).copy()
         if method == "auto":
             method = self.choose_method(t, x, th, mem, bank)
+        max_step = min(max_step, TABLE_STEPS * bank.table_spacing())
         X = np.empty((t.size, n))
         Y = np.empty((t.size, len(self.output_names)))
         stats = np.zeros(5, np.int64)

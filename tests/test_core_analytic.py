@@ -55,6 +55,23 @@ def test_rc_circuit_step_and_sine():
     assert np.max(np.abs(res["vc"] - va)) < 1e-6
 
 
+@pytest.mark.parametrize("method", ["dopri5", "radau"])
+def test_sampled_pulse_reaches_a_model_at_rest(method):
+    """A 2 ms pulse in a 10 kHz table, 1 s into the record: at rest the error estimate is zero
+    and the step would grow past the pulse; the step cap (10 table intervals) keeps it in view.
+    RC with tau = 0.1 ms: the pulse charges C to 1 - exp(-20) and it decays after."""
+    g = bg.Model("rc")
+    V = g.input("V", "V")
+    g.add(bg.Se("src", V), bg.J1("loop"), bg.R("R", 1e2), bg.C("C", 1e-6))
+    g.chain("src", "loop", "R")
+    g.bond("loop", "C")
+    g.output("vc", g.effort("C"), "V")
+    t = np.linspace(0, 2, 20001)
+    v = np.where((t > 1.0) & (t < 1.002), 1.0, 0.0)
+    res = bg.simulate(g, t, {"V": bg.PiecewiseLinear(t, v)}, method=method, rtol=1e-6)
+    assert res["vc"].max() == pytest.approx(1.0, abs=1e-3)
+    assert abs(res["vc"][-1]) < 1e-6
+
 def test_energy_balance_of_driven_msd():
     """Work done by the source = stored energy + dissipated energy (to integration accuracy)."""
     g = msd()
