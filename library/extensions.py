@@ -557,30 +557,36 @@ class StiffnessSoftening(_Centred):
 def _screen_then_fit(ctx: Context, cand: Candidate, starts: Mapping[str, Spec]) -> dict[str, float]:
     """Fit a structural extension with the integrator.  A nonlinear resonance (jumps, shifted
     peaks) defeats a local fit from zero and biases the linear calibration, so the new
-    parameters are scanned on a log grid of their scales, each grid point improved by one
-    Gauss–Newton step that also moves the calibration; the best of these points (simulated),
-    if it beats the calibrated model by 2 %, starts the local fit."""
+    parameters are scanned on a log grid of their scales (upwards, until the error doubles),
+    each grid point improved by one Gauss–Newton step that also moves the calibration; the best
+    of these points (simulated), if it beats the calibrated model by 2 %, starts the local fit."""
     new = list(starts)
     model = cand.build(ctx, {n: 0.0 for n in new})
     ident = ctx.ident.like(model, rtol=1e-5)
     base = {**ctx.calibrated, **{n: 0.0 for n in new}}
-    base_rms = ident.scores(ident.predict(base))[1]
+    base_pred = ident.predict(base)
+    base_rms = ident.scores(base_pred)[1]
     best = (base_rms, base)
     # calibration sensitivities at the nominal point stand in for those at each grid point
     extra = {n: (0.01 * ctx.calibrated[n], col) for n, col in ctx.calibration_sensitivities().items()}
+    # what moving the calibration alone promises (a calibration held at a bound promises
+    # something): a grid point must promise more than that to be followed
+    floor = min(base_rms, ctx.screen(ident, base, {}, extra, base_pred)[0])
     predicted = []
     for f in (0.001, 0.003, 0.01, 0.03, 0.1, 0.3):
         at = {**ctx.calibrated, **{n: f * starts[n].scale for n in new}}
         try:
             pred_at = ident.predict(at)
             rms_at = ident.scores(pred_at)[1]
+            if rms_at > 2 * base_rms:  # a stronger nonlinearity only strays further
+                break
             rms_pred, values = ctx.screen(ident, at, {n: 0.3 * f * starts[n].scale for n in new}, extra, pred_at)
         except SimulationError:
             continue
         best = min(best, (rms_at, at), key=lambda b: b[0])
         predicted.append((rms_pred, at, values))
     # the Gauss–Newton steps overshoot in a nonlinear resonance: a line search on the two best
-    for _, at, values in [p for p in sorted(predicted, key=lambda p: p[0])[:2] if p[0] < 0.98 * base_rms]:
+    for _, at, values in [p for p in sorted(predicted, key=lambda p: p[0])[:2] if p[0] < 0.98 * floor]:
         for alpha in (1.0, 0.5, 0.25):
             trial = {k: at[k] + alpha * (values[k] - at[k]) for k in values}
             try:
