@@ -60,13 +60,23 @@ class Experiment:
 
 @dataclass
 class SimResult:
-    """Sampled simulation result: ``t`` (s), inputs, outputs and states by name."""
+    """Sampled simulation result: ``t`` (s), inputs, outputs and states by name.
+
+    The inputs are sampled when first asked for (fitting loops read only the outputs)."""
 
     t: np.ndarray
-    inputs: dict[str, np.ndarray]
     outputs: dict[str, np.ndarray]
     states: dict[str, np.ndarray]
     stats: dict = field(default_factory=dict)
+    bank: SignalBank | None = field(default=None, repr=False)
+    _inputs: dict | None = field(default=None, repr=False)
+
+    @property
+    def inputs(self) -> dict[str, np.ndarray]:
+        if self._inputs is None:
+            U = self.bank.sample(self.t)
+            self._inputs = {n: U[:, i] for i, n in enumerate(self.bank.names)}
+        return self._inputs
 
     def __getitem__(self, name: str) -> np.ndarray:
         for d in (self.outputs, self.inputs, self.states):
@@ -196,12 +206,10 @@ class Simulator:
             x = np.ascontiguousarray(Xc[-1])
             if progress is not None:
                 progress(b / (t.size - 1))
-        U = bank.sample(t)
-        ins = {n: U[:, i] for i, n in enumerate(self.input_names)}
-        return SimResult(t, ins, {n: Y[:, i] for i, n in enumerate(self.output_names)},
+        return SimResult(t, {n: Y[:, i] for i, n in enumerate(self.output_names)},
                          {n: X[:, i] for i, n in enumerate(self.state_names)},
                          {"method": method, "steps": int(stats[0]), "rejected": int(stats[1]),
-                          "rhs_calls": int(stats[2]), "reversal_rejections": int(stats[3])})
+                          "rhs_calls": int(stats[2]), "reversal_rejections": int(stats[3])}, bank)
 
     def jacobian_at(self, t0, x, th, mem, bank) -> np.ndarray:
         """∂(dx/dt)/∂x from the compiled symbolic Jacobian."""
