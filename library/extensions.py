@@ -557,9 +557,10 @@ class StiffnessSoftening(_Centred):
 def _screen_then_fit(ctx: Context, cand: Candidate, starts: Mapping[str, Spec]) -> dict[str, float]:
     """Fit a structural extension with the integrator.  A nonlinear resonance (jumps, shifted
     peaks) defeats a local fit from zero and biases the linear calibration, so the new
-    parameters are scanned on a log grid of their scales (upwards, until the error doubles),
-    each grid point improved by one Gauss–Newton step that also moves the calibration; the best
-    of these points (simulated), if it beats the calibrated model by 2 %, starts the local fit."""
+    parameters are scanned on a log grid of their scales (upwards, until the error doubles, or
+    after three points when none of them helped or promised 1 %), each grid point improved by
+    one Gauss–Newton step that also moves the calibration; the best of these points
+    (simulated), if it beats the calibrated model by 2 %, starts the local fit."""
     new = list(starts)
     model = cand.build(ctx, {n: 0.0 for n in new})
     ident = ctx.ident.like(model, rtol=1e-5)
@@ -573,7 +574,9 @@ def _screen_then_fit(ctx: Context, cand: Candidate, starts: Mapping[str, Spec]) 
     # something): a grid point must promise more than that to be followed
     floor = min(base_rms, ctx.screen(ident, base, {}, extra, base_pred)[0])
     predicted = []
-    for f in (0.001, 0.003, 0.01, 0.03, 0.1, 0.3):
+    for k, f in enumerate((0.001, 0.003, 0.01, 0.03, 0.1, 0.3)):
+        if k == 3 and predicted and best[0] >= base_rms and min(p[0] for p in predicted) > 0.99 * floor:
+            break  # weak nonlinearity neither helps nor promises anything: no trace of the effect
         at = {**ctx.calibrated, **{n: f * starts[n].scale for n in new}}
         try:
             pred_at = ident.predict(at)
@@ -624,6 +627,11 @@ class NonlinearDamping(_Centred):
         if velocity:
             self.label = "velocity-cubic damping of the damping elements"
 
+    def applies(self, ctx):
+        """The Stanton form only where some damping element has a stiffness partner (else it
+        is the velocity-cubic form, tried by its own candidate)."""
+        els = ctx.model.with_role(self.role)
+        return bool(els) and (self.velocity or any(self._partner(ctx, el) is not None for el in els))
 
     def _partner(self, ctx, el):
         if self.velocity:
