@@ -557,10 +557,10 @@ class StiffnessSoftening(_Centred):
 def _screen_then_fit(ctx: Context, cand: Candidate, starts: Mapping[str, Spec]) -> dict[str, float]:
     """Fit a structural extension with the integrator.  A nonlinear resonance (jumps, shifted
     peaks) defeats a local fit from zero and biases the linear calibration, so the new
-    parameters are scanned on a log grid of their scales (upwards, until the error doubles, or
-    after three points when none of them helped or promised 1 %), each grid point improved by
-    one Gauss–Newton step that also moves the calibration; the best of these points
-    (simulated), if it beats the calibrated model by 2 %, starts the local fit."""
+    parameters are scanned upwards on a log grid of their scales (stopping after three points
+    when none of them helped or promised 1 %), each grid point improved by one Gauss–Newton
+    step that also moves the calibration; the best of these points (simulated), if it beats
+    the calibrated model by 2 %, starts the local fit."""
     new = list(starts)
     model = cand.build(ctx, {n: 0.0 for n in new})
     ident = ctx.ident.like(model, rtol=1e-5)
@@ -581,8 +581,6 @@ def _screen_then_fit(ctx: Context, cand: Candidate, starts: Mapping[str, Spec]) 
         try:
             pred_at = ident.predict(at)
             rms_at = ident.scores(pred_at)[1]
-            if rms_at > 2 * base_rms:  # a stronger nonlinearity only strays further
-                break
             rms_pred, values = ctx.screen(ident, at, {n: 0.3 * f * starts[n].scale for n in new}, extra, pred_at)
         except SimulationError:
             continue
