@@ -1,15 +1,9 @@
 """Workload 4: ``bondgraph diagnose`` on a 250 000-sample APA-120ML file (wall time, peak memory).
 
-Kept separate from the other workloads: the command does not exist yet.  When
-``bondgraph diagnose --help`` works, this generates the file once (the APA-120ML with the
-modified-PI capacitor driven by a 5 Hz sine, 25 s at 10 kHz = 250 001 samples, written with
-``bondgraph.data.write_csv``; cached under benchmarks/.data/) and times
-``bondgraph diagnose models/apa120ml.py <file>`` end to end in a wrapper process that reports
-the peak resident memory of the command alone.  Until then it prints
-"skipped: diagnose not implemented yet" and reports no figure.
-
-How the data file is passed is read from the command's help: ``--data FILE`` if it has such an
-option, otherwise as the positional argument after the model.
+Generates the file once (the APA-120ML with the modified-PI capacitor driven by a 5 Hz sine,
+25 s at 10 kHz = 250 000 samples, written with ``bondgraph.data.write_csv``; cached under
+benchmarks/.data/) and times ``bondgraph diagnose models/apa120ml.py FILE --json`` end to end
+in a wrapper process that reports the peak resident memory of the command alone.
 """
 from __future__ import annotations
 
@@ -30,13 +24,12 @@ _WRAPPER = (
     "import json, resource, subprocess, sys, time\n"
     "t0 = time.perf_counter()\n"
     "try:\n"
-    "    r = subprocess.run(sys.argv[2:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,\n"
-    "                       timeout=float(sys.argv[1]))\n"
-    "    rc, err = r.returncode, r.stderr\n"
+    "    r = subprocess.run(sys.argv[2:], capture_output=True, text=True, timeout=float(sys.argv[1]))\n"
+    "    rc, out, err = r.returncode, r.stdout, r.stderr\n"
     "except subprocess.TimeoutExpired:\n"
-    "    rc, err = 'timeout', ''\n"
+    "    rc, out, err = 'timeout', '', ''\n"
     "dt = time.perf_counter() - t0\n"
-    "print(json.dumps({'rc': rc, 'seconds': dt, "
+    "print(json.dumps({'rc': rc, 'seconds': dt, 'stdout': out, "
     "'peak_mb': resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024, 'stderr': err[-1500:]}))\n"
 )
 
@@ -46,10 +39,17 @@ def _cli():
     return [exe] if os.path.exists(exe) else [sys.executable, "-m", "bondgraph"]
 
 
-def available() -> tuple[bool, str]:
-    """(True, help text) if ``bondgraph diagnose`` exists."""
-    r = subprocess.run(_cli() + ["diagnose", "--help"], capture_output=True, text=True, cwd=ROOT)
-    return r.returncode == 0, r.stdout + r.stderr
+def timed(cmd: list[str], timeout: float = TIMEOUT) -> dict:
+    """Run ``cmd`` in the wrapper: {'rc', 'seconds', 'peak_mb', 'stdout', 'stderr'} ('rc' = 'timeout'
+    when killed)."""
+    import json
+
+    r = subprocess.run([sys.executable, "-c", _WRAPPER, str(timeout)] + cmd, capture_output=True, text=True, cwd=ROOT)
+    try:
+        return json.loads(r.stdout.strip().splitlines()[-1])
+    except (ValueError, IndexError):
+        return {"rc": f"wrapper failed: {r.stdout[-300:]!r} {r.stderr[-300:]!r}", "seconds": 0.0, "peak_mb": 0.0,
+                "stdout": "", "stderr": ""}
 
 
 def make_data(path: str, samples: int = SAMPLES) -> None:
@@ -70,25 +70,15 @@ def make_data(path: str, samples: int = SAMPLES) -> None:
 
 
 def run(quick: bool = False, log=print) -> dict:
-    ok, help_text = available()
-    if not ok:
-        log("  skipped: diagnose not implemented yet")
-        return {"status": "skipped: diagnose not implemented yet"}
     samples = 25_000 if quick else SAMPLES
     os.makedirs(DATA_DIR, exist_ok=True)
     path = os.path.join(DATA_DIR, f"apa120ml_pi_{samples}.csv")
     if not os.path.exists(path):
         log(f"  generating {path} ({samples} samples)")
         make_data(path, samples)
-    model = os.path.join(ROOT, "models", "apa120ml.py")
-    cmd = _cli() + ["diagnose", model] + (["--data", path] if "--data" in help_text else [path])
+    cmd = _cli() + ["diagnose", os.path.join(ROOT, "models", "apa120ml.py"), path, "--json"]
     log("  " + " ".join(cmd))
-    r = subprocess.run([sys.executable, "-c", _WRAPPER, str(TIMEOUT)] + cmd, capture_output=True, text=True, cwd=ROOT)
-    try:
-        import json
-        rec = json.loads(r.stdout.strip().splitlines()[-1])
-    except (ValueError, IndexError):
-        return {"status": f"failed: wrapper output {r.stdout[-300:]!r} {r.stderr[-300:]!r}"}
+    rec = timed(cmd)
     if rec["rc"] == "timeout":
         log(f"  diagnose: > {TIMEOUT:.0f} s (killed)")
         return {"status": f"> {TIMEOUT:.0f} s (killed at the benchmark's time limit)", "command": cmd,

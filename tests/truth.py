@@ -81,10 +81,10 @@ def measure(model: bg.Model, t: np.ndarray, V: np.ndarray, noise: float, seed: i
 
 
 # ---- APA-like truths ----------------------------------------------------------------------------
-def apa_truth(effect: str) -> bg.Model:
-    """The APA-120ML with changed linear parameters and one hidden effect, built from elements."""
+def apa_truth(effect: str, changes: dict = APA_CHANGES) -> bg.Model:
+    """The APA-120ML with changed linear parameters (factors) and one hidden effect, built from elements."""
     lm = load_model(MODELS / "apa120ml.py", {k: f * load_model(MODELS / "apa120ml.py").params.value(k)
-                                              for k, f in APA_CHANGES.items()})
+                                              for k, f in changes.items()})
     p = lm.params
     if effect == "electrical-rc":
         p.set("Re", 400.0)
@@ -146,12 +146,13 @@ def apa_data(effect: str, duration: float = 6.0, rate: float = 5000.0, noise: fl
 
 
 # ---- bimorph-like truths -------------------------------------------------------------------------
-def t226_truth(effect: str) -> bg.Model:
+def t226_truth(effect: str, changes: dict = T226_CHANGES) -> bg.Model:
+    """The T226 bimorph's first mode with changed modal parameters (factors) and one hidden effect."""
     base = load_model(MODELS / "bimorph_t226.py").model
     table = {str(k): v for k, v in base.parameter_table().items()}
-    w = table["omega_1"] * T226_CHANGES["omega_1"]
-    z = table["zeta_1"] * T226_CHANGES["zeta_1"]
-    mp = table["mp_1"] * T226_CHANGES["mp_1"]
+    w = table["omega_1"] * changes["omega_1"]
+    z = table["zeta_1"] * changes["zeta_1"]
+    mp = table["mp_1"] * changes["mp_1"]
     phi = table["phi_1"]
     g = bg.Model(f"bimorph truth ({effect})")
     V = g.input("V", "V")
