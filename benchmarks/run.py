@@ -594,18 +594,12 @@ def main(argv=None):
     m = res["machine"]
     log(f"machine: {m['cpu']}, {m['cores']} cores, {m['memory']}; Python {m['python']}; "
         + ", ".join(f"{k} {v}" for k, v in m["packages"].items()))
-    if "derive" in wl:
-        log("\n[1] derivation and compilation")
-        res["derive"] = workload_derive(args)
-    if "peers" in wl:
-        log("\n[2] peers")
-        res["peers"] = workload_peers(args)
-    if "simulate" in wl:
-        log("\n[3] simulation")
-        res["simulate"] = workload_simulate(args)
-    if "diagnose" in wl:
-        log("\n[4] diagnosis")
-        res["diagnose"] = workload_diagnose(args)
+    workloads = [("derive", "derivation and compilation", workload_derive), ("peers", "peers", workload_peers),
+                 ("simulate", "simulation", workload_simulate), ("diagnose", "diagnosis", workload_diagnose)]
+    for k, (key, title, work) in enumerate(workloads, 1):
+        if key in wl:
+            log(f"\n[{k}] {title}")
+            res[key] = work(args)
     res["wall_s"] = time.time() - t0
     with open(args.out, "w", encoding="utf-8") as fh:
         json.dump(res, fh, indent=1, default=str)

@@ -124,9 +124,8 @@ class SignalBank:
     """All inputs of a model packed into arrays for the compiled integrator."""
 
     def __init__(self, signals: Mapping[str, Signal], kinks: bool = False):
-        self.signals = list(signals.values())
+        self.signals = sigs = list(signals.values())
         self.kinks = kinks
-        sigs = list(signals.values())
         self.names = list(signals)
         self.kind = np.array([s.kind for s in sigs], np.int64)
         self.par = np.array([s.par for s in sigs], float).reshape(len(sigs), NPAR)

@@ -103,8 +103,7 @@ class Simulator:
         self.input_names = [str(u) for u in self.eqs.inputs]
         self._theta = parameter_vector(self.eqs)
         self._index = {p.name: i for i, p in enumerate(self.eqs.params)}
-        used = set().union(*(e.free_symbols for e in [*self.eqs.rates.values(), *self.eqs.outputs.values(),
-                                                       *(st.expr for st in self.eqs.program)]))
+        used = self._uses([*self.eqs.rates.values(), *self.eqs.outputs.values()])
         #: laws use input rates, so slope jumps of the inputs are discontinuities to stop at
         self.uses_input_rates = bool(used & set(self.eqs.input_rates))
         signals = set(self.eqs.inputs) | set(self.eqs.input_rates)
@@ -144,7 +143,7 @@ class Simulator:
 
     def initial_memory(self, t0, x0, th, bank: SignalBank) -> np.ndarray:
         lay = self.compiled.layout
-        if hasattr(self.compiled, "tape"):
+        if isinstance(self.compiled, Taped):
             return self.compiled.tape.copy()
         mem = np.zeros(max(lay.n_mem, 1))
         if not self.eqs.operators:
