@@ -1,0 +1,104 @@
+"""Defaults in one place: the tolerances, thresholds and limits the framework reads at call time.
+
+    from bondgraph import config
+    config.get("simulate.rtol")                       # 1e-06
+    config.set("diagnosis.min_gain", 1.5)             # until reset
+    with config.override({"simulate.rtol": 1e-9}):    # for a block only
+        ...
+    config.reset()                                    # every value back to its default
+    config.describe()                                 # name, value, default, meaning of each
+
+Names are ``section.key``; each section belongs to one module, which reads its values with
+:func:`get` when it needs them (never at import), so a change takes effect on the next call.
+Worker processes receive a :func:`snapshot` and :func:`restore` it.
+"""
+from __future__ import annotations
+
+import contextlib
+from dataclasses import dataclass
+from typing import Any, Iterator, Mapping
+
+from .errors import UsageError, did_you_mean
+
+
+@dataclass(frozen=True)
+class Default:
+    """A documented default value."""
+
+    value: Any
+    doc: str
+
+
+DEFAULTS: dict[str, Default] = {
+    "simulate.rtol": Default(1e-6, "relative tolerance of the integrators"),
+    "simulate.atol_floor": Default(1e-20, "absolute tolerance floor; the error is otherwise relative to each "
+                                          "state's peak"),
+    "simulate.table_steps": Default(10, "no step spans more than this many sample intervals of a tabulated input"),
+}
+
+_values: dict[str, Any] = {k: d.value for k, d in DEFAULTS.items()}
+
+
+def _check(name: str) -> None:
+    if name not in DEFAULTS:
+        raise UsageError(f"config: {did_you_mean(name, DEFAULTS, 'setting')}")
+
+
+def get(name: str) -> Any:
+    """The current value of setting ``name``."""
+    _check(name)
+    return _values[name]
+
+
+def set(name: str, value: Any) -> None:  # noqa: A001 - the natural verb here
+    """Change setting ``name`` until :func:`reset`; the type must match the default's."""
+    _check(name)
+    default = DEFAULTS[name].value
+    if isinstance(default, (int, float)) and not isinstance(default, bool):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise UsageError(f"config: {name} must be a number, got {value!r}")
+        value = type(default)(value) if isinstance(default, float) else value
+    elif not isinstance(value, type(default)):
+        raise UsageError(f"config: {name} must be a {type(default).__name__}, got {value!r}")
+    _values[name] = value
+
+
+def reset(name: str | None = None) -> None:
+    """Back to the default: one setting, or all of them."""
+    if name is None:
+        _values.clear()
+        _values.update({k: d.value for k, d in DEFAULTS.items()})
+    else:
+        _check(name)
+        _values[name] = DEFAULTS[name].value
+
+
+@contextlib.contextmanager
+def override(values: Mapping[str, Any]) -> Iterator[None]:
+    """Set ``values`` for the duration of a ``with`` block."""
+    saved = snapshot()
+    try:
+        for k, v in values.items():
+            set(k, v)
+        yield
+    finally:
+        restore(saved)
+
+
+def snapshot() -> dict[str, Any]:
+    """Every current value (to hand to a worker process)."""
+    return dict(_values)
+
+
+def restore(values: Mapping[str, Any]) -> None:
+    """Install values taken by :func:`snapshot`."""
+    for k in values:
+        _check(k)
+    _values.clear()
+    _values.update({k: d.value for k, d in DEFAULTS.items()})
+    _values.update(values)
+
+
+def describe() -> list[dict]:
+    """name, value, default and meaning of every setting."""
+    return [{"name": k, "value": _values[k], "default": d.value, "doc": d.doc} for k, d in DEFAULTS.items()]
