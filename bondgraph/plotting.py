@@ -107,6 +107,25 @@ def plot_simulation(res, path: str, title: str = "", units: dict | None = None, 
     plot_signals(res.t, columns if columns is not None else {**res.inputs, **res.outputs}, units or {}, path, title)
 
 
+def plot_fit(t, measured, fitted, path: str, name: str = "y", unit: str = "", title: str = "") -> None:
+    """Measured and fitted output (offset included) on one panel, the residual below."""
+    plt = _pyplot()
+    t = np.asarray(t, float)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
+    a1.plot(*_envelope(t, np.asarray(measured, float)), lw=0.8, label="measured")
+    a1.plot(*_envelope(t, np.asarray(fitted, float)), lw=0.8, label="fitted model")
+    a1.set_ylabel(axis_label(name, unit))
+    a1.legend(fontsize=8, loc="best")
+    a2.plot(*_envelope(t, np.asarray(measured, float) - np.asarray(fitted, float)), lw=0.6, color="tab:red")
+    a2.set_ylabel(axis_label("residual", unit))
+    a2.set_xlabel("t (s)")
+    for a in (a1, a2):
+        a.grid(alpha=0.3)
+    if title:
+        a1.set_title(title, fontsize=9)
+    save(fig, path)
+
+
 def plot_bode(w, H, path: str, title: str = "", input: tuple[str, str] = ("u", ""),
               output: tuple[str, str] = ("y", "")) -> None:
     """Magnitude and phase of the frequency response H(jω) of ``output`` to ``input``
