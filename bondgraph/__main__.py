@@ -1,15 +1,24 @@
 """``python -m bondgraph`` and the ``bondgraph`` command.
 
-The interrupt handlers are installed before anything else is imported, so even a Ctrl-C
-during start-up ends with one line and status 130 (see :mod:`bondgraph.cli.runner`).
+A Ctrl-C (or SIGTERM) handler is the very first thing installed, so even an interrupt during
+start-up ends with one line and status 130 (143); :mod:`bondgraph.interrupt` then takes over.
 """
+import os
+import signal
 import sys
 
 
-def run() -> None:
-    from .cli import runner
+def _early(signum, frame):  # noqa: ARG001 - before any work: nothing to clean up
+    os.write(2, b"bondgraph: interrupted; no output file was changed\n")
+    os._exit(130 if signum == signal.SIGINT else 143)
 
-    with runner.handle_signals():
+
+def run() -> None:
+    signal.signal(signal.SIGINT, _early)
+    signal.signal(signal.SIGTERM, _early)
+    from . import interrupt
+
+    with interrupt.handle_signals():
         from .cli import main
         code = main()
     sys.exit(code)

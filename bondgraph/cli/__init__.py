@@ -4,7 +4,7 @@ Each command lives in its own module, its arguments declared next to its functio
 (:func:`registry.command`).  Exit status: 0 success, 2 usage or input error (one line on
 stderr, no traceback), 1 internal failure (``--debug`` shows the traceback), 130 interrupted
 by Ctrl-C and 143 by SIGTERM (one line; temporary files removed, worker processes killed,
-existing files untouched: see :mod:`.runner`).
+existing files untouched: see :mod:`bondgraph.interrupt`).
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ import warnings
 
 from ..errors import BondGraphError, UsageError
 from . import causality, diagnose, equations, fit, linearize, params, simulate  # noqa: F401 (registration)
-from . import runner
+from .. import interrupt
 from .registry import COMMANDS, Parser
 
 DEBUG_HELP = "show the traceback of an error"
@@ -42,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
     debug = "--debug" in argv
-    with runner.handle_signals():
+    with interrupt.handle_signals():
         try:
             parser = build_parser()
             args = parser.parse_args(argv)
@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
                 warnings.simplefilter("default")
                 warnings.simplefilter("ignore", RuntimeWarning)  # numpy's overflow/invalid notes: results are checked
                 warnings.showwarning = _show_warning
-                runner.run(COMMANDS[args.command].run, args)
+                interrupt.run(COMMANDS[args.command].run, args)
             return 0
         except BondGraphError as exc:
             if debug:

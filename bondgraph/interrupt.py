@@ -1,4 +1,7 @@
-"""Running a command so that Ctrl-C (SIGINT) and SIGTERM end it at once, cleanly.
+"""Ending a command at once, cleanly, on Ctrl-C (SIGINT) or SIGTERM.
+
+Used by the command line (``bondgraph.cli``); standard library only, so the ``bondgraph``
+command installs the handlers before it imports anything else.
 
 The command runs in a worker thread while the main thread waits for it.  Python delivers
 signals to the main thread only, between two bytecodes, so a command busy in compiled code
@@ -13,8 +16,8 @@ minutes; the waiting main thread sees it within 0.1 s.  It then
 
 Worker processes forked by the command inherit the handler and leave silently on the
 terminal's Ctrl-C (which reaches the whole process group), so they print no traceback.
-Pools started with ``spawn``/``forkserver`` should ignore SIGINT in their initializer
-(``signal.signal(signal.SIGINT, signal.SIG_IGN)``); they are killed all the same.
+Pools started with ``spawn``/``forkserver`` should pass :func:`worker_initializer` as their
+initializer (it ignores SIGINT); they are killed all the same.
 """
 from __future__ import annotations
 
@@ -23,7 +26,6 @@ import os
 import signal
 import sys
 import threading
-from typing import Callable
 
 _STATUS = {signal.SIGINT: 130, signal.SIGTERM: 143}
 _NAMES = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated (SIGTERM)"}
@@ -40,7 +42,7 @@ def _on_signal(signum, frame):  # noqa: ARG001 - signal handler signature
 
 def stop(signum: int) -> None:
     """Clean up (temporary files, child processes) and exit now with one line on stderr."""
-    from ..atomic import COMMIT_LOCK, remove_temporary_files
+    from .atomic import COMMIT_LOCK, remove_temporary_files
 
     got = COMMIT_LOCK.acquire(timeout=1.5)  # let a commit under way finish (renames only)
     try:
@@ -75,7 +77,7 @@ def handle_signals():
             signal.signal(s, h if h is not None else signal.SIG_DFL)
 
 
-def run(fn: Callable, *args) -> None:
+def run(fn, *args) -> None:
     """``fn(*args)`` in a worker thread while this (main) thread stays ready for signals;
     an exception of ``fn`` is raised here.  Outside the main thread, ``fn`` runs directly."""
     if threading.current_thread() is not threading.main_thread():
@@ -95,6 +97,11 @@ def run(fn: Callable, *args) -> None:
         worker.join(0.1)
     if "exc" in box:
         raise box["exc"]
+
+
+def worker_initializer() -> None:
+    """Pool initializer for worker processes: ignore Ctrl-C (the parent ends them)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def kill_children() -> None:
