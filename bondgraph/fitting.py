@@ -72,6 +72,11 @@ def fit_parameters(loaded: LoadedModel, data: Dataset, names: Sequence[str], *, 
     if twice:
         raise UsageError(f"fit: {', '.join(twice)} listed twice in the parameters to fit; list each once")
     model = loaded.model
+    decl = model.all_parameters()
+    for n in names:
+        if n in decl and decl[n].kind != "real":
+            raise UsageError(f"fit: '{n}' is {decl[n].expected()}, not a real number; only real-valued parameters "
+                             f"can be fitted (set it with --set {n}=...)")
     input = input or next(iter(model.inputs), "")
     output = output or next(iter(model.outputs), "")
     seed = getattr(loaded.module, "seed", None)

@@ -70,6 +70,11 @@ def read_model_module(path: str | Path):
     declared = list(module.PARAMETERS)
     if not all(isinstance(d, Parameter) for d in declared):
         raise ModelError(f"model file {path}: PARAMETERS must be a list of bondgraph.Parameter")
+    names = [d.name for d in declared]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ModelError(f"model file {path}: parameter {', '.join(repr(n) for n in twice)} declared twice in "
+                         f"PARAMETERS; declare each name once")
     return module, declared
 
 

@@ -89,6 +89,13 @@ def _check_numbers(args):
         if not math.isfinite(v) or v <= 0 or (name == "rtol" and v >= 1):
             bound = "between 0 and 1" if name == "rtol" else "a positive number"
             raise UsageError(f"--{name.replace('_', '-')} must be {bound}, got {v}")
+    v = getattr(args, "validation", None)
+    if v is not None and not 0 < v < 1:
+        raise UsageError(f"--validation is the share of the data held out; it must be between 0 and 1, got {v}")
+    for name in ("workers", "starts"):
+        v = getattr(args, name, None)
+        if v is not None and v < 1:
+            raise UsageError(f"--{name} must be at least 1, got {v}")
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None):

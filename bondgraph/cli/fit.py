@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import sys
 
-from ..errors import UsageError
 from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, command, counter, load, outputs, read_data
 
 
@@ -32,8 +31,6 @@ from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, comm
 def run(args):
     from ..fitting import fit_parameters
 
-    if args.starts < 1:
-        raise UsageError(f"--starts must be at least 1, got {args.starts}")
     with outputs(args, "out", "plot") as out:
         lm = load(args)
         data = read_data(args)
