@@ -91,11 +91,6 @@ def stack_constants(*, d33, s33E, eps33T, area, length, h) -> dict:
     return {"l": h, "a": d33 * h / (eps33T * area), "K": K_i / (1 - k33sq), "kx": 1 / (eps33T * area * length)}
 
 
-def stack_stiffness(*, s33E, area, length):
-    """Internal (short-circuit) stiffness K_i = A/(l·s33^E) (N/m), seed 004 eq. 3."""
-    return area / (length * s33E)
-
-
 def free_stroke(V, *, d33, length, h):
     """Free stroke U = d33·E·l with E = V/h (m), seed 004 eqs. 4-5."""
     return d33 * (V / h) * length

@@ -16,7 +16,7 @@ import traceback
 import warnings
 
 from ..errors import BondGraphError, UsageError
-from . import causality, diagnose, equations, fit, linearize, params, simulate  # noqa: F401 (registration)
+from . import causality, compensate, diagnose, equations, fit, linearize, params, simulate  # noqa: F401 (registration)
 from .. import interrupt
 from .registry import COMMANDS, Parser
 
