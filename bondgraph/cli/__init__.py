@@ -12,7 +12,7 @@ import traceback
 import warnings
 
 from ..errors import BondGraphError, UsageError
-from . import causality, diagnose, equations, fit, linearize, params, simulate  # noqa: F401 (registration)
+from . import batch, causality, diagnose, equations, fit, linearize, params, simulate  # noqa: F401 (registration)
 from .registry import COMMANDS, Parser
 
 
