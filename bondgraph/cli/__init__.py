@@ -16,7 +16,17 @@ import traceback
 import warnings
 
 from ..errors import BondGraphError, UsageError
-from . import causality, compensate, diagnose, equations, fit, linearize, params, simulate  # noqa: F401 (registration)
+from . import (  # noqa: F401 (registration: one command module per line)
+    batch,
+    causality,
+    compensate,
+    diagnose,
+    equations,
+    fit,
+    linearize,
+    params,
+    simulate,
+)
 from .. import interrupt
 from .registry import COMMANDS, Parser
 
