@@ -67,6 +67,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import sympy as sp
 
 from bondgraph import C, CField, Component, I, J0, J1, Model, ModelError, R, Se, TF
@@ -251,6 +252,98 @@ def add_triangular_drive(m: Model, *, V1, V2, d33, s33E, eps33T, area, length, h
         m.output("i1", m.flow("Re1"), "A", "drive current of stack 1")
         m.output("i2", m.flow("Re2"), "A", "drive current of stack 2")
     return TriangularDrive(x, y, deltas[0], deltas[1], consts, formulation)
+
+
+def wave_factor(omega, *, rho, s33E, length):
+    """gamma*l*cot(gamma*l) with the wave number gamma = omega*sqrt(rho*s33E) (Hassani &
+    Tjahjowidodo 2013, eqs. 10 and 17): 1 in the quasi-static limit, 1 - (gamma l)^2/3 + ... (the
+    stack's moving mass rho*A*l/3) at low frequency. Numbers (numpy) only."""
+    gl = np.asarray(omega, float) * np.sqrt(rho * s33E) * length
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(gl == 0.0, 1.0, gl / np.tan(np.where(gl == 0.0, 1.0, gl)))
+
+
+def dynamic_stiffness(omega, *, k_e, m_e, zeta):
+    """K_e(omega) = k_e*(1 - (omega/omega_n)^2 + 2i*zeta*omega/omega_n), omega_n = sqrt(k_e/m_e):
+    the structure's dynamic stiffness at the stack head (eq. 13), N/m, complex."""
+    wn = np.sqrt(k_e / m_e)
+    w = np.asarray(omega, float)
+    return k_e * (1.0 - (w / wn) ** 2 + 2j * zeta * w / wn)
+
+
+def stiffness_ratio(omega, *, K_i, k_e, m_e, zeta):
+    """r(omega) = K_e(omega)/K_i, the stiffness ratio of eq. 16 (complex)."""
+    return dynamic_stiffness(omega, k_e=k_e, m_e=m_e, zeta=zeta) / K_i
+
+
+def contact_displacement(omega, U, *, K_i, k_e, m_e, zeta, rho, s33E, length):
+    """Displacement phasor of the stack head against the structure, eq. 17 (m):
+    u(l, omega) = U / (gamma*l*cot(gamma*l) + r(omega)), with U the free stroke: d33*E*l in the
+    constitutive route, the measured (hysteretic) stroke in eqs. 18-19."""
+    r = stiffness_ratio(omega, K_i=K_i, k_e=k_e, m_e=m_e, zeta=zeta)
+    return U / (wave_factor(omega, rho=rho, s33E=s33E, length=length) + r)
+
+
+def tip_displacement(U1, U2, *, omega, K_i, k_x, k_y, m_x, m_y, c_x, c_y, rho, s33E, length, half_angle=45.0):
+    """Tip phasors (X, Y) (m) of the two-stack drive for free-stroke phasors U1, U2, eq. 17 applied
+    to the symmetric pair: in the antisymmetric motion (delta1 = -delta2) each stack sees the
+    body's x dynamic stiffness K_x(omega) = k_x - omega^2 m_x + i omega c_x as
+    K_x/(2 sin^2 theta), in the symmetric one K_y/(2 cos^2 theta), so
+
+        X = (U1 - U2) / (2 sin theta (gamma l cot gamma l + r_x)),  r_x = K_x(omega)/(2 sin^2 theta K_i)
+        Y = (U1 + U2) / (2 cos theta (gamma l cot gamma l + r_y)),  r_y = K_y(omega)/(2 cos^2 theta K_i)
+
+    (m_x, m_y: body masses without the stacks, whose inertia is in the wave term)."""
+    th = np.radians(half_angle)
+    s, c = np.sin(th), np.cos(th)
+    g = wave_factor(omega, rho=rho, s33E=s33E, length=length)
+    Kx = k_x - omega ** 2 * m_x + 1j * omega * c_x
+    Ky = k_y - omega ** 2 * m_y + 1j * omega * c_y
+    return ((U1 - U2) / (2 * s * (g + Kx / (2 * s * s * K_i))),
+            (U1 + U2) / (2 * c * (g + Ky / (2 * c * c * K_i))))
+
+
+def ellipse_axes(X, Y) -> np.ndarray:
+    """Semi-axes (major, minor) of the closed path (Re(X e^{i w t}), Re(Y e^{i w t})) traced by
+    tip phasors X, Y: the singular values of [[Re X, Im X], [Re Y, Im Y]]."""
+    return np.linalg.svd(np.array([[np.real(X), np.imag(X)], [np.real(Y), np.imag(Y)]], float),
+                         compute_uv=False)
+
+
+@dataclass(frozen=True)
+class MeasuredStroke:
+    """Free-stroke amplitude of a stack measured at several drive frequencies (Hassani &
+    Tjahjowidodo 2013, Table 1 and Sec. 4.2: the stroke falls as the frequency rises, so eqs.
+    18-19 feed the measured stroke into eq. 17 instead of d33*E*l).
+
+    frequencies: ascending drive frequencies (Hz); amplitudes: stroke amplitudes (m) measured at
+    drive amplitude ``voltage`` (V). Between the table points the amplitude is interpolated
+    linearly in log(frequency) and log(amplitude); outside it is an error."""
+
+    frequencies: tuple
+    amplitudes: tuple
+    voltage: float
+
+    def __post_init__(self):
+        f, a = np.asarray(self.frequencies, float), np.asarray(self.amplitudes, float)
+        if f.ndim != 1 or f.size < 2 or f.size != a.size or np.any(np.diff(f) <= 0) or f[0] <= 0:
+            raise ModelError("measured stroke: give at least two ascending positive frequencies, "
+                             "one amplitude each")
+        if np.any(a <= 0) or not self.voltage > 0:
+            raise ModelError("measured stroke: amplitudes and the drive voltage must be positive")
+
+    def amplitude(self, frequency: float) -> float:
+        """Stroke amplitude (m) at ``frequency`` (Hz) and the table's drive voltage."""
+        f = float(frequency)
+        lo, hi = self.frequencies[0], self.frequencies[-1]
+        if not lo <= f <= hi:
+            raise ModelError(f"measured stroke: drive frequency {f:g} Hz is outside the measured "
+                             f"{lo:g}-{hi:g} Hz; use the constitutive stroke there")
+        return float(np.exp(np.interp(np.log(f), np.log(self.frequencies), np.log(self.amplitudes))))
+
+    def per_volt(self, frequency: float) -> float:
+        """Stroke per volt of drive amplitude (m/V) at ``frequency`` (Hz)."""
+        return self.amplitude(frequency) / self.voltage
 
 
 def static_tip_displacement(U1, U2, *, K_i, k_x, k_y, half_angle=45):
