@@ -1,4 +1,6 @@
-"""Triangular-based piezoelectric drive (seed 004, Hassani & Tjahjowidodo, MSSP 36 (2013)):
+"""Triangular-based piezoelectric drive after Hassani, V., Tjahjowidodo, T. "Structural response
+investigation of a triangular-based piezoelectric drive mechanism to hysteresis effect of the
+piezoelectric actuator." Mechanical Systems and Signal Processing 36 (2013) (cited by equation):
 two piezo stacks, 90° apart, under a compliant triangular body whose head (the tip) moves in
 the x-y plane.  Built only from the ``bondgraph`` public API and :mod:`library.piezo`.
 
@@ -19,7 +21,7 @@ viscous damper (m_x, k_x, c_x and m_y, k_y, c_y; the paper's FE frequency respon
 equivalent set m_e, k_e, ζ_e and notes that y is stiffer than x).  The paper's dynamic
 stiffness K_e(ω) = k_e·(1 − (ω/ω_n)² + 2iζω/ω_n) is what a stack sees of such a body.
 
-Stacks.  Each stack is the lumped seed-002 stack (:func:`library.piezo.piezo_layer` with a
+Stacks.  Each stack is the lumped stack of Rodriguez-Fortun et al. 2010 (:func:`library.piezo.piezo_layer` with a
 linear polarization law) with N = length/h layers, expressed in the paper's data sheet
 quantities (Section 2, eqs. 3-5): stiffness K_i = A/(l·s33^E), field E = V/h, free stroke
 U = d33·E·l.  :func:`stack_constants` gives the layer constants (l, a, K, kx) for which a
@@ -77,8 +79,8 @@ from .piezo import layer_extension, linear_polarization, piezo_layer
 
 def stack_constants(*, d33, s33E, eps33T, area, length, h) -> dict:
     """Layer constants (l, a, K, kx) of :func:`library.piezo.piezo_layer` for a lumped stack of
-    N = length/h layers of thickness h and cross-section ``area`` (seed 004 eqs. 3-5 in the
-    seed-002 three-domain form).  Values may be numbers or sympy expressions.
+    N = length/h layers of thickness h and cross-section ``area`` (Hassani & Tjahjowidodo 2013, eqs. 3-5 in the
+    three-domain form of Rodriguez-Fortun et al. 2010).  Values may be numbers or sympy expressions.
 
     * kx = 1/(C^T·h²) with the free capacitance C^T = N·ε33^T·area/h, i.e. kx = 1/(ε33^T·area·length);
     * a = N·d33/C^T = d33·h/(ε33^T·area): free stroke per charge, so the free stroke per volt
@@ -93,7 +95,7 @@ def stack_constants(*, d33, s33E, eps33T, area, length, h) -> dict:
 
 
 def free_stroke(V, *, d33, length, h):
-    """Free stroke U = d33·E·l with E = V/h (m), seed 004 eqs. 4-5."""
+    """Free stroke U = d33·E·l with E = V/h (m), Hassani & Tjahjowidodo 2013, eqs. 4-5."""
     return d33 * (V / h) * length
 
 
@@ -104,7 +106,7 @@ def piezo_stack(name: str, *, d33, s33E, eps33T, area, length, h, c_stack=None, 
     k = stack_constants(d33=d33, s33E=s33E, eps33T=eps33T, area=area, length=length, h=h)
     return piezo_layer(name, l=k["l"], a=k["a"], K=k["K"], R_NL=c_stack,
                        polarization=lambda c, n: linear_polarization(c, n, k["kx"]),
-                       doc=doc or "lumped piezo stack of length/h layers (seed 004 eqs. 3-5)")
+                       doc=doc or "lumped piezo stack of length/h layers (Hassani & Tjahjowidodo 2013, eqs. 3-5)")
 
 
 def _sin_cos(half_angle):
@@ -151,7 +153,7 @@ def triangular_body(name: str = "body", *, k_x, k_y, m_x, m_y, c_x, c_y, half_an
 
 def drive_field(name: str, *, K, a, C1, k_x, k_y, half_angle=45) -> CField:
     """The elastic and dielectric energy of both stacks and the body as one 4-port C-field
-    (ports ``Q1``, ``d1``, ``Q2``, ``d2``): seed-002 'model 1' per stack plus the body springs,
+    (ports ``Q1``, ``d1``, ``Q2``, ``d2``): 'model 1' of Rodriguez-Fortun et al. 2010 per stack plus the body springs,
 
         U = Σ_i [½·K·(δ_i − a·Q_i)² + Q_i²/(2·C1)] + ½·k_x·x² + ½·k_y·y²,
         x = (δ1 − δ2)/(2 sinθ),  y = (δ1 + δ2)/(2 cosθ).
@@ -197,7 +199,7 @@ def add_triangular_drive(m: Model, *, V1, V2, d33, s33E, eps33T, area, length, h
     (Ω), the stacks and the body ``body`` (:func:`triangular_body`).
 
     formulation:
-      ``layers``: stacks ``stack1``/``stack2`` are seed-002 three-domain lumped stacks
+      ``layers``: stacks ``stack1``/``stack2`` are three-domain lumped stacks (Rodriguez-Fortun et al. 2010)
         (:func:`piezo_stack`, i.e. :func:`library.piezo.piezo_layer`), the body has its own
         springs.  8 states, of which two combinations are conserved (δ_i computed from the
         stack and from the tip position agree for all time): the linearisation has two
