@@ -1,5 +1,13 @@
-"""Rate-independent hysteresis operators: Prandtl–Ishlinskii (play and stop forms), the modified
-PI of seed 002 eq. 12, and the Maxwell-slip model of seed 003.
+"""Rate-independent hysteresis operators: Prandtl–Ishlinskii (play and stop forms), the modified PI
+(dead zones on the absolute PI sum, eq. 12, or measured from the last reversal, Sec. 5.3) of
+Rodriguez-Fortun, J.M., Orus, J., Buil, F., Castellanos, J.A. "General bond graph model for
+piezoelectric actuators and methodology for experimental identification." Mechatronics 20 (2010)
+303-314, with exact inverses, and the Maxwell-slip model of Wood, R.J., Steltz, E., Fearing, R.S.
+"Nonlinear performance limits for high energy density piezoelectric bending actuators." Proc. IEEE
+ICRA, Barcelona, 2005. The initial-memory convention follows Ghafarirad, H., Rezaei, S.M., Sarhan,
+A.A.D., Zareinejad, M. "Continuous dynamic modelling of bimorph piezoelectric cantilevered
+actuators considering hysteresis effect and dynamic behaviour analysis." Mathematical and
+Computer Modelling of Dynamical Systems 21(2) (2015) 130-152.
 
 Physics-free: every operator maps a scalar input v to an output y. Play/stop thresholds r_i and
 Maxwell-slip yield displacements carry the units of v, dead zones d_j the units of the PI sum,
@@ -7,7 +15,7 @@ weights w_i the units of y per unit of v. Each class is a :class:`MemoryOperator
 ``output``/in-place ``commit`` kernels, parameters in one flat float64 array).
 
 Memory of a play-based operator is the vector of play outputs (for Maxwell slip: the slip
-positions, which are the same thing). Initial memory convention, used throughout (seed 000
+positions, which are the same thing). Initial memory convention, used throughout (Ghafarirad et al. 2015
 eq. 32 with y_0 = 0): at rest at v0 each play holds the value reached by a monotone approach
 from the demagnetised state v = 0, h_i = max(v0 - r_i, min(v0 + r_i, 0)). With this convention
 the analytic inverse of :meth:`PrandtlIshlinskii.inverse` is exact from rest: the monotone
@@ -76,7 +84,7 @@ class _PlayBank(MemoryOperator):
 
 
 class PrandtlIshlinskii(_PlayBank):
-    """Play form y = sum_i w_i H_{r_i}[v] (seed 002 eqs. 10-11, seed 000 eq. 33).
+    """Play form y = sum_i w_i H_{r_i}[v] (Rodriguez-Fortun et al. 2010, eqs. 10-11, Ghafarirad et al. 2015, eq. 33).
 
     ``thresholds`` r_i >= 0 in units of v, ``weights`` w_i in units of y/v;
     prm = [r_1..r_n, w_1..w_n], memory = the n play outputs (units of v).
@@ -450,7 +458,7 @@ class InverseRelativeModifiedPI(_DeadZonePI):
 
 
 class MaxwellSlip(MemoryOperator):
-    """Maxwell slip (seed 003): n parallel branches, spring k_i in series with a Coulomb slip
+    """Maxwell slip (Wood, Steltz & Fearing 2005): n parallel branches, spring k_i in series with a Coulomb slip
     element of break-away force f_i. Input displacement delta, output force
     F = sum_i k_i (delta - delta_i); branch i sticks while |k_i (delta - delta_i)| < f_i.
 
@@ -542,7 +550,7 @@ def threshold_grid(v, n: int) -> np.ndarray:
     """n equally spaced thresholds 0, R/n, ..., (n-1)R/n with R = (max v - min v)/2, units of v.
 
     A play only opens a loop when the input swings by more than 2r, so R is the largest useful
-    threshold (seed 002: r_i = P_i / 2 over the input range).
+    threshold (Rodriguez-Fortun et al. 2010: r_i = P_i / 2 over the input range).
     """
     v = np.asarray(v, dtype=np.float64)
     return np.linspace(0.0, 0.5 * float(np.ptp(v)), int(n), endpoint=False)

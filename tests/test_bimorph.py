@@ -64,7 +64,7 @@ def test_table2_natural_frequencies_from_the_console_script():
 
 @pytest.mark.parametrize("target, nmp", [(0.7, True), (0.9, False), (0.95, False)])
 def test_rhp_zeros_depend_on_the_target_point(capsys, target, nmp):
-    """Seed 000 Sec. 3.1 / 4.1: two modes, non-minimum phase at 0.7 L, minimum phase at 0.9 L, 0.95 L."""
+    """Ghafarirad et al. 2015, Sec. 3.1 / 4.1: two modes, non-minimum phase at 0.7 L, minimum phase at 0.9 L, 0.95 L."""
     res = cli_json(capsys, "linearize", T215, "--set", f"target={target}", "--json")
     assert len(res["natural_frequencies_rad_s"]) == 2
     if nmp:
