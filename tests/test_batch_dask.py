@@ -10,6 +10,7 @@ must give exactly the draws and statistics of a serial loop over the same draws.
 import contextlib
 import csv
 import glob
+import importlib.util
 import json
 import math
 import os
@@ -149,6 +150,8 @@ def test_local_cluster_batch_diagnosis_with_a_failing_record(records, direct, tm
     said, done = [], []
     table = batch.diagnose(APA, records, workers=2, say=said.append, progress=lambda d, n: done.append((d, n)))
     assert "local Dask cluster of 2 worker processes" in said[0]
+    if importlib.util.find_spec("bokeh"):
+        assert "; dashboard: http://" in said[0]
     assert done[-1] == (3, 3) and [d for d, _ in done] == sorted(d for d, _ in done)
     check_diagnosis_rows(table, records, direct)
     table.write(tmp_path / "lot.csv")
