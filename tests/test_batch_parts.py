@@ -156,6 +156,15 @@ def test_memo_builds_each_structure_once_per_process(msd):
     assert rows[2]["peak(x)"] == float(np.max(np.abs(direct["x"])))
 
 
+def test_a_components_own_parameter_changes_only_the_parameter_vector():
+    path = str(MODELS / "bimorph_t226.py")
+    jobs._simulator.cache_clear()
+    for f in (0.9, 1.0, 1.1):
+        sim, numeric = jobs.built(path, {"omega_1": 1000.0 * f})  # declared by the beam-mode component
+        assert numeric == {"omega_1": 1000.0 * f}
+    assert jobs.memo_info()["misses"] == 1
+
+
 # ---- sensitivities with known answers ------------------------------------------------------------
 def test_regression_sensitivity_recovers_a_linear_law():
     rng = np.random.default_rng(0)
