@@ -34,6 +34,10 @@ DEFAULTS: dict[str, Default] = {
     "simulate.atol_floor": Default(1e-20, "absolute tolerance floor; the error is otherwise relative to each "
                                           "state's peak"),
     "simulate.table_steps": Default(10, "no step spans more than this many sample intervals of a tabulated input"),
+    "batch.connect_timeout": Default(10.0, "seconds to wait for the Dask scheduler named by --scheduler"),
+    "batch.tasks_per_worker": Default(4, "short jobs (simulations) are grouped into about this many Dask tasks "
+                                         "per worker"),
+    "batch.max_jobs_per_task": Default(32, "at most this many short jobs in one Dask task"),
     "causality.max_attempts": Default(100_000, "causality assignment gives up after this many revised choices "
                                                "in one part of the graph (reported as an error naming its elements)"),
     "codegen.tape_threshold": Default(300, "programs with more statements run on the tape interpreter instead of "
