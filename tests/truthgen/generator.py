@@ -69,6 +69,8 @@ class Record:
     effect_size: tuple           # RMS(with - without effect) / noise RMS, per cause
     visible_size: tuple          # what the best plausible linear refit leaves / noise RMS
     attempts: int                # rounds of the visibility rule used
+    clean: np.ndarray            # noise-free x (m, before the sensor) at the instants x was taken
+    clean0: np.ndarray           # the same without the hidden effects
     seconds: float = 0.0         # generation time
     extra: dict = field(default_factory=dict)
 
@@ -217,7 +219,7 @@ def draw(seed: int, size: str = "ci") -> Record:
             ctx["ref"] = ref
             drive_version += 1
     order = sorted(range(len(mechs)), key=lambda i: -visible[i]) if mechs else []
-    t, Vs, x, noise_rms = measure.sample(t_fine, V, y, shape.fs, n, noise, stroke)
+    t, Vs, x, noise_rms, (clean, clean0) = measure.sample(t_fine, V, y, shape.fs, n, noise, stroke, [y, y0])
     return Record(
         seed=int(seed), size=size, family=fam.name, model=fam.model, overrides=overrides,
         t=t, V=Vs, x=x, causes=tuple(causes[i] for i in order),
@@ -226,5 +228,5 @@ def draw(seed: int, size: str = "ci") -> Record:
         params=p, nominal=nominal, drive=spec, fs=shape.fs, duration=shape.T, noise=noise,
         noise_rms=noise_rms, stroke=stroke,
         effect_size=tuple(effect[i] for i in order), visible_size=tuple(visible[i] for i in order),
-        attempts=attempts, seconds=time.perf_counter() - start,
+        attempts=attempts, clean=clean, clean0=clean0, seconds=time.perf_counter() - start,
         extra={"regime": shape.regime, "substeps": m})

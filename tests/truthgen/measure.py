@@ -70,8 +70,9 @@ def _quantise(x, lsb):
     return np.round(x / lsb) * lsb
 
 
-def sample(t_fine, V_fine, y_fine, fs: float, n: int, spec: dict, stroke: float):
-    """(t, V, x, noise RMS) of ``n`` samples at ``fs`` measured from the fine-grid truth.
+def sample(t_fine, V_fine, y_fine, fs: float, n: int, spec: dict, stroke: float, others=()):
+    """(t, V, x, noise RMS, [other fine-grid signals at the instants x is taken]) of ``n``
+    samples at ``fs`` measured from the fine-grid truth ``y_fine``.
 
     ``stroke`` is the effect-free peak-to-peak displacement (m) the noise level refers to."""
     rng = np.random.default_rng(spec["seed"])
@@ -88,7 +89,9 @@ def sample(t_fine, V_fine, y_fine, fs: float, n: int, spec: dict, stroke: float)
     else:
         t = instants = k
     V = np.interp(instants, t_fine, V_fine)
-    y = CubicSpline(t_fine, y_fine)(instants + spec["delay"] * dt)
+    at = instants + spec["delay"] * dt
+    y = CubicSpline(t_fine, y_fine)(at)
+    sampled = [CubicSpline(t_fine, o)(at) for o in others]
 
     gain = spec["gain"]
     sigma = spec["level"] * stroke * gain
@@ -104,4 +107,4 @@ def sample(t_fine, V_fine, y_fine, fs: float, n: int, spec: dict, stroke: float)
         V = V + spec["v_noise"] * v_span * rng.standard_normal(n)
     if spec["v_bits"]:
         V = _quantise(V, v_span / 2 ** spec["v_bits"])
-    return t, V, x, float(np.sqrt(np.mean((x - gain * y - spec["offset"] * stroke) ** 2)))
+    return t, V, x, float(np.sqrt(np.mean((x - gain * y - spec["offset"] * stroke) ** 2))), sampled

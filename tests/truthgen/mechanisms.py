@@ -15,7 +15,7 @@ Strengths (dimensionless unless stated):
 cause              mechanism                   strength
 =================  ==========================  ================================================
 hysteresis         preisach, bouc-wen, duhem   width of the quasi-static major loop over its
-                                               range (largest vertical gap), 0.05-0.2
+                                               range (largest vertical gap), 0.06-0.25
 hysteresis         maxwell-slip                total slider stiffness over the device stiffness
                                                (stack: K; bimorph: omega_1^2), 0.05-0.6
 creep              log-time                    strain gain per decade of time, 0.005-0.03
@@ -108,13 +108,13 @@ def creep_cells(kind, strength, shape, T):
 # ----------------------------------------------------------------------------- stacks
 
 def _hysteresis_shape(name):
-    """A random operator of the family whose own loop is at least 0.3 of its range wide (so that
+    """A random operator of the family whose own loop is at least 0.4 of its range wide (so that
     realistic loop widths need no more hysteretic than reversible response)."""
     def shape(rng, ctx):
         for _ in range(50):
             op = HYSTERESIS[name](rng)
             gap, span = loop_stats(op)
-            if gap >= 0.3 * span:
+            if gap >= 0.4 * span:
                 break
         return {"op": op, "gap": gap, "span": span}
     return shape
@@ -229,7 +229,7 @@ def _sensor_apply(fx, s, shape, ctx):
 def _stack_mechanisms():
     out = []
     for name in ("preisach", "bouc-wen", "duhem"):
-        out.append(Mechanism("hysteresis", name, 0.05, 0.2, *_stack_field_hysteresis(name)))
+        out.append(Mechanism("hysteresis", name, 0.06, 0.25, *_stack_field_hysteresis(name)))
     out.append(Mechanism("hysteresis", "maxwell-slip", 0.05, 0.6, _stack_slip_shape, _stack_slip_apply))
     out.append(Mechanism("creep", "log-time", 0.005, 0.03, *_stack_creep("log-time")))
     out.append(Mechanism("creep", "fractional", 0.02, 0.12, *_stack_creep("fractional")))
@@ -254,7 +254,8 @@ def _bim_input_hysteresis(name):
         op, w = shape["op"], hysteretic_weight(s, shape)
 
         def drive_map(V):
-            return V + w * half * op.apply((V - c) / half)
+            h_ = op.apply((V - c) / half)
+            return V + w * half * (h_ - h_[0])
         fx.drive_map = drive_map
     return _hysteresis_shape(name), apply
 
@@ -410,7 +411,7 @@ def _fixture_apply(fx, s, shape, ctx):
 def _bimorph_mechanisms():
     out = []
     for name in ("preisach", "bouc-wen", "duhem"):
-        out.append(Mechanism("hysteresis", name, 0.05, 0.2, *_bim_input_hysteresis(name)))
+        out.append(Mechanism("hysteresis", name, 0.06, 0.25, *_bim_input_hysteresis(name)))
     out.append(Mechanism("hysteresis", "maxwell-slip", 0.05, 0.6, _stack_slip_shape, _bim_slip_apply))
     out.append(Mechanism("creep", "log-time", 0.005, 0.03, *_bim_creep("log-time")))
     out.append(Mechanism("creep", "fractional", 0.02, 0.12, *_bim_creep("fractional")))
