@@ -19,7 +19,8 @@ from bondgraph.modelfile import load_model
 from bondgraph.simulate import simulate as bondgraph_simulate
 from truthgen import SEEDS, VISIBLE, design, draw
 from truthgen import bimorph, drives, stack
-from truthgen.families import FAMILIES, ROOT, Shape, factor
+from truthgen.draws import factor
+from truthgen.families import FAMILIES, ROOT, Shape
 from truthgen.mechanisms import MECHANISMS, creep_cells
 from truthgen.operators import HYSTERESIS, MaxwellSlip, loop_stats
 from truthgen.runner import _chain, diagnose_record, score
@@ -65,6 +66,7 @@ def test_every_cause_of_every_family_has_mechanisms_and_revealing_drives():
             causes = tuple(c for c in entry.split("+") if c != "none")
             for cause in causes:
                 assert len(MECHANISMS[fam.physics][cause]) >= 3, (fam.name, cause)
+                assert set(fam.reveal[cause]) <= set(drives.KINDS)
             assert fam.drive_kinds(causes, fam.shape("bench", causes, np.random.default_rng(0), {})), entry
 
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import drives, measure
+from .draws import loguniform
 from .families import FAMILIES
 from .mechanisms import MECHANISMS
 from .system import simulate
@@ -127,10 +128,6 @@ def _drive_summary(spec: dict) -> dict:
     return {k: (v if not isinstance(v, list) or len(v) <= 6 else f"{len(v)} values") for k, v in spec.items()}
 
 
-def _loguniform(rng, lo, hi):
-    return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
-
-
 def _rms(a):
     return float(np.sqrt(np.mean(np.square(a))))
 
@@ -173,7 +170,7 @@ def draw(seed: int, size: str = "ci") -> Record:
         usable = [m_ for _, m_ in sorted(MECHANISMS[fam.physics][c].items()) if m_.applies(ctx)]
         mechs.append(usable[int(r_mech.integers(len(usable)))])
     shapes = [mech.shape(r_mech, ctx) for mech in mechs]
-    strengths = [_loguniform(r_mech, mech.lo, mech.hi) for mech in mechs]
+    strengths = [loguniform(r_mech, mech.lo, mech.hi) for mech in mechs]
 
     cache: dict = {}
 

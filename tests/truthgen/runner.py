@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -53,6 +54,20 @@ def score(truth_causes: tuple, ordered: bool, cause: str, causes: list) -> dict:
     return {"right": right, "first_right": first_right}
 
 
+def _end_group(proc: subprocess.Popen) -> None:
+    """Terminate the process group of ``proc`` (the diagnosis and its workers), then kill."""
+    for sig, wait in ((signal.SIGTERM, 5.0), (signal.SIGKILL, 5.0)):
+        try:
+            os.killpg(proc.pid, sig)
+        except ProcessLookupError:
+            break
+        try:
+            proc.communicate(timeout=wait)
+            break
+        except subprocess.TimeoutExpired:
+            continue
+
+
 def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: float = 600.0,
                     workers: int = 1, extra: list | None = None) -> dict:
     """Write ``record`` to CSV, run ``python -m bondgraph diagnose MODEL DATA --json`` on it and
@@ -71,21 +86,25 @@ def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: f
             cmd += ["--set", s]
         cmd += list(extra or [])
         start = time.perf_counter()
+        # its own process group, so that a timeout ends the diagnosis *and* its worker pool
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp,
+                                start_new_session=True)
         try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=tmp)
+            stdout, stderr = proc.communicate(timeout=timeout)
         except subprocess.TimeoutExpired:
+            _end_group(proc)
             result["wall"] = round(time.perf_counter() - start, 1)
             result["error"] = f"timeout after {timeout:g} s"
             result.update(right=False, first_right=False)
             return result
         result["wall"] = round(time.perf_counter() - start, 1)
     if proc.returncode != 0:
-        last = (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
+        last = (stderr.strip().splitlines() or ["(no message)"])[-1]
         result["error"] = f"exit {proc.returncode}: {last[:300]}"
         result.update(right=False, first_right=False)
         return result
     try:
-        out = json.loads(proc.stdout)
+        out = json.loads(stdout)
     except json.JSONDecodeError as exc:
         result["error"] = f"unreadable JSON ({exc})"
         result.update(right=False, first_right=False)
