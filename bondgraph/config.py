@@ -34,6 +34,9 @@ DEFAULTS: dict[str, Default] = {
     "simulate.atol_floor": Default(1e-20, "absolute tolerance floor; the error is otherwise relative to each "
                                           "state's peak"),
     "simulate.table_steps": Default(10, "no step spans more than this many sample intervals of a tabulated input"),
+    "simulate.max_steps": Default(50_000_000, "a run stops with an error after this many integrator steps"),
+    "simulate.explicit_step_limit": Default(3e6, "method 'auto' picks radau when the explicit method would need more "
+                                                 "steps than this (from the start-point Jacobian's eigenvalues)"),
     "causality.max_attempts": Default(100_000, "causality assignment gives up after this many revised choices "
                                                "in one part of the graph (reported as an error naming its elements)"),
     "codegen.tape_threshold": Default(300, "programs with more statements run on the tape interpreter instead of "

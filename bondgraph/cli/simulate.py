@@ -28,7 +28,7 @@ from .registry import MODEL_ARGS, arg, command, load, progress
 def run(args):
     from ..data import write_csv
     from ..signals import parse_signal
-    from ..simulate import ATOL_FLOOR, Simulator
+    from ..simulate import Simulator
 
     lm = load(args)
     exp = lm.experiment
@@ -43,7 +43,7 @@ def run(args):
     sim = Simulator(lm.model)
     rtol = exp.rtol if args.rtol is None else args.rtol
     res = sim.run(t, inputs, method=args.method or exp.method, rtol=rtol,
-                  atol=ATOL_FLOOR if args.atol is None else args.atol,
+                  atol=args.atol,
                   progress=progress("simulating") if not args.quiet else None)
     meta = {"model": str(args.model), "method": res.stats["method"], "rtol": str(rtol)}
     for name, sig in inputs.items():
