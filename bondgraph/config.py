@@ -37,6 +37,10 @@ DEFAULTS: dict[str, Default] = {
     "simulate.max_steps": Default(50_000_000, "a run stops with an error after this many integrator steps"),
     "simulate.explicit_step_limit": Default(3e6, "method 'auto' picks radau when the explicit method would need more "
                                                  "steps than this (from the start-point Jacobian's eigenvalues)"),
+    "batch.connect_timeout": Default(10.0, "seconds to wait for the Dask scheduler named by --scheduler"),
+    "batch.tasks_per_worker": Default(4, "short jobs (simulations) are grouped into about this many Dask tasks "
+                                         "per worker"),
+    "batch.max_jobs_per_task": Default(32, "at most this many short jobs in one Dask task"),
     "causality.max_attempts": Default(100_000, "causality assignment gives up after this many revised choices "
                                                "in one part of the graph (reported as an error naming its elements)"),
     "codegen.tape_threshold": Default(300, "programs with more statements run on the tape interpreter instead of "
