@@ -113,10 +113,9 @@ class MemoryOperator(ABC):
     def run(self, v: np.ndarray, prm: np.ndarray | None = None) -> np.ndarray:
         """Apply the operator to a sampled input sequence, from rest at ``v[0]``, with the
         compiled kernels the integrator uses (output, then commit, at every sample)."""
-        prm = self.parameter_values() if prm is None else prm
-        prm = np.ascontiguousarray(prm, dtype=np.float64)
-        v = np.ascontiguousarray(v, dtype=np.float64)
-        mem = np.ascontiguousarray(self.initial_memory(float(v[0]), prm), dtype=np.float64)
+        prm = np.array(self.parameter_values() if prm is None else prm, dtype=np.float64)  # private,
+        v = np.array(v, dtype=np.float64)                                                 # writable copies
+        mem = np.array(self.initial_memory(float(v[0]), prm), dtype=np.float64)
         k = self.kernels()
         y = np.empty_like(v)
         _run_kernels(k.output, k.commit, v, mem, prm, y)
@@ -179,30 +178,47 @@ def _compile(cls: type, which: str, fn, sig):
                 return fn
             except NumbaError:  # e.g. it calls plain Python helpers: compile them with its source
                 fn = fn.py_func
-        return _jit(fn, sig, {})
+        cache = len({f.__code__.co_filename for f in _plain_functions(fn, {})}) == 1
+        return _jit(fn, sig, {}, cache)
     except NumbaError as exc:
         raise ModelError(f"{_name(cls)}: {which}(v, mem, prm) cannot be compiled by numba in nopython mode "
                          f"({_numba_reason(exc)}); use numbers, numpy arrays, math and numpy functions, and "
                          f"functions that obey the same rules") from None
 
 
-def _jit(fn, sig, done: dict):
-    """njit ``fn`` after compiling the plain Python functions it calls (recursively)."""
-    if isinstance(fn, Dispatcher):
-        return fn
+def _helpers(fn) -> dict:
+    """The plain Python functions ``fn`` reads as globals, by name."""
+    return {name: fn.__globals__[name] for name in _global_names(fn.__code__)
+            if isinstance(fn.__globals__.get(name), types.FunctionType)}
+
+
+def _plain_functions(fn, seen: dict) -> dict:
+    """``fn`` and every plain Python function it reaches through its helpers."""
+    if fn not in seen:
+        seen[fn] = True
+        for h in _helpers(fn).values():
+            _plain_functions(h, seen)
+    return seen
+
+
+def _jit(fn, sig, done: dict, cache: bool):
+    """njit ``fn`` after compiling the plain Python functions it calls (recursively).
+
+    numba's disk cache is invalidated by changes to the file of the function it compiled, not
+    to the files of functions it calls, so it is used only when all of them share one file."""
     if fn in done:
         return done[fn]
-    helpers = {name: fn.__globals__[name] for name in _global_names(fn.__code__)
-               if isinstance(fn.__globals__.get(name), types.FunctionType)}
+    helpers = _helpers(fn)
     target = fn
     if helpers:
         done[fn] = None  # recursion guard: a self-recursive helper keeps its own name
         namespace = dict(fn.__globals__)
-        namespace.update({name: _jit(h, None, done) or h for name, h in helpers.items()})
+        namespace.update({name: _jit(h, None, done, cache) or h for name, h in helpers.items()})
         target = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
         target.__qualname__, target.__module__ = fn.__qualname__, fn.__module__
+    options = {"cache": True} if cache else {}
     try:
-        compiled = njit(sig, cache=True)(target) if sig is not None else njit(cache=True)(target)
+        compiled = njit(sig, **options)(target) if sig is not None else njit(**options)(target)
     except RuntimeError:  # no place to cache (a function defined in exec'd text)
         compiled = njit(sig)(target) if sig is not None else njit(target)
     done[fn] = compiled

@@ -177,3 +177,11 @@ def test_broken_kernel_in_a_model_file_is_a_one_line_error(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert status == 2 and "internal error" not in err and len(err.splitlines()) == 1
     assert "Op (kind 'bad')" in err and "undefined_name" in err
+
+
+def test_run_takes_read_only_arrays():
+    """Dataset columns are read-only; run() works on a private copy."""
+    v, prm = V.copy(), np.array([0.3])
+    v.setflags(write=False)
+    prm.setflags(write=False)
+    np.testing.assert_array_equal(StaticBacklash(0.3).run(v, prm), reference(V, 0.3))
