@@ -1,15 +1,17 @@
-"""Examples are tests: every command and the model file shown in README.md run, and the
-printed equations match what the README shows."""
+"""Examples are tests: every command and Python example of README.md runs, in the order the
+README gives them and in one working directory (as a reader would type them), and the numbers
+the README shows are the numbers they give."""
+import contextlib
+import io
 import re
 import shlex
 
-import pytest
-
 import numpy as np
+import pytest
 
 import bondgraph as bg
 from bondgraph.cli import main
-from bondgraph.data import write_csv
+from bondgraph.data import read_csv, write_csv
 from conftest import ROOT
 from truth import apa_data
 
@@ -18,6 +20,10 @@ README = (ROOT / "README.md").read_text()
 
 def blocks(lang):
     return re.findall(rf"```{lang}\n(.*?)```", README, re.S)
+
+
+def python_block(containing: str) -> str:
+    return next(b for b in blocks("python") if containing in b)
 
 
 def readme_commands():
@@ -33,6 +39,13 @@ def readme_commands():
     return out
 
 
+def shown_number(pattern: str) -> float:
+    """A number the README prints, found by a regular expression with one group."""
+    m = re.search(pattern, README.replace("\n", " "))
+    assert m, f"README shows {pattern}"
+    return float(m.group(1))
+
+
 def test_readme_starts_with_install_run_and_test_commands():
     first, second = blocks("sh")[:2]
     assert "pip install -e" in first and "bondgraph simulate" in first
@@ -41,17 +54,82 @@ def test_readme_starts_with_install_run_and_test_commands():
     assert second.strip() in ci.splitlines()
 
 
-@pytest.mark.parametrize("cmds", readme_commands(), ids=lambda c: c[0][:40])
-def test_readme_commands_run(cmds, tmp_path, monkeypatch, capsys):
-    data = apa_data("creep", duration=2.0, rate=2000.0)  # the README's data.csv: a creeping APA
-    write_csv(tmp_path / "data.csv", data.t, data.columns, data.metadata)
-    monkeypatch.chdir(tmp_path)
-    for cmd in cmds:
-        argv = [str(ROOT / a) if a.startswith("models/") else a for a in shlex.split(cmd)[1:]]
-        assert main(argv) == 0, (cmd, capsys.readouterr().err)
-        for a in argv:
-            if a.endswith((".csv", ".png", ".json")) and not a.startswith("-"):
-                assert (tmp_path / a).exists(), a
+@pytest.fixture(scope="module")
+def readme_dir(tmp_path_factory):
+    """The reader's working directory: the README's model file as msd.py and its data.csv
+    (a creeping APA record)."""
+    d = tmp_path_factory.mktemp("readme")
+    (d / "msd.py").write_text(blocks("python")[0])
+    data = apa_data("creep", duration=2.0, rate=2000.0)
+    write_csv(d / "data.csv", data.t, data.columns, data.metadata)
+    return d
+
+
+@pytest.fixture(scope="module")
+def ran(readme_dir):
+    """Run every README command in order; returns {command: (stdout, stderr)}."""
+    import os
+
+    outputs = {}
+    old = os.getcwd()
+    os.chdir(readme_dir)
+    try:
+        for cmds in readme_commands():
+            for cmd in cmds:
+                argv = [str(ROOT / a) if a.startswith("models/") else a for a in shlex.split(cmd)[1:]]
+                out, err = io.StringIO(), io.StringIO()
+                with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                    rc = main(argv)
+                assert rc == 0, (cmd, err.getvalue())
+                for a in argv:
+                    if a.endswith((".csv", ".png", ".json", ".py")) and not a.startswith("-") and "=" not in a:
+                        assert (readme_dir / a).exists(), a
+                outputs[cmd] = (out.getvalue(), err.getvalue())
+    finally:
+        os.chdir(old)
+    return outputs
+
+
+def test_readme_commands_run(ran):
+    assert len(ran) == sum(len(c) for c in readme_commands())
+
+
+def test_readme_fit_file_numbers(ran, readme_dir):
+    fit_cmd = next(c for c in ran if "apa.csv --params" in c)
+    out = ran[fit_cmd][0]
+    offset = float(re.search(r"offset of x\s+(\S+)\s+m", out).group(1))
+    rms_fit, rms_val = map(float, re.search(r"rms error: fit (\S+) m, validation (\S+) m", out).groups())
+    assert offset == pytest.approx(shown_number(r"prints `offset of x\s+(\S+)\s+m`"), rel=2e-3)
+    assert rms_fit == pytest.approx(shown_number(r"rms error: fit (\S+) m,"), rel=2e-3)
+    assert rms_val == pytest.approx(shown_number(r"validation\s+(\S+) m`"), rel=2e-3)
+    apa, refit = read_csv(readme_dir / "apa.csv"), read_csv(readme_dir / "refit.csv")
+    np.testing.assert_array_equal(refit.t, apa.t)
+    miss = float(np.sqrt(np.mean((refit.columns["x"] - apa.columns["x"]) ** 2)))
+    assert miss == pytest.approx(shown_number(r"`apa.csv` by (\S+) m RMS"), rel=1e-2)
+    assert miss == pytest.approx(rms_val, rel=0.1), "re-simulating with the fit file reproduces the fit"
+    stroke = np.ptp(apa.columns["x"])
+    assert stroke * 1e6 == pytest.approx(shown_number(r"RMS of a (\d+) µm stroke"), abs=0.5)
+    without = float(np.sqrt(np.mean((refit.columns["x"] - offset - apa.columns["x"]) ** 2)))
+    assert without * 1e6 == pytest.approx(shown_number(r"without the offset it would miss by (\d+) µm"), abs=0.5)
+
+
+def test_readme_python_control_example(ran, readme_dir, monkeypatch):
+    pytest.importorskip("control")
+    monkeypatch.syspath_prepend(str(readme_dir))
+    namespace = {}
+    exec(python_block("from plant import model"), namespace)
+    import control
+    wn, zeta, _ = control.damp(namespace["model"], doprint=False)
+    assert wn == pytest.approx([10.0, 10.0]) and zeta == pytest.approx([0.1, 0.1])
+    assert control.dcgain(namespace["model"]) == pytest.approx(0.01)
+
+
+def test_readme_energy_example_prints_what_it_shows(capsys):
+    exec(python_block("energy drift"), {})
+    shown = re.search(r"energy drift.*?prints\n\n```\n(.*?)```", README, re.S).group(1)
+    assert capsys.readouterr().out == shown
+    drifts = [float(x) for x in re.findall(r"drift (\S+)", shown)]
+    assert abs(drifts[1]) < 1e-4 < abs(drifts[0]), "rtol 1e-8 keeps the drift within 1e-4, the default does not"
 
 
 def test_readme_model_file_prints_the_equations_shown(tmp_path, capsys):
@@ -65,7 +143,7 @@ def test_readme_model_file_prints_the_equations_shown(tmp_path, capsys):
 
 
 def test_readme_operator_example_makes_a_backlash_loop(tmp_path, monkeypatch):
-    (tmp_path / "backlash_example.py").write_text(blocks("python")[1])
+    (tmp_path / "backlash_example.py").write_text(python_block("class Backlash"))
     monkeypatch.syspath_prepend(str(tmp_path))
     from backlash_example import Backlash
     g = bg.Model("gap")
