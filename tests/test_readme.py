@@ -1,5 +1,5 @@
-"""Examples are tests: every command and Python example of README.md runs, in the order the
-README gives them and in one working directory (as a reader would type them), and the numbers
+"""Examples are tests: every command and Python example of README.md runs (a shell block's
+commands in order, in a directory with the README's model file and data), and the numbers
 the README shows are the numbers they give."""
 import contextlib
 import io
@@ -54,55 +54,57 @@ def test_readme_starts_with_install_run_and_test_commands():
     assert second.strip() in ci.splitlines()
 
 
-@pytest.fixture(scope="module")
-def readme_dir(tmp_path_factory):
-    """The reader's working directory: the README's model file as msd.py and its data.csv
-    (a creeping APA record)."""
-    d = tmp_path_factory.mktemp("readme")
+def setup_dir(d):
+    """The reader's working directory: the README's model file as msd.py and its data.csv (a
+    creeping APA record)."""
     (d / "msd.py").write_text(blocks("python")[0])
     data = apa_data("creep", duration=2.0, rate=2000.0)
     write_csv(d / "data.csv", data.t, data.columns, data.metadata)
     return d
 
 
-@pytest.fixture(scope="module")
-def ran(readme_dir):
-    """Run every README command in order; returns {command: (stdout, stderr)}."""
-    import os
-
+def run_commands(cmds, d, monkeypatch) -> dict:
+    """Run README commands in ``d``; returns {command: (stdout, stderr)}."""
+    monkeypatch.chdir(d)
     outputs = {}
-    old = os.getcwd()
-    os.chdir(readme_dir)
-    try:
-        for cmds in readme_commands():
-            for cmd in cmds:
-                argv = [str(ROOT / a) if a.startswith("models/") else a for a in shlex.split(cmd)[1:]]
-                out, err = io.StringIO(), io.StringIO()
-                with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-                    rc = main(argv)
-                assert rc == 0, (cmd, err.getvalue())
-                for a in argv:
-                    if a.endswith((".csv", ".png", ".json", ".py")) and not a.startswith("-") and "=" not in a:
-                        assert (readme_dir / a).exists(), a
-                outputs[cmd] = (out.getvalue(), err.getvalue())
-    finally:
-        os.chdir(old)
+    for cmd in cmds:
+        argv = [str(ROOT / a) if a.startswith("models/") else a for a in shlex.split(cmd)[1:]]
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            rc = main(argv)
+        assert rc == 0, (cmd, err.getvalue())
+        for a in argv:
+            if a.endswith((".csv", ".png", ".json", ".py")) and not a.startswith("-") and "=" not in a:
+                assert (d / a).exists(), a
+        outputs[cmd] = (out.getvalue(), err.getvalue())
     return outputs
 
 
-def test_readme_commands_run(ran):
-    assert len(ran) == sum(len(c) for c in readme_commands())
+def block_with(text: str) -> list[str]:
+    return next(cmds for cmds in readme_commands() if any(text in c for c in cmds))
 
 
-def test_readme_fit_file_numbers(ran, readme_dir):
-    fit_cmd = next(c for c in ran if "apa.csv --params" in c)
+#: blocks with a test of their own (they need an earlier block's output or show numbers)
+FIT_FILE, PLANT = "apa.csv --params", "--format python-control"
+
+
+@pytest.mark.parametrize("cmds", [c for c in readme_commands() if not any(FIT_FILE in x or PLANT in x for x in c)],
+                         ids=lambda c: c[0][:40])
+def test_readme_commands_run(cmds, tmp_path, monkeypatch):
+    run_commands(cmds, setup_dir(tmp_path), monkeypatch)
+
+
+def test_readme_fit_file_numbers(tmp_path, monkeypatch):
+    d = setup_dir(tmp_path)
+    ran = run_commands(readme_commands()[0] + block_with(FIT_FILE), d, monkeypatch)
+    fit_cmd = next(c for c in ran if FIT_FILE in c)
     out = ran[fit_cmd][0]
     offset = float(re.search(r"offset of x\s+(\S+)\s+m", out).group(1))
     rms_fit, rms_val = map(float, re.search(r"rms error: fit (\S+) m, validation (\S+) m", out).groups())
     assert offset == pytest.approx(shown_number(r"prints `offset of x\s+(\S+)\s+m`"), rel=2e-3)
     assert rms_fit == pytest.approx(shown_number(r"rms error: fit (\S+) m,"), rel=2e-3)
     assert rms_val == pytest.approx(shown_number(r"validation\s+(\S+) m`"), rel=2e-3)
-    apa, refit = read_csv(readme_dir / "apa.csv"), read_csv(readme_dir / "refit.csv")
+    apa, refit = read_csv(d / "apa.csv"), read_csv(d / "refit.csv")
     np.testing.assert_array_equal(refit.t, apa.t)
     miss = float(np.sqrt(np.mean((refit.columns["x"] - apa.columns["x"]) ** 2)))
     assert miss == pytest.approx(shown_number(r"`apa.csv` by (\S+) m RMS"), rel=1e-2)
@@ -113,9 +115,10 @@ def test_readme_fit_file_numbers(ran, readme_dir):
     assert without * 1e6 == pytest.approx(shown_number(r"without the offset it would miss by (\d+) µm"), abs=0.5)
 
 
-def test_readme_python_control_example(ran, readme_dir, monkeypatch):
+def test_readme_python_control_example(tmp_path, monkeypatch):
     pytest.importorskip("control")
-    monkeypatch.syspath_prepend(str(readme_dir))
+    run_commands(block_with(PLANT), setup_dir(tmp_path), monkeypatch)
+    monkeypatch.syspath_prepend(str(tmp_path))
     namespace = {}
     exec(python_block("from plant import model"), namespace)
     import control

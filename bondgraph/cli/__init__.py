@@ -52,7 +52,6 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
     debug = "--debug" in argv
-    started = False
     with interrupt.handle_signals():
         try:
             parser = build_parser()
@@ -67,7 +66,6 @@ def main(argv: list[str] | None = None) -> int:
                 warnings.simplefilter("default")
                 warnings.simplefilter("ignore", RuntimeWarning)  # numpy's overflow/invalid notes: results are checked
                 warnings.showwarning = _show_warning
-                started = True
                 interrupt.run(COMMANDS[args.command].run, args)
             return 0
         except BondGraphError as exc:
@@ -81,10 +79,7 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:  # only without signal handlers (not in the main thread)
             print("bondgraph: interrupted; no output file was changed", file=sys.stderr)
             return 130
-        except SystemExit as exc:
-            if not started:  # --help
-                raise
-            # the command (a library it calls) called sys.exit: report it, do not obey it
+        except SystemExit as exc:  # the command (a library it calls) called sys.exit: report it, do not obey it
             print(f"bondgraph: internal error: unexpected exit (status {exc.code}) "
                   f"(run with --debug for the traceback)", file=sys.stderr)
             if debug:
