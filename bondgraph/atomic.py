@@ -31,8 +31,9 @@ moved into place together only when the whole run succeeded::
             fig.savefig(fh, format="png")
     # leaving the block without an exception commits; with one, nothing is replaced
 
-Every temporary file lives next to its target and is listed in a registry, so an interrupt
-handler can remove them all (:func:`remove_temporary_files`) before the process exits.
+Every temporary file lives next to its target and is listed in
+:data:`bondgraph.interrupt.TEMPORARY`, so the interrupt handler removes them all
+(:func:`remove_temporary_files`) before the process exits.
 """
 from __future__ import annotations
 
@@ -40,31 +41,16 @@ import contextlib
 import os
 import secrets
 import stat
-import threading
 from typing import IO, Iterable, Iterator
 
 from .errors import BondGraphError, UsageError
+from .interrupt import COMMIT_LOCK, TEMPORARY, remove_temporary_files
 
 __all__ = ["atomic_write", "Outputs", "remove_temporary_files", "COMMIT_LOCK"]
 
 _MODES = {"w", "wt", "wb"}
 
-#: temporary files of this process not yet moved into place or removed
-_LIVE: set[str] = set()
-#: held while files are moved into place, so an interrupt never leaves half a set of outputs
-COMMIT_LOCK = threading.Lock()
-
-
-def remove_temporary_files() -> int:
-    """Remove every temporary file this process still holds (for interrupt handlers);
-    returns how many were removed."""
-    n = 0
-    for tmp in list(_LIVE):
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-            n += 1
-        _LIVE.discard(tmp)
-    return n
+_LIVE = TEMPORARY  # temporary files not yet moved into place (the interrupt handler removes them)
 
 
 def _create_temp(directory: str, base: str, suffix: str = "") -> tuple[int, str]:

@@ -27,6 +27,11 @@ import signal
 import sys
 import threading
 
+#: temporary files of this process not yet moved into place or removed (see bondgraph.atomic)
+TEMPORARY: set[str] = set()
+#: held while output files are moved into place, so an interrupt never leaves half a set
+COMMIT_LOCK = threading.Lock()
+
 _STATUS = {signal.SIGINT: 130, signal.SIGTERM: 143}
 _NAMES = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated (SIGTERM)"}
 _owner = {"pid": None}
@@ -41,9 +46,9 @@ def _on_signal(signum, frame):  # noqa: ARG001 - signal handler signature
 
 
 def stop(signum: int) -> None:
-    """Clean up (temporary files, child processes) and exit now with one line on stderr."""
-    from .atomic import COMMIT_LOCK, remove_temporary_files
+    """Clean up (temporary files, child processes) and exit now with one line on stderr.
 
+    Runs inside a signal handler, possibly in the middle of an import: it imports nothing."""
     got = COMMIT_LOCK.acquire(timeout=1.5)  # let a commit under way finish (renames only)
     try:
         remove_temporary_files()
@@ -77,6 +82,17 @@ def handle_signals():
             signal.signal(s, h if h is not None else signal.SIG_DFL)
 
 
+def remove_temporary_files() -> int:
+    """Remove every temporary file this process still holds; returns how many were removed."""
+    n = 0
+    for tmp in list(TEMPORARY):
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+            n += 1
+        TEMPORARY.discard(tmp)
+    return n
+
+
 def run(fn, *args) -> None:
     """``fn(*args)`` in a worker thread while this (main) thread stays ready for signals;
     an exception of ``fn`` is raised here.  Outside the main thread, ``fn`` runs directly."""
@@ -108,9 +124,9 @@ def kill_children() -> None:
     """SIGKILL every descendant process of this one (children first found through /proc,
     else the multiprocessing children)."""
     pids = _descendants(os.getpid())
-    if pids is None:
-        import multiprocessing
-        pids = [p.pid for p in multiprocessing.active_children()]
+    if pids is None:  # no /proc: the children multiprocessing knows of (if it was ever imported)
+        mp = sys.modules.get("multiprocessing")
+        pids = [p.pid for p in mp.active_children()] if mp is not None else []
     for pid in pids:
         with contextlib.suppress(OSError):
             os.kill(pid, signal.SIGKILL)

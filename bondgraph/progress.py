@@ -126,7 +126,7 @@ class Progress:
             if self.total != 1.0:
                 parts.append(f"{_count(self.done)}/{_count(self.total)}{unit}")
             parts.append(f"{_duration(elapsed)} elapsed")
-            if 0 < frac < 1:
+            if 0 < frac < 1 and elapsed > 0:
                 parts.append(f"about {_duration(elapsed * (1 - frac) / frac)} left")
         else:
             parts = [f"{_count(self.done)}{unit}", f"{_duration(elapsed)} elapsed"]

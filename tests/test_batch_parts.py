@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from bondgraph import config
 from bondgraph.batch import analysis, jobs, sampling
 from bondgraph.batch.runs import simulation_options
 from bondgraph.batch.table import Table
@@ -155,6 +156,15 @@ def test_memo_builds_each_structure_once_per_process(msd):
     assert rows[2]["peak(x)"] == float(np.max(np.abs(direct["x"])))
 
 
+def test_a_components_own_parameter_changes_only_the_parameter_vector():
+    path = str(MODELS / "bimorph_t226.py")
+    jobs._simulator.cache_clear()
+    for f in (0.9, 1.0, 1.1):
+        sim, numeric = jobs.built(path, {"omega_1": 1000.0 * f})  # declared by the beam-mode component
+        assert numeric == {"omega_1": 1000.0 * f}
+    assert jobs.memo_info()["misses"] == 1
+
+
 # ---- sensitivities with known answers ------------------------------------------------------------
 def test_regression_sensitivity_recovers_a_linear_law():
     rng = np.random.default_rng(0)
@@ -215,6 +225,12 @@ def test_parquet_round_trip(tmp_path):
     assert back["cause"] == ["creep", None, "none"] and back["error"][1] == ROWS[1]["error"]
 
 
+def test_table_to_pandas():
+    pytest.importorskip("pandas")
+    df = Table(ROWS, ["data", "K"]).to_pandas()
+    assert list(df.columns) == Table(ROWS, ["data", "K"]).columns and df["gain"].tolist()[0] == 2.5
+
+
 def test_unknown_table_format_writes_nothing(tmp_path):
     with pytest.raises(UsageError, match="use .csv or .parquet"):
         Table(ROWS).write(tmp_path / "t.xlsx")
@@ -234,9 +250,15 @@ APA = str(MODELS / "apa120ml.py")
     (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5"], "at least one metric"),
     (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5", "--metric", "peak(x)",
       "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--workers sizes the local cluster"),
+    (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5", "--metric", "peak(x)",
+      "--input", "Vin"], "no data files are given"),
+    (["batch", "fit", APA, "a.csv", "--params", "K", "--input", "V=step(1)"], "for batch simulate and sweep"),
+    (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5", "--metric", "peak(x)",
+      "--scheduler", "tcp://127.0.0.1:1"], "cannot reach the Dask scheduler at tcp://127.0.0.1:1"),
 ])
 def test_cli_refuses_bad_batches_in_one_line(argv, words, capsys):
-    assert main(argv) == 2
+    with config.override({"batch.connect_timeout": 1.0}):
+        assert main(argv) == 2
     err = capsys.readouterr().err
     assert words in err and err.count("\n") == 1 and "Traceback" not in err
 
@@ -254,3 +276,20 @@ def test_cli_help_lists_batch(capsys):
     out = capsys.readouterr().out
     assert "--scheduler ADDRESS" in out and "--vary NAME=SPEC" in out
     json.dumps(out)
+
+
+def test_sweep_report_json_and_plot(tmp_path):
+    from bondgraph.batch import SweepResult
+    rng = np.random.default_rng(4)
+    a, b = rng.uniform(1, 2, 60), rng.normal(0, 1, 60)
+    rows = [{"job": i, "a": a[i], "b": b[i], "y": 2 * a[i] + 0.1 * b[i], "z": None if i == 3 else b[i] ** 2}
+            for i in range(60)]
+    res = SweepResult(Table(rows, ["a", "b"]), {"a": sampling.uniform(1, 2), "b": sampling.normal(0, 1)},
+                      "random", ["y", "z"], seed=4)
+    text = res.text()
+    assert "random sweep: 60 runs, 0 failed, seed 4" in text and "sensitivity of y" in text
+    doc = json.loads(json.dumps(res.as_json(), allow_nan=False))  # strict JSON
+    assert doc["summary"][1]["n"] == 59 and doc["sensitivity"][0]["ranking"][0]["parameter"] == "a"
+    pytest.importorskip("matplotlib")
+    res.plot(str(tmp_path / "sweep.png"))
+    assert (tmp_path / "sweep.png").stat().st_size > 10_000

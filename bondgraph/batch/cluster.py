@@ -19,6 +19,7 @@ import math
 import os
 from typing import Any, Callable, Iterator, Sequence
 
+from .. import config
 from ..errors import UsageError
 
 #: the one-line fix when Dask is missing
@@ -70,7 +71,8 @@ def connect(scheduler: Any = None, workers: int | None = None,
                 raise UsageError("--workers sizes the local cluster; with --scheduler the cluster's own workers "
                                  "run the jobs (drop --workers)")
             try:
-                client = stack.enter_context(distributed.Client(str(scheduler), timeout="10s"))
+                client = stack.enter_context(distributed.Client(str(scheduler),
+                                                                timeout=f"{config.get('batch.connect_timeout')}s"))
             except (OSError, TimeoutError, ValueError) as exc:
                 raise UsageError(f"cannot reach the Dask scheduler at {scheduler} ({exc}); start one with "
                                  f"'dask scheduler' and 'dask worker ADDRESS', or check the address") from None
@@ -155,7 +157,8 @@ def chunked(items: Sequence, size: int) -> list[list]:
     return [list(items[i:i + size]) for i in range(0, len(items), size)]
 
 
-def chunk_size(n_jobs: int, n_workers: int, per_worker: int = 4, largest: int = 32) -> int:
-    """Jobs per task for many short jobs: about ``per_worker`` tasks per worker (load balance,
-    progress) and at most ``largest`` jobs per task."""
+def chunk_size(n_jobs: int, n_workers: int) -> int:
+    """Jobs per task for many short jobs: about ``batch.tasks_per_worker`` tasks per worker (load
+    balance, progress) and at most ``batch.max_jobs_per_task`` jobs per task (a prompt Ctrl-C)."""
+    per_worker, largest = config.get("batch.tasks_per_worker"), config.get("batch.max_jobs_per_task")
     return max(1, min(largest, math.ceil(n_jobs / (per_worker * n_workers))))

@@ -190,22 +190,35 @@ _KINDS = {"diagnose": _diagnose, "fit": _fit, "simulate": _simulate}
 
 # ---- per-worker memo of built simulators ---------------------------------------------------------
 def built(path: str, values: Mapping[str, Any]):
-    """(Simulator, numeric parameter values) for ``values`` of model file ``path``: structural
-    values (integers, choices, flags, reals declared ``symbolic=False``, names the file does
-    not declare) select a memoised build; the others are checked against their declarations
-    and returned for :meth:`Simulator.run`."""
+    """(Simulator, numeric parameter values) for ``values`` of model file ``path``.
+
+    Values of structural parameters (integers, choices, flags, reals declared
+    ``symbolic=False``) select a memoised build; the others are checked against their
+    declarations and returned for :meth:`Simulator.run`.  A name the file does not declare (a
+    component's parameter) is numeric when the built equations keep it as a symbol."""
     stamp = _stamp(path)
     declared = _declared(path, stamp)
-    structural, numeric = {}, {}
+    structural, numeric, other = {}, {}, {}
     for name, value in values.items():
         decl = declared.get(name)
-        if decl is None or not decl.symbolic:
-            structural[name] = decl.parse(value) if decl is not None else value
-        else:
+        if decl is None:
+            other[name] = value
+        elif decl.symbolic:
             numeric[name] = decl.parse(value)
-    sim = _simulator(path, stamp, tuple(sorted(structural.items(), key=lambda kv: kv[0])))
-    known = {p.name for p in sim.eqs.params}
-    return sim, {k: v for k, v in numeric.items() if k in known}
+        else:
+            structural[name] = decl.parse(value)
+    sim = _simulator(path, stamp, _key(structural))
+    symbols = {p.name for p in sim.eqs.params}
+    undeclared = {k: v for k, v in other.items() if k not in symbols}
+    if undeclared:
+        sim = _simulator(path, stamp, _key({**structural, **undeclared}))
+    for name in other.keys() - undeclared.keys():
+        numeric[name] = sim.eqs.model.parameters[name][0].parse(other[name])
+    return sim, {k: v for k, v in numeric.items() if k in symbols}
+
+
+def _key(values: Mapping[str, Any]) -> tuple:
+    return tuple(sorted(values.items(), key=lambda kv: kv[0]))
 
 
 def _stamp(path: str) -> tuple:

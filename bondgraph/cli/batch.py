@@ -123,6 +123,12 @@ def _inputs(args):
     columns = [item for item in args.input if "=" not in item]
     if len(columns) > 1:
         raise UsageError(f"--input: one data column drives the model, got {', '.join(columns)}")
+    if columns and not args.data:
+        raise UsageError(f"--input {columns[0]}: a data column, but no data files are given; drive runs without "
+                         f"data with --input NAME=SIGNAL, e.g. --input 'V=sine(amplitude=50, frequency=5)'")
+    if len(columns) < len(args.input) and args.action in ("diagnose", "fit"):
+        raise UsageError(f"batch {args.action}: the data drive the model; --input NAME=SIGNAL is for batch "
+                         f"simulate and sweep")
     signals = {}
     for item in args.input:
         if "=" in item:
