@@ -300,7 +300,7 @@ def test_ctrl_c_cancels_the_jobs_and_shuts_the_local_cluster_down(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     lines = [ln for ln in err.replace("\r", "\n").splitlines() if ln.strip() and not ln.startswith("batch")]
-    assert lines == ["bondgraph: interrupted; no output file was written partially"]
+    assert lines == ["bondgraph: interrupted; no output file was changed"]
     assert not out.exists()
     _, alive = psutil.wait_procs(children, timeout=15)
     assert not alive

@@ -6,7 +6,7 @@ import json
 import sys
 
 from ..errors import UsageError
-from .registry import DATA_ARGS, MODEL_ARGS, arg, command, progress, write_text
+from .registry import DATA_ARGS, MODEL_ARGS, arg, command, load, progress, write_text
 
 ACTIONS = ("diagnose", "fit", "simulate", "sweep")
 _ONLY = {"--params": ("fit",), "--split": ("fit",), "--loss": ("fit",), "--starts": ("fit",),
@@ -58,6 +58,7 @@ _ONLY = {"--params": ("fit",), "--split": ("fit",), "--loss": ("fit",), "--start
          ])
 def run(args):
     _check_options(args)
+    load(args)  # the model file builds, and names its input and output where the options do not
     from ..batch import cluster
 
     cluster.require_dask()
