@@ -275,7 +275,6 @@ def test_cli_help_lists_batch(capsys):
         main(["batch", "--help"])
     out = capsys.readouterr().out
     assert "--scheduler ADDRESS" in out and "--vary NAME=SPEC" in out
-    json.dumps(out)
 
 
 def test_sweep_report_json_and_plot(tmp_path):
