@@ -38,6 +38,14 @@ DEFAULTS: dict[str, Default] = {
     "batch.tasks_per_worker": Default(4, "short jobs (simulations) are grouped into about this many Dask tasks "
                                          "per worker"),
     "batch.max_jobs_per_task": Default(32, "at most this many short jobs in one Dask task"),
+    "causality.max_attempts": Default(100_000, "causality assignment gives up after this many revised choices "
+                                               "in one part of the graph (reported as an error naming its elements)"),
+    "codegen.tape_threshold": Default(300, "programs with more statements run on the tape interpreter instead of "
+                                           "being compiled by numba per model"),
+    "data.uniform_rtol": Default(1e-2, "sampling is uniform when every time step is within this fraction of the "
+                                       "mean step (absorbs time stamps printed with few digits)"),
+    "data.suspicious_time_span": Default(1e4, "a record with steps of 1 s or more spanning this many seconds "
+                                              "draws a warning that 't' may be in ms or sample numbers"),
 }
 
 _values: dict[str, Any] = {k: d.value for k, d in DEFAULTS.items()}

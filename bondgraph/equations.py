@@ -24,9 +24,9 @@ import networkx as nx
 import sympy as sp
 
 from .causality import Causality, assign_causality, _ep
-from .elements import C, CField, E, F, GY, I, J0, J1, P, Q, R, Se, Sf, TF
+from .elements import Port, sympify
 from .errors import CausalityError, ModelError
-from .graph import Model, OperatorBlock, Quantity
+from .graph import Model, OperatorBlock, Quantity, input_rate_symbol
 
 
 @dataclass
@@ -75,13 +75,30 @@ class Equations:
     def state_symbols(self) -> list[sp.Symbol]:
         return [s.symbol for s in self.states]
 
-    def substituted(self, exprs: dict) -> dict:
-        """``exprs`` with every program variable substituted (operator outputs kept as symbols)."""
+    def program_values(self) -> dict:
+        """Every program variable as an expression of states, inputs and parameters
+        (operator outputs kept as symbols)."""
         full: dict = {}
         for st in self.program:
             if st.op is None:
                 full[st.var] = st.expr.xreplace(full)
+        return full
+
+    def substituted(self, exprs: dict) -> dict:
+        """``exprs`` with every program variable substituted (operator outputs kept as symbols)."""
+        full = self.program_values()
         return {k: v.xreplace(full) for k, v in exprs.items()}
+
+    def needed(self, roots) -> tuple[list[Statement], set]:
+        """The program statements ``roots`` depend on, in program order, and every symbol the
+        roots reach through them (the one backward dependency walk of the framework)."""
+        need = set().union(set(), *(r.free_symbols for r in roots))
+        keep = []
+        for st in reversed(self.program):
+            if st.var in need:
+                need |= st.expr.free_symbols
+                keep.append(st)
+        return keep[::-1], need
 
     def state_equations(self) -> dict[sp.Symbol, sp.Expr]:
         """x' = f(x, u, θ) fully substituted."""
@@ -93,10 +110,13 @@ class Equations:
     def operator_inputs(self) -> dict[sp.Symbol, sp.Expr]:
         return self.substituted({st.var: st.expr for st in self.program if st.op is not None})
 
-    def jacobian(self, roots: list[sp.Expr], wrt: list[sp.Symbol], op_gains: dict | None = None) -> sp.Matrix:
+    def jacobian(self, roots: list[sp.Expr], wrt: list[sp.Symbol], op_gains: dict | None = None,
+                 inline: bool = True) -> sp.Matrix:
         """∂roots/∂wrt by forward differentiation through the program (sparse, linear cost).
 
-        An operator output h = H[v] gets slope ``op_gains[h]`` (0 if not given: frozen memory)."""
+        An operator output h = H[v] gets slope ``op_gains[h]`` (0 if not given: frozen memory).
+        Entries of nonlinear laws hold program variables; ``inline`` substitutes them (for
+        generated code, which computes the program anyway, pass False)."""
         wrt_set = set(wrt)
         grad: dict = {}
         for st in self.program:
@@ -109,7 +129,10 @@ class Equations:
         for r in roots:
             g = _grad(r, grad, wrt_set)
             rows.append([g.get(w, sp.Integer(0)) for w in wrt])
-        return sp.Matrix(rows) if rows else sp.zeros(0, len(wrt))
+        J = sp.Matrix(rows) if rows else sp.zeros(0, len(wrt))
+        if inline and any(e.free_symbols & grad.keys() for e in J):
+            J = J.xreplace(self.program_values())
+        return J
 
 
 def _grad(expr: sp.Expr, grad: dict, wrt_set: set) -> dict:
@@ -143,7 +166,7 @@ class _Deriver:
     def __init__(self, model: Model, causality: Causality):
         self.m = model
         self.c = causality
-        self.assign: dict[sp.Symbol, sp.Expr] = {}
+        self.assign_map: dict[sp.Symbol, sp.Expr] = {}
         self.origin: dict[sp.Symbol, str] = {}
         self.ops: dict[sp.Symbol, OperatorBlock] = {}
         self.states: list[State] = []
@@ -166,15 +189,9 @@ class _Deriver:
         ends = [b.head, b.tail]
         for elem, port in ends:
             e = self.m.elements[elem]
-            if not isinstance(e, (J0, J1)):
+            if e.ports:  # not a junction
                 return elem if len(e.ports) == 1 else f"{elem}.{port}"
         return f"{b.tail[0]}_{b.head[0]}"
-
-    def _set(self, var: sp.Symbol, expr: sp.Expr, origin: str):
-        if var in self.assign:
-            raise CausalityError(f"{self.m.name}: variable {var} is computed twice ({self.origin[var]}, {origin})")
-        self.assign[var] = expr
-        self.origin[var] = origin
 
     # ---- main ------------------------------------------------------------------------------
     def run(self) -> Equations:
@@ -182,7 +199,7 @@ class _Deriver:
         # generated names never collide with the user's (parameters, inputs, states, operators)
         self._names |= {str(s) for s in m.parameter_table()} | set(m.inputs) | set(m.internal_states) \
             | set(m.operators)
-        self.e, self.f, self.sign = {}, {}, {}
+        self.e, self.f = {}, {}
         for b in m.bonds:
             label = self._bond_label(b)
             self.e[b.index] = sp.Symbol(self._unique(f"e_{label}"), real=True)
@@ -200,7 +217,7 @@ class _Deriver:
             self.rates[st.symbol] = self._q(st.rate)
         for name, ob in m.operators.items():
             ob_in = self._q(ob.input)
-            self._set(ob.symbol, ob_in, f"operator {name}")
+            self.assign(ob.symbol, ob_in, f"operator {name}")
             self.ops[ob.symbol] = ob
         outputs = {n: self._q(o.expr) for n, o in m.outputs.items()}
         self._solve_loops()
@@ -210,144 +227,51 @@ class _Deriver:
         program, rates, outputs = _collapse(program, self.rates, outputs)
         inputs = [i.symbol for i in m.inputs.values()]
         params = list(m.parameter_table())
-        return Equations(m, self.c, self.states, inputs, [_rate_symbol(u) for u in inputs], params,
+        return Equations(m, self.c, self.states, inputs, [input_rate_symbol(u) for u in inputs], params,
                          program, rates, outputs, list(self.ops.values()), self.eliminated, self.loops,
                          {b.index: (self.e[b.index], self.f[b.index]) for b in m.bonds})
 
-    # ---- constitutive relations ------------------------------------------------------------
+    # ---- constitutive relations (the element protocol) ---------------------------------------
     def _element(self, name: str, elem):
-        ports = self.ports[name]
-        sets = {port: self.c.sets_effort(b, (name, port)) for port, b, s in ports}
-        if isinstance(elem, Se):
-            (_, b, s), = ports
-            self._set(self.e[b.index], elem.effort, name)
-        elif isinstance(elem, Sf):
-            (_, b, s), = ports
-            self._set(self.f[b.index], -s * elem.flow, name)
-        elif isinstance(elem, C):
-            (port, b, s), = ports
-            e, f = self.e[b.index], self.f[b.index]
-            if sets[port]:
-                q = sp.Symbol(self._unique(f"q_{name}"), real=True)
-                self.states.append(State(q, "q", name, elem.q0))
-                self._set(e, elem.law.xreplace({Q: q}), name)
-                self.rates[q] = s * f
-                self.quantity_map[("q", name)] = q
-            else:
-                w = sp.Symbol(self._unique(f"f_in_{name}"), real=True)
-                self._set(f, s * w, name)
-                q = _invert_law(elem.law, Q, e, name, "C")
-                self.dependent.append((w, q, name))
-                self.quantity_map[("q", name)] = q
-        elif isinstance(elem, I):
-            (port, b, s), = ports
-            e, f = self.e[b.index], self.f[b.index]
-            if not sets[port]:
-                p = sp.Symbol(self._unique(f"p_{name}"), real=True)
-                self.states.append(State(p, "p", name, elem.p0))
-                self._set(f, s * elem.law.xreplace({P: p}), name)
-                self.rates[p] = e
-                self.quantity_map[("p", name)] = p
-            else:
-                w = sp.Symbol(self._unique(f"e_in_{name}"), real=True)
-                self._set(e, w, name)
-                p = _invert_law(elem.law, P, s * f, name, "I")
-                self.dependent.append((w, p, name))
-                self.quantity_map[("p", name)] = p
-        elif isinstance(elem, R):
-            (port, b, s), = ports
-            e, f = self.e[b.index], self.f[b.index]
-            if sets[port]:
-                law = elem.effort_of_flow()
-                if law is None:
-                    raise CausalityError(f"{self.m.name}: R '{name}' must take effort and give flow, but its law "
-                                         f"f(e) cannot be inverted; give it as law=lambda f: ... or change the graph")
-                self._set(e, law.xreplace({F: s * f}), name)
-            else:
-                law = elem.flow_of_effort()
-                if law is None:
-                    raise CausalityError(f"{self.m.name}: R '{name}' must take effort and give flow, but its law "
-                                         f"e(f) cannot be inverted; give it as conductance_law=lambda e: ...")
-                self._set(f, s * law.xreplace({E: e}), name)
-        elif isinstance(elem, (TF, GY)):
-            (p1, b1, s1), (p2, b2, s2) = sorted(ports, key=lambda t: t[0])
-            n = elem.ratio
-            e1, f1, e2, f2 = self.e[b1.index], self.f[b1.index], self.e[b2.index], self.f[b2.index]
-            if isinstance(elem, TF):
-                if sets[p1]:
-                    self._set(e1, n * e2, name)
-                    self._set(f2, -s1 * s2 * n * f1, name)
-                else:
-                    self._set(e2, e1 / n, name)
-                    self._set(f1, -s1 * s2 * f2 / n, name)
-            else:
-                if sets[p1]:
-                    self._set(e1, -s2 * n * f2, name)
-                    self._set(e2, s1 * n * f1, name)
-                else:
-                    self._set(f2, -s2 * e1 / n, name)
-                    self._set(f1, s1 * e2 / n, name)
-        elif isinstance(elem, (J0, J1)):
-            common_is_effort = isinstance(elem, J0)
-            # the strong bond brings the common variable in
-            strong = [(port, b, s) for port, b, s in ports if sets[port] != common_is_effort]
-            (sp_port, sb, ss), = strong
-            common = self.e if common_is_effort else self.f
-            summed = self.f if common_is_effort else self.e
-            terms = []
-            for port, b, s in ports:
-                if b is sb:
-                    continue
-                self._set(common[b.index], common[sb.index], name)
-                terms.append(s * summed[b.index])
-            self._set(summed[sb.index], -ss * sp.Add(*terms), name)
-            self.quantity_map[("e" if common_is_effort else "f", name)] = common[sb.index]
-        elif isinstance(elem, CField):
-            self._cfield(name, elem, ports, sets)
-        else:
-            raise ModelError(f"{self.m.name}: element '{name}' of unsupported kind {elem.kind}")
-        for port, b, s in ports:
+        ports = {}
+        for port, b, s in self.ports[name]:
             key = name if len(elem.ports) <= 1 else f"{name}.{port}"
-            self.quantity_map.setdefault(("e", key), self.e[b.index])
-            self.quantity_map.setdefault(("f", key), s * self.f[b.index])
+            ports[port] = Port(port, key, self.e[b.index], self.f[b.index], s,
+                               self.c.sets_effort(b, (name, port)), key if elem.is_storage else name, self)
+        elem.equations(ports, self)
+        for port in ports.values():
+            self.quantity_map.setdefault(("e", port.key), port.e)
+            self.quantity_map.setdefault(("f", port.key), port.f_in)
 
-    def _cfield(self, name, elem: CField, ports, sets):
-        efforts = elem.efforts()
-        qsym = {pn: sp.Symbol(self._unique(f"q_{name}.{pn}"), real=True) for pn in elem.ports}
-        byport = {port: (b, s) for port, b, s in ports}
-        deriv = [pn for pn in elem.ports if not sets[pn]]
-        for pn in elem.ports:
-            if pn not in deriv:
-                self.states.append(State(qsym[pn], "q", f"{name}.{pn}", elem.q0[pn]))
-        sub = {elem.placeholders[pn]: qsym[pn] for pn in elem.ports}
-        if deriv:
-            # dependent displacements from e_i = dU/dq_i on the derivative ports
-            eqs = [efforts[pn].xreplace(sub) - self.e[byport[pn][0].index] for pn in deriv]
-            unknowns = [qsym[pn] for pn in deriv]
-            try:
-                A, rhs = sp.linear_eq_to_matrix(eqs, unknowns)
-                sol = A.LUsolve(rhs)
-            except (sp.matrices.common.NonSquareMatrixError, ValueError, ZeroDivisionError):
-                raise CausalityError(
-                    f"{self.m.name}: ports {', '.join(deriv)} of C-field '{name}' are in derivative causality "
-                    f"and its law cannot be inverted for them; make the field linear or add compliance") from None
-            dep = {qsym[pn]: sp.simplify(sol[i]) for i, pn in enumerate(deriv)}
-            sub_dep = {**sub}
-            for pn in elem.ports:
-                sub_dep[elem.placeholders[pn]] = dep.get(qsym[pn], qsym[pn])
-        else:
-            dep, sub_dep = {}, sub
-        for pn in elem.ports:
-            b, s = byport[pn]
-            if pn in deriv:
-                w = sp.Symbol(self._unique(f"f_in_{name}.{pn}"), real=True)
-                self._set(self.f[b.index], s * w, f"{name}.{pn}")
-                self.dependent.append((w, dep[qsym[pn]], f"{name}.{pn}"))
-                self.quantity_map[("q", f"{name}.{pn}")] = dep[qsym[pn]]
-            else:
-                self._set(self.e[b.index], efforts[pn].xreplace(sub_dep), f"{name}.{pn}")
-                self.rates[qsym[pn]] = s * self.f[b.index]
-                self.quantity_map[("q", f"{name}.{pn}")] = qsym[pn]
+    # EquationBuilder (see bondgraph.elements.base): what elements may do in equations()
+    @property
+    def model_name(self) -> str:
+        return self.m.name
+
+    def assign(self, var: sp.Symbol, expr, origin: str) -> None:
+        if var in self.assign_map:
+            raise CausalityError(f"{self.m.name}: variable {var} is computed twice ({self.origin[var]}, {origin})")
+        self.assign_map[var] = sympify(expr, f"{origin}: value of {var}")
+        self.origin[var] = origin
+
+    def symbol(self, base: str) -> sp.Symbol:
+        return sp.Symbol(self._unique(base), real=True)
+
+    def state(self, base: str, kind: str, x0, origin: str) -> sp.Symbol:
+        sym = self.symbol(base)
+        self.states.append(State(sym, kind, origin, sympify(x0, f"{origin}: initial value")))
+        return sym
+
+    def rate(self, state: sp.Symbol, expr) -> None:
+        self.rates[state] = sympify(expr, f"rate of {state}")
+
+    def derivative(self, base: str, stored, origin: str) -> sp.Symbol:
+        w = self.symbol(base)
+        self.dependent.append((w, sympify(stored, f"{origin}: stored quantity"), origin))
+        return w
+
+    def quantity(self, what: str, key: str, expr) -> None:
+        self.quantity_map[(what, key)] = expr
 
     # ---- port quantities in user expressions --------------------------------------------------
     def _resolve_quantities(self):
@@ -363,9 +287,9 @@ class _Deriver:
         for q in sorted((s for s in syms if isinstance(s, Quantity)), key=str):
             self._quantity(q)
         # element laws may use port quantities too (e.g. modulated sources, feedback)
-        for var, expr in list(self.assign.items()):
+        for var, expr in list(self.assign_map.items()):
             if any(isinstance(s, Quantity) for s in expr.free_symbols):
-                self.assign[var] = self._q(expr)
+                self.assign_map[var] = self._q(expr)
         for k, v in list(self.rates.items()):
             self.rates[k] = self._q(v)
 
@@ -395,10 +319,10 @@ class _Deriver:
     # ---- algebraic loops ---------------------------------------------------------------------
     def _graph(self) -> nx.DiGraph:
         g = nx.DiGraph()
-        g.add_nodes_from(self.assign)
-        for var, expr in self.assign.items():
+        g.add_nodes_from(self.assign_map)
+        for var, expr in self.assign_map.items():
             for s in expr.free_symbols:
-                if s in self.assign:
+                if s in self.assign_map:
                     g.add_edge(s, var)
         return g
 
@@ -422,8 +346,8 @@ class _Deriver:
             rest = nx.DiGraph(g.subgraph(comp - set(tears)))
             sub: dict = {}
             for v in nx.topological_sort(rest):
-                sub[v] = self.assign[v].xreplace(sub)
-            eqs = [t - self.assign[t].xreplace(sub) for t in tears]
+                sub[v] = self.assign_map[v].xreplace(sub)
+            eqs = [t - self.assign_map[t].xreplace(sub) for t in tears]
             try:
                 A, b = sp.linear_eq_to_matrix(eqs, tears)
             except (ValueError, sp.PolynomialError):
@@ -434,7 +358,7 @@ class _Deriver:
             except ZeroDivisionError:
                 raise CausalityError(f"{self.m.name}: singular algebraic loop through {', '.join(names)}") from None
             for t, val in zip(tears, sol):
-                self.assign[t] = val
+                self.assign_map[t] = val
             self.loops.append(f"algebraic loop through {', '.join(names)} ({len(comp)} variables, "
                               f"torn at {', '.join(map(str, tears))}) solved symbolically")
 
@@ -445,7 +369,7 @@ class _Deriver:
         full: dict = {}
         for v in order:
             if v not in self.ops:
-                full[v] = self.assign[v].xreplace(full)
+                full[v] = self.assign_map[v].xreplace(full)
         unknowns = [w for w, _, _ in self.dependent]
         wset = set(unknowns)
         names = [n for _, _, n in self.dependent]
@@ -462,7 +386,7 @@ class _Deriver:
                                      f"add a compliance or inertia between the coupled storage elements")
             dt = sum((sp.diff(stored_full, x) * rates_full[x] for x in state_syms if stored_full.has(x)),
                      sp.Integer(0))
-            dt += sum((sp.diff(stored_full, u) * _rate_symbol(u) for u in inputs if stored_full.has(u)),
+            dt += sum((sp.diff(stored_full, u) * input_rate_symbol(u) for u in inputs if stored_full.has(u)),
                       sp.Integer(0))
             eqs.append(w - dt)
         try:
@@ -473,7 +397,7 @@ class _Deriver:
                                  f"(nonlinear or singular coupling); add a compliance or inertia between the "
                                  f"rigidly coupled storage elements, or make them linear") from None
         for (w, stored, name), s in zip(self.dependent, sol):
-            self._set(w, s, name)
+            self.assign(w, s, name)
             self.eliminated.append(f"{name} is in derivative causality: its stored quantity "
                                    f"{sp.sstr(stored.xreplace(full))} depends on the other states; "
                                    f"state eliminated, its port variable {w} = {sp.sstr(s)}")
@@ -482,7 +406,7 @@ class _Deriver:
     def _order(self, roots: list[sp.Expr]) -> list[Statement]:
         g = self._graph()
         need = set()
-        stack = [s for r in roots for s in r.free_symbols if s in self.assign]
+        stack = [s for r in roots for s in r.free_symbols if s in self.assign_map]
         while stack:
             v = stack.pop()
             if v in need:
@@ -495,7 +419,7 @@ class _Deriver:
                 else list(nx.topological_sort(sub))
         except nx.NetworkXUnfeasible:
             raise CausalityError(f"{self.m.name}: unresolved algebraic loop") from None
-        return [Statement(v, self.assign[v], self.origin[v], self.ops.get(v)) for v in order]
+        return [Statement(v, self.assign_map[v], self.origin[v], self.ops.get(v)) for v in order]
 
 
 def _tear_set(g: nx.DiGraph) -> list[sp.Symbol]:
@@ -524,22 +448,6 @@ def _solve_linear(A: sp.Matrix, b: sp.Matrix) -> list[sp.Expr]:
             raise ZeroDivisionError
         sol = list(A.LUsolve(b))
     return [sp.cancel(x) if sp.count_ops(x) < 60 else x for x in sol]
-
-
-def _invert_law(law: sp.Expr, var: sp.Symbol, value: sp.Expr, name: str, kind: str) -> sp.Expr:
-    """Stored quantity of a storage element in derivative causality: var with law(var) = value."""
-    if law.is_polynomial(var) and sp.degree(law, var) == 1:
-        a = sp.diff(law, var)
-        return sp.cancel((value - law.subs(var, 0)) / a)
-    sols = sp.solve(sp.Eq(law, value), var)
-    if len(sols) != 1:
-        raise CausalityError(f"{name}: {kind} '{name}' is in derivative causality but its law cannot be inverted; "
-                             f"make it linear or add a compliance/inertia next to it")
-    return sols[0]
-
-
-def _rate_symbol(u: sp.Symbol) -> sp.Symbol:
-    return sp.Symbol(f"d{u.name}/dt", real=True)
 
 
 def _collapse(program: list[Statement], rates: dict, outputs: dict):

@@ -22,7 +22,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
-from .data import Dataset
+from .data import Dataset, uniform_step
 from .errors import ParameterError, UsageError, did_you_mean
 from .graph import Model
 from .lti import LTI
@@ -295,13 +295,6 @@ class Identification:
             sd = math.sqrt(max(cov[i, i], 0.0))
             out[s.name] = s.from_z(z[i]) * sd if s.log else sd * s.scale
         return out
-
-
-def uniform_step(t: np.ndarray) -> float | None:
-    """The sample interval if ``t`` is uniformly spaced (to 1e-6), else None."""
-    d = np.diff(t)
-    mean = float(np.mean(d))
-    return mean if float(np.max(d) - np.min(d)) <= 1e-6 * mean else None
 
 
 def detect_linear(ident: Identification, names: Sequence[str], fixed: Mapping | None = None) -> list[str]:

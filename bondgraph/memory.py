@@ -73,6 +73,12 @@ class MemoryOperator(ABC):
     def commit(v, mem, prm):
         """Advance ``mem`` in place to input ``v`` (accepted steps only)."""
 
+    def inverse(self) -> "MemoryOperator | None":
+        """Optional: an operator G with G[H[v]] = v from rest (the exact inverse), for feedforward
+        compensation (:mod:`bondgraph.compensate`). The default None means "no closed form": the
+        compensation then inverts ``output``/``commit`` numerically, sample by sample."""
+        return None
+
     # --- used by the framework -------------------------------------------------------
     def kernel_source(self, prefix: str) -> str:
         """Source of ``output`` and ``commit`` renamed to ``{prefix}_output``/``_commit``."""

@@ -1,4 +1,4 @@
-"""Every model file of the contract runs through every CLI command."""
+"""Every model file in models/ runs through every CLI command."""
 import json
 
 import pytest
@@ -10,8 +10,9 @@ from conftest import MODELS
 MODEL_FILES = sorted(p.name for p in MODELS.glob("*.py"))
 
 
-def test_contract_model_files_exist():
-    for name in ("apa120ml.py", "stack.py", "bimorph_t215.py", "bimorph_t226.py", "triangular_drive.py"):
+def test_model_files_exist():
+    for name in ("apa120ml.py", "stack.py", "bimorph_t215.py", "bimorph_t226.py", "triangular_drive.py",
+                 "bender_highfield.py"):
         assert name in MODEL_FILES
 
 

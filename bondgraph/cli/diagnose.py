@@ -4,7 +4,7 @@ from __future__ import annotations
 import json
 import sys
 
-from .registry import DATA_ARGS, MODEL_ARGS, arg, command, load, read_data
+from .registry import DATA_ARGS, MODEL_ARGS, arg, command, load, outputs, read_data
 
 
 @command("diagnose", "find the effect the model misses in measured data, extend it and measure the gain",
@@ -17,16 +17,18 @@ from .registry import DATA_ARGS, MODEL_ARGS, arg, command, load, read_data
 def run(args):
     from ..diagnose import calibration_names, diagnose, load_candidates
 
-    lm = load(args)
-    data = read_data(args)
-    say = (lambda s: None) if args.quiet else (lambda s: print(f"diagnose: {s}", file=sys.stderr, flush=True))
-    report = diagnose(lm.model, data, calibration_names(lm.module, lm.model), load_candidates(),
-                      args.model_input, args.model_output, validation=args.validation,
-                      workers=args.workers, progress=say, source=str(args.model))
-    if args.json:
-        print(json.dumps(report.as_json()))
-    else:
-        sys.stdout.write(report.text())
-    if args.plot:
-        from ..plotting import plot_diagnosis
-        plot_diagnosis(report, data, args.model_input, args.model_output, args.plot)
+    with outputs(args, "plot") as out:  # checked before the work, written only if it all succeeds
+        lm = load(args)
+        data = read_data(args)
+        say = (lambda s: None) if args.quiet else (lambda s: print(f"diagnose: {s}", file=sys.stderr, flush=True))
+        report = diagnose(lm.model, data, calibration_names(lm.module, lm.model), load_candidates(),
+                          args.model_input, args.model_output, validation=args.validation,
+                          workers=args.workers, progress=say, source=str(args.model))
+        if args.json:
+            print(json.dumps(report.as_json()))
+        else:
+            sys.stdout.write(report.text())
+        if args.plot:
+            from ..plotting import plot_diagnosis
+            with out.path(args.plot) as tmp:
+                plot_diagnosis(report, data, args.model_input, args.model_output, tmp)
