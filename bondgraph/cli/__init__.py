@@ -55,7 +55,10 @@ def main(argv: list[str] | None = None) -> int:
     with interrupt.handle_signals():
         try:
             parser = build_parser()
-            args = parser.parse_args(argv)
+            try:
+                args = parser.parse_args(argv)
+            except SystemExit as exc:  # --help and --version: argparse printed what was asked
+                return exc.code or 0
             if not args.command:
                 raise UsageError(f"no command given; choose one of {', '.join(COMMANDS)} (see bondgraph --help)")
             _check_numbers(args)
