@@ -245,6 +245,7 @@ APA = str(MODELS / "apa120ml.py")
     (["batch", "diagnose", APA, "a.csv", "--vary", "K=uniform(1,2)"], "--vary applies to batch sweep only"),
     (["batch", "fit", APA], "give the data files"),
     (["batch", "fit", APA, "a.csv", "--params", "K", "--out", "fits.json"], "written as .csv or .parquet"),
+    (["batch", "simulate", APA, "a.csv", "b.csv", "--out", "b.csv"], "would overwrite the input file b.csv"),
     (["batch", "sweep", APA, "--vary", "Kx=uniform(1,2)", "--draws", "5", "--metric", "peak(x)"], "did you mean"),
     (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5", "--metric", "peak(y)"], "signal 'y'"),
     (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--metric", "peak(x)"], "number of draws"),

@@ -79,7 +79,7 @@ def run(args):
     common = dict(params=params, scheduler=args.scheduler, workers=args.workers, progress=report, say=bar.note)
     data_io = dict(input=args.model_input, output=args.model_output, data_input=column, data_output=args.output)
     sim = dict(metrics=args.metric, inputs=signals, t_end=args.t_end, dt=args.dt, method=args.method, rtol=args.rtol)
-    with outputs(args, "out", "plot", "summary", inputs=[*args.data, args.sets]) as out, bar:
+    with outputs(args, "out", "plot", "summary", inputs=[args.sets]) as out, bar:
         if args.action == "sweep":
             res = batch.sweep(args.model, batch.parse_space(args.vary), design=args.design, draws=args.draws,
                               seed=args.seed, input=args.model_input, output=args.model_output, **sim, **common)
