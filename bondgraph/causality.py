@@ -1,26 +1,32 @@
-"""Sequential causality assignment procedure (SCAP, Karnopp).
+"""Sequential causality assignment procedure (SCAP, Karnopp) with backtracking.
 
-Order: fixed causality of sources; preferred (integral) causality of storage elements; then
-resistors (resistance form preferred: the R takes flow and gives effort); then any bond left
-(junction-to-junction loops), each choice propagated through junctions, transformers and
-gyrators.  A storage port that propagation forces into non-preferred causality is in
-*derivative* causality; a conflict at a source, junction, TF or GY is an error naming them.
+Every element answers the causality questions of the element protocol
+(:mod:`bondgraph.elements.base`): its causal class, preferred causality per port, whether it
+allows a causality, and what the known causality of some of its ports forces on the others.
+
+Order: the fixed causality of sources; then, one port at a time, the preferred causality of
+storage ports (integral causality), then of resistors, then any bond left (junction-to-junction
+loops), each choice propagated through the elements.  The order is canonical — by element name
+(its last component first, so wrapping part of a graph in a component changes nothing) and
+port — never the order in which elements were added.  A choice whose propagation hits a
+conflict is replaced by the other causality, and if neither fits, earlier choices are revised
+(depth-first search).  Storage ports whose causality is not the preferred one are in
+*derivative* causality.  Choices in parts of the graph that no junction, transformer or
+multiport joins cannot interact, so each such part is searched on its own.  A conflict is
+reported only when no causal assignment exists, naming the elements where it arises.
 
 Result: for every bond, the element that sets its effort (the causal stroke is drawn at the
 other end, where the effort arrives).
 """
 from __future__ import annotations
 
-from collections import defaultdict, deque
+from collections import Counter, defaultdict, deque
 from dataclasses import dataclass, field
 
-from .elements import C, CField, GY, I, J0, J1, R, Se, Sf, TF
+from . import config
+from .elements import DISSIPATION, FIXED, STORAGE, CausalConflict
 from .errors import CausalityError
 from .graph import Bond, Model
-
-
-class _Conflict(Exception):
-    pass
 
 
 @dataclass
@@ -59,30 +65,29 @@ def _ep(end):
     return end[0] if end[1] == "p" or end[1].startswith("#") else f"{end[0]}.{end[1]}"
 
 
-def preferred_sets_effort(elem) -> bool | None:
-    """Whether an element prefers to set the effort on its ports (None: no preference)."""
-    if isinstance(elem, (C, CField)):
-        return True
-    if isinstance(elem, I):
-        return False
-    if isinstance(elem, R):
-        return elem.form == "resistance"
-    return None
+def name_key(name: str) -> tuple[str, str]:
+    """Canonical order of element names: last component first (``sub.k1`` sorts as ``k1``)."""
+    return name.rpartition(".")[2], name
 
 
 class _Assigner:
     def __init__(self, model: Model):
         self.m = model
+        self.elements = model.elements
         self.by_bond = {b.index: b for b in model.bonds}
         self.incident: dict[str, list[tuple[int, tuple[str, str]]]] = defaultdict(list)
+        self.bond_of: dict[tuple[str, str], int] = {}
         for b in model.bonds:
-            self.incident[b.tail[0]].append((b.index, b.tail))
-            self.incident[b.head[0]].append((b.index, b.head))
+            for end in (b.tail, b.head):
+                self.incident[end[0]].append((b.index, end))
+                self.bond_of[end] = b.index
         self.setter: dict[int, tuple[str, str]] = {}
         self.trail: list[int] = []
+        self.conflicts: Counter = Counter()
+        self.attempts = 0
 
-    # E(end): does the element at `end` of bond k set the effort? None when unassigned
     def sets(self, k: int, end) -> bool | None:
+        """Does the element at ``end`` of bond ``k`` set its effort? None when unassigned."""
         s = self.setter.get(k)
         return None if s is None else s == end
 
@@ -95,13 +100,15 @@ class _Assigner:
         cur = self.setter.get(k)
         if cur is not None:
             if cur != setter:
-                raise _Conflict(k)
+                raise CausalConflict(end[0])
             return
+        for e in (end, self.other(k, end)):
+            if not self.elements[e[0]].allows_causality(e[1], setter == e):
+                raise CausalConflict(e[0])
         self.setter[k] = setter
         self.trail.append(k)
-        b = self.by_bond[k]
-        queue.append(b.tail[0])
-        queue.append(b.head[0])
+        queue.append(end[0])
+        queue.append(self.other(k, end)[0])
 
     def undo(self, mark: int):
         while len(self.trail) > mark:
@@ -110,97 +117,139 @@ class _Assigner:
     def propagate(self, queue: deque):
         while queue:
             name = queue.popleft()
-            self.constrain(name, queue)
+            known = {end[1]: self.sets(k, end) for k, end in self.incident[name]}
+            for port, value in self.elements[name].propagate_causality(known).items():
+                end = (name, port)
+                self.assign(self.bond_of[end], end, bool(value), queue)
 
-    def constrain(self, name: str, queue: deque):
-        elem = self.m.elements[name]
-        inc = self.incident[name]
-        if isinstance(elem, (Se, Sf)):
-            k, end = inc[0]
-            self.assign(k, end, isinstance(elem, Se), queue)
-        elif isinstance(elem, (TF, GY)):
-            (k1, e1), (k2, e2) = sorted(inc, key=lambda ke: ke[1][1])
-            s1, s2 = self.sets(k1, e1), self.sets(k2, e2)
-            same = isinstance(elem, GY)
-            if s1 is not None:
-                self.assign(k2, e2, s1 if same else not s1, queue)
-            elif s2 is not None:
-                self.assign(k1, e1, s2 if same else not s2, queue)
-        elif isinstance(elem, (J0, J1)):
-            # 0-junction: exactly one bond brings the effort in (junction does not set it);
-            # 1-junction: exactly one bond brings the flow in (junction sets its effort).
-            strong = isinstance(elem, J1)
-            states = [(k, end, self.sets(k, end)) for k, end in inc]
-            n_strong = sum(1 for _, _, s in states if s is strong)
-            unassigned = [(k, end) for k, end, s in states if s is None]
-            if n_strong > 1:
-                raise _Conflict(name)
-            if n_strong == 1:
-                for k, end in unassigned:
-                    self.assign(k, end, not strong, queue)
-            elif len(unassigned) == 1:
-                k, end = unassigned[0]
-                self.assign(k, end, strong, queue)
-            elif not unassigned:
-                raise _Conflict(name)
-
-    def attempt(self, choices) -> bool:
+    def attempt(self, k: int, end, sets_effort: bool) -> bool:
+        """Assign and propagate; on a conflict undo everything and return False."""
+        self.attempts += 1
         mark = len(self.trail)
         queue: deque = deque()
         try:
-            for k, end, sets in choices:
-                self.assign(k, end, sets, queue)
+            self.assign(k, end, sets_effort, queue)
             self.propagate(queue)
             return True
-        except _Conflict:
+        except CausalConflict as exc:
+            self.conflicts[exc.args[0] if exc.args else end[0]] += 1
             self.undo(mark)
             return False
+
+    def search(self, decisions: list[tuple]) -> list[int]:
+        """Depth-first search over ``decisions`` ``(bond, end, preferred, may_flip, label)`` in order:
+        each gets its preferred value if the rest can still be assigned.  Returns the indices
+        of the decisions that were choices (not forced by propagation)."""
+        budget = self.attempts + config.get("causality.max_attempts") + 2 * len(decisions)
+        stack: list[tuple[int, int, bool]] = []  # (decision index, trail mark, other value left)
+        i = 0
+        while i < len(decisions):
+            if self.attempts > budget:
+                raise CausalityError(self.conflict_message(decisions, gave_up=True))
+            k, end, pref, may_flip, _ = decisions[i]
+            if k in self.setter:
+                i += 1
+                continue
+            mark = len(self.trail)
+            if self.attempt(k, end, pref):
+                stack.append((i, mark, may_flip))
+                i += 1
+                continue
+            if may_flip and self.attempt(k, end, not pref):
+                stack.append((i, mark, False))
+                i += 1
+                continue
+            while stack:  # revise the latest choice that still has its other value
+                j, m, left = stack.pop()
+                self.undo(m)
+                kj, endj, prefj = decisions[j][:3]
+                if left and self.attempt(kj, endj, not prefj):
+                    stack.append((j, m, False))
+                    i = j + 1
+                    break
+            else:
+                raise CausalityError(self.conflict_message(decisions))
+        return [j for j, _, _ in stack]
+
+    def conflict_message(self, decisions, gave_up: bool = False) -> str:
+        names = [n for n, _ in self.conflicts.most_common(6)] or sorted({d[1][0] for d in decisions})[:6]
+        where = ", ".join(repr(n) for n in names)
+        if gave_up:
+            return (f"{self.m.name}: no causal assignment found around {where} within "
+                    f"{config.get('causality.max_attempts')} attempts (setting causality.max_attempts); "
+                    f"add storage elements that decouple this part of the graph")
+        return (f"{self.m.name}: causal conflict around {where}: no causal assignment satisfies every junction, "
+                f"transformer and gyrator there and the causality each element accepts (a law that cannot be "
+                f"inverted refuses derivative causality); add a compliance or inertia between rigidly coupled "
+                f"elements, or make their laws invertible")
+
+    def components(self) -> dict[int, int]:
+        """Bond → part of the graph: bonds joined by an element with several bonds share a part."""
+        parent = {k: k for k in self.by_bond}
+
+        def root(k):
+            while parent[k] != k:
+                parent[k] = parent[parent[k]]
+                k = parent[k]
+            return k
+
+        for inc in self.incident.values():
+            for (k1, _), (k2, _) in zip(inc, inc[1:]):
+                parent[root(k1)] = root(k2)
+        return {k: root(k) for k in parent}
 
 
 def assign_causality(model: Model) -> Causality:
     """Run SCAP on ``model`` (after its structural check); see the module docstring."""
     model.check()
     a = _Assigner(model)
-    names = list(model.elements)
-    for name in names:
-        elem = model.elements[name]
-        if isinstance(elem, (Se, Sf)):
-            k, end = a.incident[name][0]
-            if not a.attempt([(k, end, isinstance(elem, Se))]):
+    elements = model.elements
+    order = sorted(elements, key=name_key)
+    ports = [(name, end) for name in order for _, end in sorted(a.incident[name], key=lambda ke: ke[1][1])]
+    for name, end in ports:
+        pref = elements[name].preferred_causality(end[1])
+        if elements[name].causal_class == FIXED and pref is not None:
+            if not a.attempt(a.bond_of[end], end, bool(pref)):
                 raise CausalityError(_source_conflict(model, a, name))
-    derivative: list[tuple[str, str]] = []
-    arbitrary: list[str] = []
-    for kinds in ((C, I, CField), (R,)):
-        for name in names:
-            elem = model.elements[name]
-            if not isinstance(elem, kinds):
-                continue
-            pref = preferred_sets_effort(elem)
-            for k, end in a.incident[name]:
-                if a.setter.get(k) is None:
-                    if not (a.attempt([(k, end, pref)]) or a.attempt([(k, end, not pref)])):
-                        raise CausalityError(f"{model.name}: no causal assignment fits '{name}' "
-                                             f"(conflict at its neighbours)")
-                    if isinstance(elem, R):
-                        arbitrary.append(name)
-                if elem.is_storage and a.sets(k, end) != pref:
-                    derivative.append(end)
-    for b in model.bonds:
-        if a.setter.get(b.index) is None:
-            if not (a.attempt([(b.index, b.tail, True)]) or a.attempt([(b.index, b.tail, False)])):
-                raise CausalityError(f"{model.name}: bond {_ep(b.tail)} → {_ep(b.head)} admits no causality")
-            arbitrary.append(f"bond {b.index}")
+    decisions = []  # (bond, end, preferred value, may take the other, what is decided)
+    for cls in (STORAGE, DISSIPATION):
+        for name, end in ports:
+            pref = elements[name].preferred_causality(end[1])
+            if elements[name].causal_class == cls and pref is not None:
+                decisions.append((a.bond_of[end], end, bool(pref), True, name))
+    for b in sorted(model.bonds, key=lambda b: (*sorted((_end_key(b.tail), _end_key(b.head))), b.index)):
+        decisions.append((b.index, min((b.tail, b.head), key=_end_key), True, True, f"bond {b.index}"))
+    part = a.components()
+    by_part: dict[int, list] = defaultdict(list)
+    for d in decisions:
+        by_part[part[d[0]]].append(d)
+    chosen = set()
+    for group in by_part.values():
+        chosen |= {group[j][4] for j in a.search(group)}
+    arbitrary = [d[4] for d in decisions if d[4] in chosen and (d[4].startswith("bond ") or
+                                                                elements[d[4]].causal_class == DISSIPATION)]
+    derivative = []
+    for name, end in ports:
+        elem = elements[name]
+        pref = elem.preferred_causality(end[1])
+        if elem.is_storage and pref is not None and a.sets(a.bond_of[end], end) != bool(pref):
+            derivative.append(end)
     return Causality(model, dict(a.setter), derivative, arbitrary)
 
 
+def _end_key(end) -> tuple:
+    """Canonical key of a bond end (junction ports, named after bond numbers, count as one)."""
+    return (*name_key(end[0]), "" if end[1].startswith("#") else end[1])
+
+
 def _source_conflict(model: Model, a: _Assigner, source: str) -> str:
-    """Explain a source conflict: name the source, its junction and the rival sources there."""
+    """Explain a source conflict: name the source, its neighbour and the rival sources there."""
     k, end = a.incident[source][0]
     other = a.other(k, end)[0]
     rivals = sorted({a.other(kk, e)[0] for kk, e in a.incident[other]} - {source, other})
-    rivals = [r for r in rivals if isinstance(model.elements[r], (Se, Sf))]
+    rivals = [r for r in rivals if model.elements[r].causal_class == FIXED]
     elem = model.elements[source]
-    what = "effort" if isinstance(elem, Se) else "flow"
+    what = "effort" if elem.preferred_causality(end[1]) else "flow"
     also = f" (so does {', '.join(repr(r) for r in rivals)})" if rivals else ""
     return (f"{model.name}: causal conflict: {elem.kind} '{source}' imposes the {what} at '{other}'{also}; "
             f"two sources fix the same variable: remove one or put an R, C or I between them")

@@ -34,6 +34,21 @@ DEFAULTS: dict[str, Default] = {
     "simulate.atol_floor": Default(1e-20, "absolute tolerance floor; the error is otherwise relative to each "
                                           "state's peak"),
     "simulate.table_steps": Default(10, "no step spans more than this many sample intervals of a tabulated input"),
+    "simulate.max_steps": Default(50_000_000, "a run stops with an error after this many integrator steps"),
+    "simulate.explicit_step_limit": Default(3e6, "method 'auto' picks radau when the explicit method would need more "
+                                                 "steps than this (from the start-point Jacobian's eigenvalues)"),
+    "batch.connect_timeout": Default(10.0, "seconds to wait for the Dask scheduler named by --scheduler"),
+    "batch.tasks_per_worker": Default(4, "short jobs (simulations) are grouped into about this many Dask tasks "
+                                         "per worker"),
+    "batch.max_jobs_per_task": Default(32, "at most this many short jobs in one Dask task"),
+    "causality.max_attempts": Default(100_000, "causality assignment gives up after this many revised choices "
+                                               "in one part of the graph (reported as an error naming its elements)"),
+    "codegen.tape_threshold": Default(300, "programs with more statements run on the tape interpreter instead of "
+                                           "being compiled by numba per model"),
+    "data.uniform_rtol": Default(1e-2, "sampling is uniform when every time step is within this fraction of the "
+                                       "mean step (absorbs time stamps printed with few digits)"),
+    "data.suspicious_time_span": Default(1e4, "a record with steps of 1 s or more spanning this many seconds "
+                                              "draws a warning that 't' may be in ms or sample numbers"),
     # diagnosis (bondgraph.diagnosis): what counts as evidence; see that package's docstring
     "diagnosis.spread": Default(10.0, "linear parameters are calibrated within x/÷ this factor of the model's "
                                       "values (and their declared bounds); the sensor gain is free"),

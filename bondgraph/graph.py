@@ -18,10 +18,15 @@ from typing import Any
 
 import sympy as sp
 
-from .elements import Element, Junction, J0, J1, STORAGE_KINDS, CField, sympify
+from .elements import Element, Junction, sympify
 from .errors import ModelError, did_you_mean
 from .memory import MemoryOperator
 from .parameters import Parameter
+
+
+def input_rate_symbol(u: sp.Symbol) -> sp.Symbol:
+    """The symbol of du/dt for input symbol ``u`` (named ``du/dt``)."""
+    return sp.Symbol(f"d{u.name}/dt", real=True)
 
 
 @dataclass(frozen=True)
@@ -221,6 +226,7 @@ class Component:
             raise ModelError(f"{self.name}: operator '{name}' declared twice")
         if not isinstance(op, MemoryOperator):
             raise ModelError(f"{self.name}: operator '{name}' must be a MemoryOperator, got {op!r}")
+        op.kernels()  # compiled and checked now: a broken kernel is an error at the line that applies it
         values = op.parameter_values()
         syms = [self.parameter(f"{name}.{pn}", v, doc=f"{op.kind} parameter")
                 for pn, v in zip(op.parameter_names, values)]
@@ -385,7 +391,7 @@ class Model(Component):
         """Symbol of the time derivative of input ``name`` (for rate-dependent laws and states)."""
         if name not in self.inputs:
             raise ModelError(f"{self.name}: " + did_you_mean(name, self.inputs, "input"))
-        return sp.Symbol(f"d{name}/dt", real=True)
+        return input_rate_symbol(self.inputs[name].symbol)
 
     def output(self, name: str, expr, unit: str = "", doc: str = "") -> None:
         """Declare a named output; ``expr`` may use port quantities, states, inputs, parameters.
@@ -412,4 +418,4 @@ class Model(Component):
         return out
 
     def storage_elements(self):
-        return [e for e in self.elements.values() if isinstance(e, STORAGE_KINDS)]
+        return [e for e in self.elements.values() if e.is_storage]

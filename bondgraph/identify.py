@@ -29,7 +29,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
-from .data import Dataset
+from .data import Dataset, uniform_step
 from .errors import DataError, ParameterError, UsageError, did_you_mean
 from .graph import Model
 from .lti import LTI, first_input, first_output
@@ -332,13 +332,6 @@ def check_varies(u: np.ndarray, name: str, path: str | None = None) -> None:
         where = f"{path}: " if path else ""
         raise DataError(f"{where}input column '{name}' is constant ({u[0]:g}): nothing to identify; "
                         f"give a record in which the drive varies")
-
-
-def uniform_step(t: np.ndarray) -> float | None:
-    """The sample interval if ``t`` is uniformly spaced (to 1e-6), else None."""
-    d = np.diff(t)
-    mean = float(np.mean(d))
-    return mean if float(np.max(d) - np.min(d)) <= 1e-6 * mean else None
 
 
 def detect_linear(ident: Identification, names: Sequence[str], fixed: Mapping | None = None) -> list[str]:

@@ -12,6 +12,7 @@ import numpy as np
 import scipy.linalg as sla
 import sympy as sp
 
+from .checks import check_linear
 from .equations import Equations
 from .errors import UsageError, did_you_mean
 
@@ -78,8 +79,39 @@ class LinearModel:
         except np.linalg.LinAlgError:
             return float("inf")
 
+    def to_control(self, name: str = ""):
+        """The model as a ``control.StateSpace`` (python-control, the optional extra
+        ``control``), with its input, output and state names, for Bode plots, margins and
+        controller design::
+
+            sys = linearize(derive(model), "V", "x").to_control()
+            control.bode_plot(sys)
+        """
+        try:
+            import control
+        except ImportError:
+            raise UsageError("python-control is not installed: pip install 'bondgraph[control]'") from None
+        return control.ss(self.A, self.B, self.C, self.D, inputs=[self.input], outputs=[self.output],
+                          states=list(self.states), **({"name": name} if name else {}))
+
+    def python_control_script(self, name: str = "model", comment: str = "") -> str:
+        """Python source that builds this model as ``control.StateSpace`` named ``model``
+        (numbers written exactly), e.g. to save and import from a control-design script."""
+        def arr(M):
+            return "np.array(" + repr(np.asarray(M, float).tolist()) + ")"
+
+        lines = [f"# {comment}" if comment else "# linearised by bondgraph", "import control",
+                 "import numpy as np", "",
+                 f"A = {arr(self.A) if self.A.size else 'np.zeros((0, 0))'}",
+                 f"B = {arr(self.B) if self.B.size else 'np.zeros((0, 1))'}",
+                 f"C = {arr(self.C) if self.C.size else 'np.zeros((1, 0))'}",
+                 f"D = {arr(self.D)}",
+                 f"model = control.ss(A, B, C, D, inputs={[self.input]!r}, outputs={[self.output]!r},",
+                 f"                   states={list(self.states)!r}, name={name!r})", ""]
+        return "\n".join(lines)
+
     def summary(self) -> dict:
-        """The JSON object of ``bondgraph linearize --json`` (see CONTRACT)."""
+        """The JSON object of ``bondgraph linearize --json``."""
         z = self.zeros
         return {
             "input": self.input, "output": self.output, "states": self.states,
@@ -134,6 +166,12 @@ def linearize(eqs: Equations, input: str = "V", output: str = "x", params: dict 
         point[ob.symbol] = 0.0
 
     def num(M):
-        return np.array(M.xreplace(point).evalf(), dtype=float).reshape(M.shape)
+        E = M.xreplace(point).evalf()
+        try:
+            return np.array(E, dtype=float).reshape(M.shape)
+        except TypeError:  # zoo, nan or complex entries (a parameter at 0 in a denominator)
+            return np.array([float(e) if e.is_real and e.is_finite else np.nan for e in E], float).reshape(M.shape)
 
-    return LinearModel(num(A), num(B), num(C), num(D), [str(s) for s in eqs.state_symbols], input, output)
+    mats = num(A), num(B), num(C), num(D)
+    check_linear(eqs.model, mats, {p.name: v for p, v in values.items()})
+    return LinearModel(*mats, [str(s) for s in eqs.state_symbols], input, output)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import importlib.util
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -28,7 +28,8 @@ from .simulate import Experiment
 
 @dataclass
 class LoadedModel:
-    """A built model with its file, declared parameters, values and default experiment."""
+    """A built model with its file, declared parameters, values and default experiment;
+    ``offsets`` maps output names to an offset added to them (a fit file's sensor zero)."""
 
     path: Path
     model: Model
@@ -36,6 +37,7 @@ class LoadedModel:
     experiment: Experiment
     declared: list[Parameter]
     module: Any
+    offsets: dict = field(default_factory=dict)
 
 
 def read_model_module(path: str | Path):
@@ -56,6 +58,9 @@ def read_model_module(path: str | Path):
         raise ModelError(f"{path}:{exc.lineno or '?'}: syntax error: {exc.msg}") from None
     except BondGraphError as exc:
         raise type(exc)(f"{path}: {exc}") from None
+    except SystemExit as exc:
+        raise ModelError(f"{path}:{_user_line(exc, p)}: the model file called sys.exit({exc.code!r}); a model file "
+                         f"must define PARAMETERS and build(p), not end the program") from None
     except Exception as exc:  # noqa: BLE001 - any failure of user code is reported as an input error
         raise ModelError(f"{path}:{_user_line(exc, p)}: {type(exc).__name__}: {exc}") from None
     for attr in ("PARAMETERS", "build"):
@@ -65,6 +70,11 @@ def read_model_module(path: str | Path):
     declared = list(module.PARAMETERS)
     if not all(isinstance(d, Parameter) for d in declared):
         raise ModelError(f"model file {path}: PARAMETERS must be a list of bondgraph.Parameter")
+    names = [d.name for d in declared]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ModelError(f"model file {path}: parameter {', '.join(repr(n) for n in twice)} declared twice in "
+                         f"PARAMETERS; declare each name once")
     return module, declared
 
 
@@ -88,6 +98,9 @@ def load_model(path: str | Path, overrides: Mapping[str, Any] | None = None) -> 
         model = module.build(values)
     except BondGraphError as exc:
         raise type(exc)(f"{path}: {exc}") from None
+    except SystemExit as exc:
+        raise ModelError(f"{path}:{_user_line(exc, p)}: build(p) called sys.exit({exc.code!r}); it must return "
+                         f"a bondgraph.Model") from None
     except Exception as exc:  # noqa: BLE001
         raise ModelError(f"{path}:{_user_line(exc, p)}: {type(exc).__name__} while building: {exc}") from None
     if not isinstance(model, Model):

@@ -82,7 +82,12 @@ class Parameter:
                 return self.coerce(int(s))
             if kind == "choice":
                 return self.coerce(s)
-            return self.coerce(float(s))
+            v = float(s)
+            if not math.isfinite(v):
+                raise ParameterError(f"bad value {text!r} for parameter '{self.name}': must be a finite number")
+            return self.coerce(v)
+        except ParameterError:
+            raise  # out of bounds, not one of the choices: already says so
         except (ValueError, OverflowError):
             raise ParameterError(
                 f"bad value {text!r} for parameter '{self.name}': expected {self.expected()}") from None
@@ -172,32 +177,71 @@ class ParameterValues:
 
 
 def parse_assignments(items: Iterable[str]) -> dict[str, str]:
-    """Split ``NAME=VALUE`` strings (from ``--set``) into a dict; ParameterError if malformed."""
+    """Split ``NAME=VALUE`` strings (from ``--set``) into a dict; ParameterError if malformed
+    or if a name is given twice."""
     out: dict[str, str] = {}
     for item in items:
         name, sep, value = item.partition("=")
         if not sep or not name.strip() or not value.strip():
             raise ParameterError(f"bad --set {item!r}: expected NAME=VALUE, e.g. --set K=1.2e7")
-        out[name.strip()] = value.strip()
+        name = name.strip()
+        if name in out:
+            raise ParameterError(f"--set {name} given twice ({name}={out[name]} and {name}={value.strip()}); "
+                                 f"give each parameter once")
+        out[name] = value.strip()
     return out
 
 
 def read_params_file(path: str | Path) -> dict[str, Any]:
-    """Parameter values from a JSON file (as written by ``bondgraph fit``).
+    """Parameter values from a JSON file: a fit file of ``bondgraph fit`` (its ``params``)
+    or a flat ``{name: value}`` object.  See :func:`read_fit_file` for the output offset."""
+    return read_fit_file(path)[0]
 
-    Accepts ``{"params": {name: value}}`` or a flat ``{name: value}`` object.
-    """
+
+def read_fit_file(path: str | Path) -> tuple[dict[str, Any], dict[str | None, float]]:
+    """(parameter values, output offsets) from a JSON parameter file.
+
+    A fit file (``bondgraph fit --out``) holds ``params`` (every parameter value of the fitted
+    model), ``output`` and ``offset`` (the output offset the fit solved: measured ≈ model
+    output + offset), and the fit's settings and scores.  A flat ``{name: value}`` object is
+    read as parameter values with no offset.  The offset key is the output name, or ``None``
+    for a file that does not name its output (then it applies to the model's first output).
+    Values are numbers, booleans or text; a name given twice is an error."""
     p = Path(path)
+
+    def no_duplicates(pairs):
+        seen = {}
+        for key, value in pairs:
+            if key in seen:
+                raise ParameterError(f"parameter file {path}: {key!r} is given twice; keep one value")
+            seen[key] = value
+        return seen
+
     try:
-        data = json.loads(p.read_text(encoding="utf-8"))
+        data = json.loads(p.read_text(encoding="utf-8"), object_pairs_hook=no_duplicates)
     except FileNotFoundError:
         raise ParameterError(f"parameter file {path}: not found") from None
+    except IsADirectoryError:
+        raise ParameterError(f"parameter file {path}: is a directory; give a .json file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterError(f"parameter file {path}: cannot read ({exc})") from None
     except json.JSONDecodeError as exc:
         raise ParameterError(f"parameter file {path}:{exc.lineno}: not valid JSON ({exc.msg})") from None
-    if isinstance(data, dict) and isinstance(data.get("params"), dict):
+    offsets: dict[str | None, float] = {}
+    if isinstance(data, dict) and "params" in data:
+        if not isinstance(data["params"], dict):
+            raise ParameterError(f"parameter file {path}: 'params' must be an object of name: value")
+        offset = data.get("offset")
+        if offset is not None:
+            if isinstance(offset, bool) or not isinstance(offset, (int, float)) or not math.isfinite(offset):
+                raise ParameterError(f"parameter file {path}: 'offset' must be a finite number, got {offset!r}")
+            output = data.get("output")
+            offsets[output if isinstance(output, str) else None] = float(offset)
         data = data["params"]
     if not isinstance(data, dict):
         raise ParameterError(f"parameter file {path}: expected a JSON object of name: value")
-    return data
+    for key, value in data.items():
+        if value is None or isinstance(value, (list, dict)):
+            raise ParameterError(f"parameter file {path}: value of {key!r} must be a number, true/false or "
+                                 f"text, got {json.dumps(value)}")
+    return data, offsets

@@ -1,9 +1,13 @@
 """Plots (optional extra ``plot``: matplotlib): simulations, Bode diagrams, bond graphs.
 
-Every figure is written atomically to a PNG; without matplotlib a one-line error names the
-extra to install.
+Axes carry the quantity and its unit (taken from the model's declared inputs and outputs);
+signals that never change are left out (and listed in the title); curves that share a unit
+share a panel, with a legend.  Every figure is written atomically, in the format of its file
+name (png, pdf or svg); without matplotlib a one-line error names the extra to install.
 """
 from __future__ import annotations
+
+import os
 
 import numpy as np
 
@@ -22,32 +26,116 @@ def _pyplot():
 
 
 def save(fig, path: str) -> None:
+    """Write ``fig`` atomically; the format follows the file name's suffix (png, pdf, svg)."""
     plt = _pyplot()
-    with atomic_write(path, "wb") as fh:
-        fig.savefig(fh, format="png", dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    fmt = os.path.splitext(os.fspath(path))[1].lstrip(".").lower() or "png"
+    try:
+        with atomic_write(path, "wb") as fh:
+            fig.savefig(fh, format=fmt, dpi=110, bbox_inches="tight")
+    finally:
+        plt.close(fig)
 
 
-def plot_simulation(res, path: str, title: str = "") -> None:
-    """Inputs on top, each output below, against time."""
+def axis_label(name: str, unit: str) -> str:
+    """``x (m)``, or just ``x`` for a quantity without unit (``(m)`` without a name)."""
+    return f"{name} ({unit})".strip() if unit else name
+
+
+def varies(y) -> bool:
+    """Whether a sampled signal changes at all (beyond rounding)."""
+    y = np.asarray(y, float)
+    if y.size < 2:
+        return False
+    peak = float(np.max(np.abs(y)))
+    return peak > 0 and float(np.ptp(y)) > 1e-12 * peak
+
+
+def _envelope(t, y, limit: int = 20000):
+    """At most about ``limit`` points that keep every bucket's minimum and maximum (a
+    million-sample signal draws as fast as a short one and loses no peak)."""
+    n = t.size
+    if n <= limit:
+        return t, y
+    k = int(np.ceil(n / (limit // 2)))
+    m = n // k * k
+    tb, yb = t[:m].reshape(-1, k), y[:m].reshape(-1, k)
+    lo, hi = yb.argmin(axis=1), yb.argmax(axis=1)
+    rows = np.arange(tb.shape[0])
+    first, second = np.minimum(lo, hi), np.maximum(lo, hi)
+    tt = np.column_stack([tb[rows, first], tb[rows, second]]).ravel()
+    yy = np.column_stack([yb[rows, first], yb[rows, second]]).ravel()
+    return np.concatenate([tt, t[m:]]), np.concatenate([yy, y[m:]])
+
+
+def plot_signals(t, signals: dict, units: dict, path: str, title: str = "") -> None:
+    """Signals against time, one panel per unit: signals that share a unit share the panel
+    (with a legend), the y axis says the unit; signals that never change are left out and
+    listed in the title.  ``signals``: name → samples; ``units``: name → unit text."""
     plt = _pyplot()
-    n = len(res.inputs) + len(res.outputs)
-    fig, axes = plt.subplots(max(n, 1), 1, figsize=(8, 1.9 * max(n, 1) + 0.6), sharex=True, squeeze=False)
-    for ax, (name, y) in zip(axes[:, 0], list(res.inputs.items()) + list(res.outputs.items())):
-        ax.plot(res.t, y, lw=1.0)
-        ax.set_ylabel(name)
+    panels: dict = {}
+    constant = []
+    for name, y in signals.items():
+        if not varies(y):
+            constant.append(f"{name} = {float(np.asarray(y)[0]):.4g}" + (f" {units.get(name)}" if units.get(name) else ""))
+            continue
+        unit = units.get(name, "")
+        panels.setdefault(unit if unit else ("", name), []).append(name)  # unitless: a panel each
+    n = max(len(panels), 1)
+    fig, axes = plt.subplots(n, 1, figsize=(8, 1.9 * n + 0.8), sharex=True, squeeze=False)
+    for ax, names in zip(axes[:, 0], panels.values()):
+        unit = units.get(names[0], "")
+        for name in names:
+            ax.plot(*_envelope(np.asarray(t), np.asarray(signals[name], float)), lw=1.0, label=name)
+        joined = ", ".join(names)
+        ax.set_ylabel(axis_label(joined if len(joined) <= 24 else "", unit).strip() if unit else joined)
+        if len(names) > 1:
+            ax.legend(fontsize=8, loc="best")
         ax.grid(alpha=0.3)
+    if not panels:
+        axes[0, 0].text(0.5, 0.5, "every signal is constant", ha="center", va="center", transform=axes[0, 0].transAxes)
     axes[-1, 0].set_xlabel("t (s)")
-    if title:
-        axes[0, 0].set_title(title)
+    head = title + (": " if title and constant else "") + ("constant " + ", ".join(constant) if constant else "")
+    if head:
+        axes[0, 0].set_title(head, fontsize=9)
     save(fig, path)
 
 
-def plot_bode(w, H, path: str, title: str = "") -> None:
+def plot_simulation(res, path: str, title: str = "", units: dict | None = None, columns: dict | None = None) -> None:
+    """Inputs and outputs of a :class:`~bondgraph.simulate.SimResult` against time (see
+    :func:`plot_signals`); ``units`` name → unit (e.g. from the model's inputs and outputs),
+    ``columns`` replaces the result's signals (e.g. outputs with a fit's offset added)."""
+    plot_signals(res.t, columns if columns is not None else {**res.inputs, **res.outputs}, units or {}, path, title)
+
+
+def plot_fit(t, measured, fitted, path: str, name: str = "y", unit: str = "", title: str = "") -> None:
+    """Measured and fitted output (offset included) on one panel, the residual below."""
     plt = _pyplot()
+    t = np.asarray(t, float)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
+    a1.plot(*_envelope(t, np.asarray(measured, float)), lw=0.8, label="measured")
+    a1.plot(*_envelope(t, np.asarray(fitted, float)), lw=0.8, label="fitted model")
+    a1.set_ylabel(axis_label(name, unit))
+    a1.legend(fontsize=8, loc="best")
+    a2.plot(*_envelope(t, np.asarray(measured, float) - np.asarray(fitted, float)), lw=0.6, color="tab:red")
+    a2.set_ylabel(axis_label("residual", unit))
+    a2.set_xlabel("t (s)")
+    for a in (a1, a2):
+        a.grid(alpha=0.3)
+    if title:
+        a1.set_title(title, fontsize=9)
+    save(fig, path)
+
+
+def plot_bode(w, H, path: str, title: str = "", input: tuple[str, str] = ("u", ""),
+              output: tuple[str, str] = ("y", "")) -> None:
+    """Magnitude and phase of the frequency response H(jω) of ``output`` to ``input``
+    (each a (name, unit) pair; the magnitude's unit is theirs divided)."""
+    plt = _pyplot()
+    (u, uu), (y, yu) = input, output
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
     a1.loglog(w, np.abs(H))
-    a1.set_ylabel("|H|")
+    unit = f"{yu or '1'}/{uu}" if uu else yu
+    a1.set_ylabel(axis_label(f"|{y}/{u}|", unit))
     a2.semilogx(w, np.degrees(np.unwrap(np.angle(H))))
     a2.set_ylabel("phase (deg)")
     a2.set_xlabel("ω (rad/s)")

@@ -4,15 +4,47 @@ Sections: parameters, constitutive relations per element, the causal assignment 
 of each bond sets the effort, where the stroke sits), eliminations (derivative causality) and
 algebraic loops, memory operators, the state equations x' = f(x, u, θ) fully substituted,
 and the outputs.
+
+Fully substituted equations of big graphs repeat the same sub-expressions many times (every
+layer of an N-layer stack sees the common electrode's voltage, a sum over all N layers), so
+the printers remember the text of every sub-expression they have printed: the printout of
+a 200-layer stack costs as much as its unique sub-expressions, not as its 4 MB of text.
 """
 from __future__ import annotations
 
 import sympy as sp
+from sympy.printing.latex import LatexPrinter
+from sympy.printing.str import StrPrinter
 
 from .equations import Equations
 from .graph import Model
 
 FORMATS = ("text", "latex", "markdown")
+
+
+class _Memo:
+    """Printer mixin: each distinct sub-expression is printed once (keyed by the expression,
+    so the text is exactly what the plain sympy printer gives)."""
+
+    def __init__(self, *args, **kw):
+        super().__init__(*args, **kw)
+        self._memo: dict = {}
+
+    def _print(self, expr, **kw):
+        if kw or not isinstance(expr, sp.Basic):
+            return super()._print(expr, **kw)
+        text = self._memo.get(expr)
+        if text is None:
+            text = self._memo[expr] = super()._print(expr)
+        return text
+
+
+class _Str(_Memo, StrPrinter):
+    pass
+
+
+class _Latex(_Memo, LatexPrinter):
+    pass
 
 
 def _fmt_value(v) -> str:
@@ -28,11 +60,12 @@ def _rows_parameters(model: Model):
 
 def _rows_elements(eqs: Equations):
     m = eqs.model
-    rows = []
-    for name, el in m.elements.items():
-        bonds = [b.index for b in m.bonds_of(name)]
-        rows.append((name, el.kind, el.describe(), ", ".join(map(str, bonds))))
-    return rows
+    bonds: dict[str, list[int]] = {name: [] for name in m.elements}
+    for b in m.bonds:  # one pass (bonds_of per element is quadratic in big graphs)
+        for end in {b.tail[0], b.head[0]}:
+            bonds[end].append(b.index)
+    return [(name, el.kind, el.describe(), ", ".join(map(str, sorted(bonds[name]))))
+            for name, el in m.elements.items()]
 
 
 def _rows_causality(eqs: Equations):
@@ -50,16 +83,26 @@ def _derivative(sym: sp.Symbol, fmt: str) -> str:
     return r"\frac{d}{dt}" + sp.latex(sym)
 
 
+def _substituted(eqs: Equations):
+    """State equations, outputs and operator inputs, fully substituted in one pass over the
+    program (the same as ``state_equations()``, ``output_equations()``, ``operator_inputs()``)."""
+    ops = {st.var: st.expr for st in eqs.program if st.op is not None}
+    both = eqs.substituted({**{("x", k): v for k, v in eqs.rates.items()},
+                            **{("y", k): v for k, v in eqs.outputs.items()},
+                            **{("h", k): v for k, v in ops.items()}})
+    return ({k: both[("x", k)] for k in eqs.rates}, {k: both[("y", k)] for k in eqs.outputs},
+            {k: both[("h", k)] for k in ops})
+
+
 def render(eqs: Equations, fmt: str = "text") -> str:
     """The complete printout of ``eqs`` in ``fmt`` (text, latex or markdown)."""
     if fmt not in FORMATS:
         raise ValueError(f"format must be one of {FORMATS}")
+    sstr, latex = _Str().doprint, _Latex().doprint
     m = eqs.model
-    states = eqs.state_equations()
-    outputs = eqs.output_equations()
-    op_inputs = eqs.operator_inputs()
+    states, outputs, op_inputs = _substituted(eqs)
     if fmt == "latex":
-        return _latex(eqs, states, outputs, op_inputs)
+        return _latex(eqs, states, outputs, op_inputs, latex)
     md = fmt == "markdown"
     out: list[str] = []
 
@@ -81,7 +124,7 @@ def render(eqs: Equations, fmt: str = "text") -> str:
                 out.append("  ".join(str(c).ljust(w) for c, w in zip(r, widths)).rstrip())
 
     def eq(lhs, rhs):
-        out.append(f"- ${lhs} = {sp.latex(rhs)}$" if md else f"  {lhs} = {sp.sstr(rhs)}")
+        out.append(f"- ${lhs} = {latex(rhs)}$" if md else f"  {lhs} = {sstr(rhs)}")
 
     out.append(f"# {m.name}" if md else f"{m.name}\n{'=' * len(m.name)}")
     if m.doc:
@@ -101,31 +144,31 @@ def render(eqs: Equations, fmt: str = "text") -> str:
     if eqs.operators:
         head("Memory operators")
         for ob in eqs.operators:
-            lhs = f"{ob.symbol}" if not md else sp.latex(ob.symbol)
+            lhs = f"{ob.symbol}" if not md else latex(ob.symbol)
             rhs = op_inputs[ob.symbol]
             if md:
-                out.append(f"- ${lhs} = \\mathcal{{H}}_{{\\mathrm{{{ob.operator.kind}}}}}[{sp.latex(rhs)}]$")
+                out.append(f"- ${lhs} = \\mathcal{{H}}_{{\\mathrm{{{ob.operator.kind}}}}}[{latex(rhs)}]$")
             else:
-                out.append(f"  {lhs} = {ob.operator.kind}[{sp.sstr(rhs)}]")
+                out.append(f"  {lhs} = {ob.operator.kind}[{sstr(rhs)}]")
     head(f"State equations ({len(states)} states)")
     for s, rhs in states.items():
         eq(_derivative(s, "latex" if md else "text"), rhs)
     head("Outputs")
     for name, rhs in outputs.items():
-        eq(sp.latex(sp.Symbol(name)) if md else name, rhs)
+        eq(latex(sp.Symbol(name)) if md else name, rhs)
     return "\n".join(out).strip() + "\n"
 
 
-def _latex(eqs, states, outputs, op_inputs) -> str:
+def _latex(eqs, states, outputs, op_inputs, latex) -> str:
     m = eqs.model
     lines = [f"% {m.name}: state equations generated by bondgraph", r"\begin{align}"]
     for s, rhs in states.items():
-        lines.append(f"  {_derivative(s, 'latex')} &= {sp.latex(rhs)} \\\\")
+        lines.append(f"  {_derivative(s, 'latex')} &= {latex(rhs)} \\\\")
     for ob in eqs.operators:
-        lines.append(f"  {sp.latex(ob.symbol)} &= \\mathcal{{H}}_{{\\mathrm{{{ob.operator.kind}}}}}"
-                     f"[{sp.latex(op_inputs[ob.symbol])}] \\\\")
+        lines.append(f"  {latex(ob.symbol)} &= \\mathcal{{H}}_{{\\mathrm{{{ob.operator.kind}}}}}"
+                     f"[{latex(op_inputs[ob.symbol])}] \\\\")
     for name, rhs in outputs.items():
-        lines.append(f"  {sp.latex(sp.Symbol(name))} &= {sp.latex(rhs)} \\\\")
+        lines.append(f"  {latex(sp.Symbol(name))} &= {latex(rhs)} \\\\")
     if lines[-1].endswith(" \\\\"):
         lines[-1] = lines[-1][:-3]
     lines.append(r"\end{align}")

@@ -1,16 +1,21 @@
-"""Bimorph piezoelectric cantilever: exact Euler–Bernoulli modes (seed 000, Ghafarirad et al. 2015).
+"""Bimorph piezoelectric cantilever: exact Euler–Bernoulli modes, after Ghafarirad, H., Rezaei, S.M.,
+Sarhan, A.A.D., Zareinejad, M. "Continuous dynamic modelling of bimorph piezoelectric cantilevered
+actuators considering hysteresis effect and dynamic behaviour analysis." Mathematical and Computer
+Modelling of Dynamical Systems 21(2) (2015) 130-152; and the effective mass of tapered and
+extended cantilevers after Wood, R.J., Steltz, E., Fearing, R.S. "Nonlinear performance limits for
+high energy density piezoelectric bending actuators." Proc. IEEE ICRA, Barcelona, 2005.
 
 SI units throughout. x runs from the clamp (x = 0) to the free tip (x = L); w is the transverse
 deflection. Two piezo layers of equal thickness cover the substrate on [l1, l2], giving three
 segments [0, l1] bare, [l1, l2] covered, [l2, L] bare (zero-length segments are dropped).
 
-Modal model (seed 000 eqs. 22-23), with mass-normalised modes phi_i:
+Modal model (Ghafarirad et al. eqs. 22-23), with mass-normalised modes phi_i:
 
     q_i'' + 2 zeta_i omega_i q_i' + omega_i^2 q_i = m_p,i V,     w(x, t) = sum_i phi_i(x) q_i(t)
     m_p,i = M_p (phi_i'(l2) - phi_i'(l1)),   M_p = b e31 (t_b + t_p)
 
 Sign convention (decision, checked against the paper): the bending moment of the covered part is
-M = EI w'' - M_p V (seed 000 eq. 10, field E3 = V/t_p in each layer, poling opposite in the two
+M = EI w'' - M_p V (Ghafarirad et al. eq. 10, field E3 = V/t_p in each layer, poling opposite in the two
 layers), so the distributed load is M_p V [delta'(x - l1) - delta'(x - l2)] (eq. 14) and, with
 int delta'(x - l) phi dx = -phi'(l) (eq. 21), m_p,i = M_p (phi_i'(l2) - phi_i'(l1)). M_p keeps the
 sign of e31: for PZT (e31 < 0) M_p < 0, so a positive V bends the tip towards negative w. Mode
@@ -22,6 +27,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from scipy.integrate import quad
 from scipy.optimize import brentq
 
 
@@ -36,7 +42,7 @@ class Segment(NamedTuple):
 
 @dataclass(frozen=True)
 class Bimorph:
-    """Symmetric bimorph cantilever (seed 000 Fig. 1), clamped at x = 0, free at x = L.
+    """Symmetric bimorph cantilever (Ghafarirad et al. Fig. 1), clamped at x = 0, free at x = L.
 
     L, b: length and width (m); t_p: thickness of EACH piezo layer (m); t_b: substrate thickness (m);
     rho_p, rho_b: densities (kg/m^3); c_p, c_b: elastic moduli (Pa); e31: piezo constant (C/m^2);
@@ -80,7 +86,7 @@ class Bimorph:
 
     @property
     def EI_covered(self) -> float:
-        """c_b I_b + c_p I_p, I_p = 2b[(t_b/2 + t_p)^3 - (t_b/2)^3]/3 (seed 000 eq. 11) (N m^2)."""
+        """c_b I_b + c_p I_p, I_p = 2b[(t_b/2 + t_p)^3 - (t_b/2)^3]/3 (Ghafarirad et al. eq. 11) (N m^2)."""
         h = self.t_b / 2
         return self.EI_bare + self.c_p * 2 * self.b * ((h + self.t_p) ** 3 - h**3) / 3
 
@@ -107,10 +113,10 @@ class Bimorph:
         return _modal_analysis(self, n)
 
 
-# Seed 000 Table 1: Piezo Systems T215-A4-103X, PZT-5A on brass, fully covered.
+# Ghafarirad et al. 2015, Table 1: Piezo Systems T215-A4-103X, PZT-5A on brass, fully covered.
 T215_A4_103X = Bimorph(L=21.6e-3, b=3.2e-3, t_p=0.13e-3, t_b=0.12e-3, rho_p=7800.0, rho_b=9000.0,
                        c_p=59e9, c_b=105e9, e31=-12.54)
-# Seed 001 Table 1: Piezo Systems T226-H4-203X, PZT-5H on brass, fully covered.
+# Shahabi, Ghafarirad & Taghvaeipour 2019, Table 1: Piezo Systems T226-H4-203X, PZT-5H on brass, fully covered.
 T226_H4_203X = Bimorph(L=24.53e-3, b=6.4e-3, t_p=0.265e-3, t_b=0.140e-3, rho_p=7500.0,
                        rho_b=9000.0, c_p=51.51e9, c_b=105e9, e31=-13.11)
 
@@ -257,7 +263,8 @@ class Modes:
 
 
 def effective_mass(beam: Bimorph) -> float:
-    """Tip-referred effective mass from the static tip-load deflection delta(x) (seed 003 eq. 6):
+    """Tip-referred effective mass from the static tip-load deflection delta(x) (Wood, Steltz &
+    Fearing 2005, eq. 6):
 
     m_eff = int rhoA delta^2 dx / delta(L)^2  (kg); for a uniform beam this is 33/140 of its mass.
     """
@@ -276,6 +283,68 @@ def effective_mass(beam: Bimorph) -> float:
         x, w = _gauss(s.start, s.end, 4)
         energy += s.rhoA * w @ delta(x) ** 2
     return float(energy / delta(beam.L) ** 2)
+
+
+# ---- effective mass of tapered and extended cantilevers (Wood, Steltz & Fearing 2005, Sec. III-A) ----
+def cantilever_mass_factor(w_r: float = 1.0, l_r: float = 0.0, d_r: float = 0.0) -> float:
+    """M = m_eff / m_beam of a cantilever of length l with a tip load (Wood, Steltz & Fearing,
+    "Nonlinear performance limits for high energy density piezoelectric bending actuators",
+    ICRA 2005, eqs. 6-12), by quadrature of the static deflection.
+
+    Width w(x) = w_nom (w_r + 2 (1 - w_r) x / l) (eq. 7: w_nom at mid-length, root w_r w_nom,
+    tip (2 - w_r) w_nom, planform area fixed), bending stiffness proportional to the width;
+    a rigid extension of length l_r l and the tip width, with mass per area d_r times the beam's
+    (eq. 10). m_beam = rho t w_nom l (1 + d_r l_r (2 - w_r)) is the gross mass, so
+
+        M = [int_0^l delta^2 w/w_nom dx + d_r (2 - w_r) int_l^{l(1+l_r)} delta^2 dx]
+            / [l (1 + d_r l_r (2 - w_r)) delta(l (1 + l_r))^2]
+
+    with delta from EI(x) delta'' = F (l (1 + l_r) - x), delta(0) = delta'(0) = 0 and the
+    extension straight. M = 33/140 for the rectangular beam (eq. 6); see
+    :func:`extension_mass_factor` for eq. 11. Dimensionless; 0 < w_r < 2."""
+    if not 0.0 < w_r < 2.0 or l_r < 0.0 or d_r < 0.0:
+        raise ValueError(f"need 0 < w_r < 2, l_r >= 0, d_r >= 0; got w_r={w_r}, l_r={l_r}, d_r={d_r}")
+    tip = 1.0 + l_r                                   # lengths in units of l
+
+    def width(x):
+        return w_r + 2.0 * (1.0 - w_r) * x
+
+    def slope(x):                                      # delta'(x) = int_0^x (tip - s)/w(s) ds
+        return quad(lambda s: (tip - s) / width(s), 0.0, x, epsabs=0.0, epsrel=1e-13)[0]
+
+    def deflection(x):                                 # delta(x) = int_0^x (x - s)(tip - s)/w(s) ds
+        return quad(lambda s: (x - s) * (tip - s) / width(s), 0.0, x, epsabs=0.0, epsrel=1e-13)[0]
+
+    d1, a1 = deflection(1.0), slope(1.0)
+    beam = quad(lambda x: deflection(x) ** 2 * width(x), 0.0, 1.0, epsabs=0.0, epsrel=1e-12)[0]
+    ext_w = d_r * (2.0 - w_r)
+    # the straight extension: int_0^{l_r} (d1 + a1 s)^2 ds in closed form
+    ext = ext_w * (d1 ** 2 * l_r + d1 * a1 * l_r ** 2 + a1 ** 2 * l_r ** 3 / 3.0)
+    d_tip = d1 + a1 * l_r
+    return float((beam + ext) / ((1.0 + ext_w * l_r) * d_tip ** 2))
+
+
+def extension_mass_factor(l_r, d_r):
+    """Eq. 11 of Wood, Steltz & Fearing 2005: M(l_r, d_r) of a rectangular cantilever with a rigid
+    extension (extension ratio l_r = l_ext/l, mass-per-area ratio d_r, eq. 10),
+
+        M = [33 + 7 l_r (13 + 9 l_r + 5 d_r (4 + 3 l_r (6 + l_r (11 + 2 l_r (5 + 2 l_r)))))]
+            / [140 (1 + d_r l_r) (1 + 3 l_r + 3 l_r^2)^2].
+
+    The numerator is as printed; the denominator, lost in the text, is derived from eq. 9
+    (tests check both against :func:`cantilever_mass_factor`). Numbers or arrays."""
+    num = 33 + 7 * l_r * (13 + 9 * l_r + 5 * d_r * (4 + 3 * l_r * (6 + l_r * (11 + 2 * l_r * (5 + 2 * l_r)))))
+    return num / (140 * (1 + d_r * l_r) * (1 + 3 * l_r + 3 * l_r ** 2) ** 2)
+
+
+def cantilever_tip_compliance(EI_nom: float, l: float, w_r: float = 1.0, l_r: float = 0.0) -> float:
+    """Tip deflection per unit tip force (m/N) of the cantilever of :func:`cantilever_mass_factor`,
+    bending stiffness EI_nom (N m^2) at mid-length, scaled with the width; at the end of the rigid
+    extension: delta = l^3/EI_nom int_0^1 (1 + l_r - s)^2 / w(s) ds (Castigliano)."""
+    tip = 1.0 + l_r
+    integral = quad(lambda s: (tip - s) ** 2 / (w_r + 2.0 * (1.0 - w_r) * s), 0.0, 1.0,
+                    epsabs=0.0, epsrel=1e-13)[0]
+    return float(l ** 3 / EI_nom * integral)
 
 
 def cantilever_beta_L(n: int) -> np.ndarray:

@@ -1,13 +1,19 @@
 """Bimorph cantilever as a bond graph: one mass-normalised modal resonator per bending mode.
 
-Seed 000 (Ghafarirad et al. 2015) eqs. 22-25 and 36, seed 001 eqs. 31-34. For each mode i the
+Ghafarirad, H., Rezaei, S.M., Sarhan, A.A.D., Zareinejad, M. "Continuous dynamic modelling of
+bimorph piezoelectric cantilevered actuators considering hysteresis effect and dynamic behaviour
+analysis." Mathematical and Computer Modelling of Dynamical Systems 21(2) (2015) 130-152, eqs.
+22-25 and 36; Shahabi, P., Ghafarirad, H., Taghvaeipour, A. "Nonlinear vibration analysis of
+piezoelectric bending actuators: theoretical and experimental studies." Comptes Rendus Mecanique
+347(12) (2019) 953-966, eqs. 31-34 (cited below as Ghafarirad et al. 2015 and Shahabi et al.
+2019). For each mode i the
 modal coordinate q_i (kg^1/2 m, mass-normalised: int rhoA phi_i^2 dx = 1) obeys
 
     q_i'' + 2 zeta_i omega_i q_i' + omega_i^2 q_i [+ k1_i q_i^3 + k2_i q_i^5]
         [+ mu1_i q_i^2 q_i'] = m_p,i u(t)
 
 and the sensor reads w(l_t) = sum_i phi_i(l_t) q_i (m). The drive u is the voltage V (V) or the
-output of a hysteresis operator applied to it, u = H[V] (seed 000 eq. 25; H in volts).
+output of a hysteresis operator applied to it, u = H[V] (Ghafarirad et al. 2015, eq. 25; H in volts).
 
 Bond graph per mode: a 1-junction ``mode_i`` (common flow q_i') with
 
@@ -22,7 +28,7 @@ name, settable with ``--set``, fittable); the geometry itself stays numeric.
 
 Sign convention: :attr:`library.beam.Modes.input_gains`, m_p,i = M_p (phi_i'(l2) - phi_i'(l1)) with
 M_p = b e31 (t_b + t_p) < 0 for PZT, so mp_1 < 0 and a positive V moves the tip towards negative w.
-Seed 001 writes m_p = -M_p phi'(l) (eq. 32), the opposite sign; only |m_p| enters its amplitude
+Shahabi et al. 2019 write m_p = -M_p phi'(l) (eq. 32), the opposite sign; only |m_p| enters its amplitude
 equation (and the zeros of w/V do not depend on a global sign), so one convention serves both.
 
 Units of the per-mode nonlinear coefficients (q in kg^1/2 m, modal force in kg^1/2 m s^-2):
@@ -55,7 +61,7 @@ UNITS = {
 
 @dataclass(frozen=True)
 class ModeNonlinearity:
-    """Nonlinear terms of one mode (seed 001 eq. 34): stiffness k1 q^3 + k2 q^5 added to
+    """Nonlinear terms of one mode (Shahabi et al. 2019, eq. 34): stiffness k1 q^3 + k2 q^5 added to
     omega^2 q, damping mu1 q^2 q' added to 2 zeta omega q'. Units in :data:`UNITS`.
     A value may be a number (registered as a parameter ``k1_<i>`` etc.) or a sympy expression
     (used as given, e.g. a model-file parameter)."""
@@ -109,11 +115,11 @@ def add_bimorph_modes(m: Model, beam: Bimorph, n_modes: int = 2, target: float =
         beam's (for a uniform beam they do not depend on the stiffness).
     drive: the drive expression u (default: the model input ``V``, created if needed).
     hysteresis: a :class:`bondgraph.MemoryOperator` applied to the drive, u = H[drive]
-        (seed 000 eq. 25); its parameters become ``<prefix>H.<name>``.
+        (Ghafarirad et al. 2015, eq. 25); its parameters become ``<prefix>H.<name>``.
     nonlinear: {mode number (1-based): ModeNonlinearity} or a sequence aligned with the modes
         (None entries for linear modes).
     prefix: prepended to every element and parameter name (to put two beams in one model).
-    source: a citation appended to the parameter docs (e.g. "seed 000 Table 1").
+    source: a citation appended to the parameter docs (e.g. "Ghafarirad et al. 2015, Table 1").
     """
     if not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
         raise ModelError(f"number of modes must be a positive integer, got {n_modes!r}")
@@ -208,9 +214,9 @@ def _per_mode(spec, n: int) -> list:
     return seq + [None] * (n - len(seq))
 
 
-# ---- hysteresis at the input (seed 000 Sec. 2.3-2.4) ---------------------------------------------
+# ---- hysteresis at the input (Ghafarirad et al. 2015, Sec. 2.3-2.4) ---------------------------------------------
 def pi_operator(thresholds: Sequence[float], weights: Sequence[float]):
-    """A Prandtl–Ishlinskii operator H[V] = sum_j w_j play_{r_j}[V] (seed 000 eqs. 30-33) from
+    """A Prandtl–Ishlinskii operator H[V] = sum_j w_j play_{r_j}[V] (Ghafarirad et al. 2015, eqs. 30-33) from
     :mod:`library.hysteresis` (imported only when asked for)."""
     try:
         from library.hysteresis import PrandtlIshlinskii
@@ -224,7 +230,7 @@ def pi_operator(thresholds: Sequence[float], weights: Sequence[float]):
 def effective_tip_mass(beam: Bimorph, mode: int | None = None, x: float | None = None) -> float:
     """Effective mass referred to the point x (default the tip), kg.
 
-    mode None: from the static tip-load deflection shape (seed 003: 33/140 of the beam mass for a
+    mode None: from the static tip-load deflection shape (Wood, Steltz & Fearing 2005: 33/140 of the beam mass for a
     uniform beam), the mass of a lumped model that matches the static stiffness.
     mode i (1-based): modal mass 1/phi_i(x)^2 of the mass-normalised mode, the mass of a 1-DOF
     model that matches mode i's resonance and static contribution at x.
@@ -236,11 +242,11 @@ def effective_tip_mass(beam: Bimorph, mode: int | None = None, x: float | None =
     return beam.modes(int(mode)).effective_mass(int(mode) - 1, x)
 
 
-# ---- seed 001: multiple-scales steady state ---------------------------------------------------------
+# ---- Shahabi et al. 2019: multiple-scales steady state ---------------------------------------------------------
 def amplitude_equation_roots(omega_drive: float, omega_n: float, zeta: float, force: float,
                              k1: float = 0.0, k2: float = 0.0, mu1: float = 0.0) -> np.ndarray:
     """Steady-state amplitudes a > 0 of q'' + (mu + mu1 q^2) q' + omega_n^2 q + k1 q^3 + k2 q^5
-    = force cos(omega_drive t), mu = 2 zeta omega_n, by first-order multiple scales (seed 001
+    = force cos(omega_drive t), mu = 2 zeta omega_n, by first-order multiple scales (Shahabi et al. 2019
     eq. 54 with the modal force m_p V written out as ``force``):
 
         (mu omega_n a/2 + mu1 omega_n a^3/8)^2 + (sigma omega_n^2 a - 3/8 k1 a^3 - 10/32 k2 a^5)^2
@@ -267,12 +273,12 @@ def amplitude_equation_roots(omega_drive: float, omega_n: float, zeta: float, fo
 def amplitude_equation_phase(a: float, omega_drive: float, omega_n: float, zeta: float, force: float,
                              k1: float = 0.0, k2: float = 0.0, mu1: float = 0.0) -> float:
     """Phase lag gamma (rad) of the multiple-scales steady state q ≈ a cos(omega t - gamma)
-    for the forcing ``force cos(omega t)`` (seed 001 eqs. 52-53)."""
+    for the forcing ``force cos(omega t)`` (Shahabi et al. 2019, eqs. 52-53)."""
     sigma = omega_drive / omega_n - 1.0
     mu = 2 * zeta * omega_n
     sin_g = (mu * omega_n * a / 2 + mu1 * omega_n * a**3 / 8) / (force / 2)
     cos_g = (-sigma * omega_n**2 * a + 3 / 8 * k1 * a**3 + 10 / 32 * k2 * a**5) / (force / 2)
-    # seed 001 eqs. 44-53: q0 = a cos(omega t - gamma) for the forcing force cos(omega t)
+    # Shahabi et al. 2019, eqs. 44-53: q0 = a cos(omega t - gamma) for the forcing force cos(omega t)
     return float(np.arctan2(sin_g, cos_g))
 
 

@@ -1,5 +1,13 @@
-"""Rate-independent hysteresis operators: Prandtl–Ishlinskii (play and stop forms), the modified
-PI of seed 002 eq. 12, and the Maxwell-slip model of seed 003.
+"""Rate-independent hysteresis operators: Prandtl–Ishlinskii (play and stop forms), the modified PI
+(dead zones on the absolute PI sum, eq. 12, or measured from the last reversal, Sec. 5.3) of
+Rodriguez-Fortun, J.M., Orus, J., Buil, F., Castellanos, J.A. "General bond graph model for
+piezoelectric actuators and methodology for experimental identification." Mechatronics 20 (2010)
+303-314, with exact inverses, and the Maxwell-slip model of Wood, R.J., Steltz, E., Fearing, R.S.
+"Nonlinear performance limits for high energy density piezoelectric bending actuators." Proc. IEEE
+ICRA, Barcelona, 2005. The initial-memory convention follows Ghafarirad, H., Rezaei, S.M., Sarhan,
+A.A.D., Zareinejad, M. "Continuous dynamic modelling of bimorph piezoelectric cantilevered
+actuators considering hysteresis effect and dynamic behaviour analysis." Mathematical and
+Computer Modelling of Dynamical Systems 21(2) (2015) 130-152.
 
 Physics-free: every operator maps a scalar input v to an output y. Play/stop thresholds r_i and
 Maxwell-slip yield displacements carry the units of v, dead zones d_j the units of the PI sum,
@@ -7,7 +15,7 @@ weights w_i the units of y per unit of v. Each class is a :class:`MemoryOperator
 ``output``/in-place ``commit`` kernels, parameters in one flat float64 array).
 
 Memory of a play-based operator is the vector of play outputs (for Maxwell slip: the slip
-positions, which are the same thing). Initial memory convention, used throughout (seed 000
+positions, which are the same thing). Initial memory convention, used throughout (Ghafarirad et al. 2015
 eq. 32 with y_0 = 0): at rest at v0 each play holds the value reached by a monotone approach
 from the demagnetised state v = 0, h_i = max(v0 - r_i, min(v0 + r_i, 0)). With this convention
 the analytic inverse of :meth:`PrandtlIshlinskii.inverse` is exact from rest: the monotone
@@ -19,8 +27,7 @@ import numba
 import numpy as np
 from scipy.optimize import nnls
 
-from bondgraph.errors import ParameterError
-from bondgraph.memory import MemoryOperator
+from bondgraph import MemoryOperator, ParameterError
 
 
 def _vector(name: str, values, n: int | None = None, nonneg: bool = False) -> np.ndarray:
@@ -76,7 +83,7 @@ class _PlayBank(MemoryOperator):
 
 
 class PrandtlIshlinskii(_PlayBank):
-    """Play form y = sum_i w_i H_{r_i}[v] (seed 002 eqs. 10-11, seed 000 eq. 33).
+    """Play form y = sum_i w_i H_{r_i}[v] (Rodriguez-Fortun et al. 2010, eqs. 10-11, Ghafarirad et al. 2015, eq. 33).
 
     ``thresholds`` r_i >= 0 in units of v, ``weights`` w_i in units of y/v;
     prm = [r_1..r_n, w_1..w_n], memory = the n play outputs (units of v).
@@ -106,18 +113,7 @@ class PrandtlIshlinskii(_PlayBank):
         Requires r_1 = 0 and every W_i > 0 (a strictly increasing loading curve).
         With the common initial-memory convention H^{-1}[H[v]] = v from rest.
         """
-        order = np.argsort(self.thresholds, kind="stable")
-        r, w = self.thresholds[order], self.weights[order]
-        big_w = np.cumsum(w)
-        if r[0] != 0.0 or np.any(big_w <= 0.0):
-            raise ParameterError(
-                "PI inverse needs a play with threshold 0 and positive partial weight sums "
-                "(sorted by threshold); the loading curve is not strictly increasing")
-        r_inv = big_w * r - np.cumsum(w * r)
-        w_inv = np.empty_like(w)
-        w_inv[0] = 1.0 / w[0]
-        w_inv[1:] = -w[1:] / (big_w[1:] * big_w[:-1])
-        return PrandtlIshlinskii(r_inv, w_inv)
+        return PrandtlIshlinskii(*_kuhnen_inverse(self.thresholds, self.weights, "PI"))
 
 
 class PIStop(_PlayBank):
@@ -144,20 +140,34 @@ class PIStop(_PlayBank):
         return float(np.sum(prm[n:2 * n][prm[:n] > 0.0]))
 
 
-class ModifiedPI(_PlayBank):
-    """Modified PI (seed 002 eq. 12, after Kuhnen): y = sum_j ws_j S_{d_j}(x), x = sum_i w_i H_i[v].
+def _kuhnen_inverse(r: np.ndarray, w: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """Thresholds and weights of the inverse of a superposition y = sum_i w_i F_{r_i} of plays
+    (F = H_r) or one-sided dead zones (F = max(0, . - r)), Kuhnen's formula: with the terms
+    sorted by r (r_1 = 0) and partial sums W_i = w_1 + .. + w_i,
+    r'_i = sum_{j<=i} w_j (r_i - r_j),  w'_1 = 1/w_1,  w'_i = -w_i / (W_i W_{i-1}).
+    Requires r_1 = 0 and every W_i > 0 (a strictly increasing loading curve)."""
+    order = np.argsort(r, kind="stable")
+    r, w = r[order], w[order]
+    big_w = np.cumsum(w)
+    if r[0] != 0.0 or np.any(big_w <= 0.0):
+        raise ParameterError(
+            f"{what} inverse needs a term with threshold 0 and positive partial weight sums "
+            "(sorted by threshold); the loading curve is not strictly increasing")
+    w_inv = np.empty_like(w)
+    w_inv[0] = 1.0 / w[0]
+    w_inv[1:] = -w[1:] / (big_w[1:] * big_w[:-1])
+    return big_w * r - np.cumsum(w * r), w_inv
 
-    Dead zones (decision): S_d(x) = max(0, x - d) for d > 0 (the paper's eq. 12),
-    S_d(x) = min(0, x - d) for d < 0 (Kuhnen's mirror image for the negative side, absent from
-    the paper), S_0(x) = x. Dead zones d_j are in units of x (the PI sum), ws_j is dimensionless,
-    so y has the units of x. The dead zones act on the absolute PI output, as eq. 12 is written;
-    seed 002's fitting text measures them from the last reversal, which eq. 12 does not express
-    and this operator does not do.
 
-    prm = [r_1..r_n, w_1..w_n, d_1..d_m, ws_1..ws_m]; memory = the n play outputs.
-    """
+def _merge_zero(d: np.ndarray, ws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One d = 0 term holding the summed weight of all d = 0 terms (first), the others after."""
+    zero = d == 0.0
+    return np.r_[0.0, d[~zero]], np.r_[np.sum(ws[zero]), ws[~zero]]
 
-    kind = "modified_pi"
+
+class _DeadZonePI(_PlayBank):
+    """Shared parameters of a PI stage and a dead-zone stage: prm = [r_1..r_n, w_1..w_n,
+    d_1..d_m, ws_1..ws_m]; S_d(x) = max(0, x - d) for d > 0, min(0, x - d) for d < 0, x for d = 0."""
 
     def __init__(self, thresholds, weights, deadzones, dz_weights):
         super().__init__(thresholds, weights)
@@ -167,11 +177,39 @@ class ModifiedPI(_PlayBank):
         self.parameter_names += _indexed("d", m) + _indexed("ws", m)
 
     def __repr__(self) -> str:
-        return (f"ModifiedPI({self.thresholds.tolist()}, {self.weights.tolist()}, "
+        return (f"{type(self).__name__}({self.thresholds.tolist()}, {self.weights.tolist()}, "
                 f"{self.deadzones.tolist()}, {self.dz_weights.tolist()})")
 
     def parameter_values(self) -> np.ndarray:
         return np.concatenate([self.thresholds, self.weights, self.deadzones, self.dz_weights])
+
+    def _zero_gains(self, prm: np.ndarray) -> tuple[float, float]:
+        """(sum of w over r = 0, sum of ws over d = 0): the slopes of both stages after a reversal."""
+        n = self.thresholds.size
+        m = self.deadzones.size
+        d, ws = prm[2 * n:2 * n + m], prm[2 * n + m:2 * n + 2 * m]
+        return float(np.sum(prm[n:2 * n][prm[:n] == 0.0])), float(np.sum(ws[d == 0.0]))
+
+    def small_signal_gain(self, prm: np.ndarray) -> float:
+        """Slope after a reversal at rest at v = 0: product of both stages' zero-threshold weights."""
+        a, b = self._zero_gains(prm)
+        return a * b
+
+
+class ModifiedPI(_DeadZonePI):
+    """Modified PI (Rodriguez-Fortun et al. 2010, eq. 12, after Kuhnen): y = sum_j ws_j S_{d_j}(x),
+    x = sum_i w_i H_i[v], the dead zones acting on the absolute PI sum as eq. 12 is written.
+
+    S_d(x) = max(0, x - d) for d > 0 (eq. 12), min(0, x - d) for d < 0 (Kuhnen's mirror image
+    for the negative side, absent from the paper), S_0(x) = x. Dead zones d_j are in units of x
+    (the PI sum), ws_j is dimensionless, so y has the units of x. The paper's fitting text
+    (Sec. 5.3) measures the dead zones from the last reversal instead: that is
+    :class:`RelativeModifiedPI`.
+
+    prm = [r_1..r_n, w_1..w_n, d_1..d_m, ws_1..ws_m]; memory = the n play outputs.
+    """
+
+    kind = "modified_pi"
 
     @staticmethod
     def output(v, mem, prm):
@@ -193,44 +231,233 @@ class ModifiedPI(_PlayBank):
             y += prm[2 * n + m + j] * s
         return y
 
-    def small_signal_gain(self, prm: np.ndarray) -> float:
-        """Slope after a reversal at rest at v = 0 (x = 0: only the d = 0 terms are active)."""
+    def inverse(self) -> "InverseModifiedPI":
+        """The exact inverse: the inverse dead-zone map (static, both sides by Kuhnen's formula)
+        followed by the inverse PI operator; H^{-1}[H[v]] = v from rest."""
+        d, ws = self.deadzones, self.dz_weights
+        pos_d, pos_w = _merge_zero(np.abs(d[d >= 0.0]), ws[d >= 0.0])
+        neg_d, neg_w = _merge_zero(np.abs(d[d <= 0.0]), ws[d <= 0.0])
+        pd, pw = _kuhnen_inverse(pos_d, pos_w, "dead-zone (x > 0)")
+        nd, nw = _kuhnen_inverse(neg_d, neg_w, "dead-zone (x < 0)")
+        pi = PrandtlIshlinskii(self.thresholds, self.weights).inverse()
+        return InverseModifiedPI(pi.thresholds, pi.weights, np.r_[pd, -nd[1:]], np.r_[pw, nw[1:]])
+
+
+class InverseModifiedPI(_DeadZonePI):
+    """Inverse of :class:`ModifiedPI`: the static dead-zone map x = sum_j ws_j S_{d_j}(y) applied
+    to the input first, then the PI sum v = sum_i w_i H_i[x] (parameters of the inverse stages,
+    as returned by :meth:`ModifiedPI.inverse`). Memory: the n play outputs (units of x)."""
+
+    kind = "modified_pi_inverse"
+
+    def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
+        """Plays at rest after a monotone approach from 0 to the mapped input x(v0)."""
         n = self.n_memory
-        m = (prm.size - 2 * n) // 2
-        d, ws = prm[2 * n:2 * n + m], prm[2 * n + m:2 * n + 2 * m]
-        return float(np.sum(prm[n:2 * n][prm[:n] == 0.0]) * np.sum(ws[d == 0.0]))
+        return _virgin_plays(_dead_zone_map(v0, prm, n), np.asarray(prm[:n], dtype=np.float64))
+
+    @staticmethod
+    def output(v, mem, prm):
+        """Static dead-zone map of the input, then the PI sum with the plays h frozen."""
+        n = len(mem)
+        m = (len(prm) - 2 * n) // 2
+        x = 0.0
+        for j in range(m):
+            d = prm[2 * n + j]
+            if d > 0.0:
+                s = max(0.0, v - d)
+            elif d < 0.0:
+                s = min(0.0, v - d)
+            else:
+                s = v
+            x += prm[2 * n + m + j] * s
+        y = 0.0
+        for i in range(n):
+            y += prm[n + i] * max(x - prm[i], min(x + prm[i], mem[i]))
+        return y
+
+    @staticmethod
+    def commit(v, mem, prm):
+        """Advance the plays to the mapped input x(v)."""
+        n = len(mem)
+        m = (len(prm) - 2 * n) // 2
+        x = 0.0
+        for j in range(m):
+            d = prm[2 * n + j]
+            if d > 0.0:
+                s = max(0.0, v - d)
+            elif d < 0.0:
+                s = min(0.0, v - d)
+            else:
+                s = v
+            x += prm[2 * n + m + j] * s
+        for i in range(n):
+            mem[i] = max(x - prm[i], min(x + prm[i], mem[i]))
 
 
-def apa120ml_modified_pi() -> ModifiedPI:
-    """ILLUSTRATIVE modified-PI parameters for the APA-120ML, read from seed 002 Table 3.
+def _dead_zone_map(v: float, prm: np.ndarray, n: int) -> float:
+    """sum_j ws_j S_{d_j}(v) for the dead-zone part of a prm vector with n plays."""
+    m = (prm.size - 2 * n) // 2
+    d, ws = prm[2 * n:2 * n + m], prm[2 * n + m:2 * n + 2 * m]
+    s = np.where(d > 0.0, np.maximum(0.0, v - d), np.where(d < 0.0, np.minimum(0.0, v - d), v))
+    return float(ws @ s)
 
-    Input: dipole p = Q l (C m); output: field E (V/m). The extracted table cannot be read
-    consistently, so this is a plausible reading, not the paper's fitted model:
 
-    * r_i: printed 0, 2.2e9, 5.5e9, 1.1e8, 1.7e8, 2.5e8, 1.0e7, 1.4e7, 1.6e7, 1.8e7, 2.0e7, 2.0e7.
-      Taken as lost minus signs in the exponents (2.2e-9 ... 2.0e-7 C m): this makes them
-      ascending, and of the size of the dipole at full drive (p = E/kx ~ 1.5e6/5e12 = 3e-7 C m
-      with Table 2's kx and 150 V over l = 0.1 mm), as the paper's r_i = P_i/2 rule requires.
-    * w_i (V/m per C m) as printed, 6.64e12 ... 2.74e12, 0: comparable with kx = 5e12.
-    * d_j (V/m) and ws_j as printed, row by row; the inert row (d = 1.30e6, ws = 0) is dropped.
-      Every printed row with d = 0 has ws = 0, which would make E = 0 below 0.94e6 V/m, so an
-      identity term (d = 0, ws = 1) is added.
-    * The paper says fifteen parameters; the table holds about thirty nonzero entries.
-    * Check: the virgin curve reaches 1.5e6 V/m (150 V) at p = 1.43e-7 C m, and a loop to
-      -0.2e6 V/m (-20 V) stays within |p| <= 1.43e-7, so the plays with r >= 1.0e-7 never open at
-      rated drive (they need swings above 2e-7 C m). The set is plausible, not recovered.
+class RelativeModifiedPI(_DeadZonePI):
+    """Modified PI with the dead zones measured from the last reversal (Rodriguez-Fortun et al.
+    2010, Sec. 5.3 and Fig. 20: "d_j are relative values with respect to the change of direction
+    value ... so that the shape of the loop depends on the amplitude of the signal and not on its
+    absolute value").
+
+    x = sum_i w_i H_i[v] (PI sum); on a branch that started at the reversal (x_r, y_r) and runs in
+    direction s = +1 (rising) or -1 (falling),
+
+        y = y_r + s g(s (x - x_r)),    g(u) = sum_j ws_j max(0, u - d_j),  d_j >= 0 (units of x).
+
+    A reversal of x starts a new branch at the current (x, y), so y is continuous. A d = 0 term
+    with positive weight makes g strictly increasing and the operator invertible
+    (:meth:`inverse`). Unlike the PI operator it has no return-point memory: a minor loop does
+    not close. At rest at v0 the branch starts at the demagnetised state (x_r, y_r) = (0, 0).
+
+    prm = [r_1..r_n, w_1..w_n, d_1..d_m, ws_1..ws_m];
+    memory = [h_1..h_n, x_r, y_r, s, x_last] (x_last: the PI sum at the last accepted step).
     """
-    thresholds = [0.0, 2.2e-9, 5.5e-9, 1.1e-8, 1.7e-8, 2.5e-8,
-                  1.0e-7, 1.4e-7, 1.6e-7, 1.8e-7, 2.0e-7, 2.0e-7]
-    weights = [6.64e12, 1.46e12, 0.0, 0.25e12, 0.0, 0.75e12,
-               0.80e12, 0.61e12, 0.43e12, 0.42e12, 2.74e12, 0.0]
-    deadzones = [0.0, 0.94e6, 1.10e6, 1.22e6, 1.28e6, 1.30e6]
-    dz_weights = [1.0, 0.09, 0.15, 0.33, 1.71, 1.33]
-    return ModifiedPI(thresholds, weights, deadzones, dz_weights)
+
+    kind = "modified_pi_relative"
+
+    def __init__(self, thresholds, weights, deadzones, dz_weights):
+        super().__init__(thresholds, weights, deadzones, dz_weights)
+        if np.any(self.deadzones < 0.0):
+            raise ParameterError("relative dead zones are distances from the last reversal: d_j >= 0")
+
+    @property
+    def n_memory(self) -> int:
+        return self.thresholds.size + 4
+
+    def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
+        n = self.thresholds.size
+        h = _virgin_plays(v0, np.asarray(prm[:n], dtype=np.float64))
+        x0 = float(prm[n:2 * n] @ h)
+        return np.r_[h, 0.0, 0.0, 1.0 if x0 >= 0.0 else -1.0, x0]
+
+    @staticmethod
+    def output(v, mem, prm):
+        """y on the current branch (or on the new one if x turned back), plays frozen."""
+        n = len(mem) - 4
+        m = (len(prm) - 2 * n) // 2
+        x = 0.0
+        for i in range(n):
+            x += prm[n + i] * max(v - prm[i], min(v + prm[i], mem[i]))
+        x_r, y_r, s = mem[n], mem[n + 1], mem[n + 2]
+        if s * (x - mem[n + 3]) < 0.0:   # turned back: a reversal at the last accepted point
+            u = s * (mem[n + 3] - x_r)
+            for j in range(m):
+                y_r += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+            x_r = mem[n + 3]
+            s = -s
+        u = s * (x - x_r)
+        y = y_r
+        for j in range(m):
+            y += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+        return y
+
+    @staticmethod
+    def commit(v, mem, prm):
+        """Advance the plays; on a reversal of the PI sum start a new branch at the last point."""
+        n = len(mem) - 4
+        m = (len(prm) - 2 * n) // 2
+        x = 0.0
+        for i in range(n):
+            mem[i] = max(v - prm[i], min(v + prm[i], mem[i]))
+            x += prm[n + i] * mem[i]
+        s = mem[n + 2]
+        if s * (x - mem[n + 3]) < 0.0:
+            u = s * (mem[n + 3] - mem[n])
+            for j in range(m):
+                mem[n + 1] += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+            mem[n] = mem[n + 3]
+            mem[n + 2] = -s
+        mem[n + 3] = x
+
+    def inverse(self) -> "InverseRelativeModifiedPI":
+        """The exact inverse: the inverse relative dead-zone stage (same reversal logic on the
+        input, g^{-1} by Kuhnen's formula) followed by the inverse PI operator."""
+        d, ws = _merge_zero(self.deadzones, self.dz_weights)
+        d_inv, ws_inv = _kuhnen_inverse(d, ws, "relative dead-zone")
+        pi = PrandtlIshlinskii(self.thresholds, self.weights).inverse()
+        return InverseRelativeModifiedPI(pi.thresholds, pi.weights, d_inv, ws_inv)
+
+
+class InverseRelativeModifiedPI(_DeadZonePI):
+    """Inverse of :class:`RelativeModifiedPI`: the relative dead-zone stage acts on the input
+    first, x = x_r + s g(s (v - v_r)) with reversals of v, then the PI sum sum_i w_i H_i[x].
+
+    prm = [r_1..r_n, w_1..w_n, d_1..d_m, ws_1..ws_m] of the inverse stages (from
+    :meth:`RelativeModifiedPI.inverse`); memory = [h_1..h_n, v_r, x_r, s, v_last]."""
+
+    kind = "modified_pi_relative_inverse"
+
+    def __init__(self, thresholds, weights, deadzones, dz_weights):
+        super().__init__(thresholds, weights, deadzones, dz_weights)
+        if np.any(self.deadzones < 0.0):
+            raise ParameterError("relative dead zones are distances from the last reversal: d_j >= 0")
+
+    @property
+    def n_memory(self) -> int:
+        return self.thresholds.size + 4
+
+    def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
+        n = self.thresholds.size
+        m = self.deadzones.size
+        s = 1.0 if v0 >= 0.0 else -1.0
+        d, ws = prm[2 * n:2 * n + m], prm[2 * n + m:2 * n + 2 * m]
+        x0 = s * float(ws @ np.maximum(0.0, abs(v0) - d))
+        return np.r_[_virgin_plays(x0, np.asarray(prm[:n], dtype=np.float64)), 0.0, 0.0, s, v0]
+
+    @staticmethod
+    def output(v, mem, prm):
+        """The relative dead-zone stage on v (reversal detected on v), then the PI sum, frozen."""
+        n = len(mem) - 4
+        m = (len(prm) - 2 * n) // 2
+        v_r, x_r, s = mem[n], mem[n + 1], mem[n + 2]
+        if s * (v - mem[n + 3]) < 0.0:
+            u = s * (mem[n + 3] - v_r)
+            for j in range(m):
+                x_r += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+            v_r = mem[n + 3]
+            s = -s
+        u = s * (v - v_r)
+        x = x_r
+        for j in range(m):
+            x += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+        y = 0.0
+        for i in range(n):
+            y += prm[n + i] * max(x - prm[i], min(x + prm[i], mem[i]))
+        return y
+
+    @staticmethod
+    def commit(v, mem, prm):
+        """Advance the dead-zone stage's branch and the plays to the stage output x(v)."""
+        n = len(mem) - 4
+        m = (len(prm) - 2 * n) // 2
+        s = mem[n + 2]
+        if s * (v - mem[n + 3]) < 0.0:
+            u = s * (mem[n + 3] - mem[n])
+            for j in range(m):
+                mem[n + 1] += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+            mem[n] = mem[n + 3]
+            s = -s
+            mem[n + 2] = s
+        u = s * (v - mem[n])
+        x = mem[n + 1]
+        for j in range(m):
+            x += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+        for i in range(n):
+            mem[i] = max(x - prm[i], min(x + prm[i], mem[i]))
+        mem[n + 3] = v
 
 
 class MaxwellSlip(MemoryOperator):
-    """Maxwell slip (seed 003): n parallel branches, spring k_i in series with a Coulomb slip
+    """Maxwell slip (Wood, Steltz & Fearing 2005): n parallel branches, spring k_i in series with a Coulomb slip
     element of break-away force f_i. Input displacement delta, output force
     F = sum_i k_i (delta - delta_i); branch i sticks while |k_i (delta - delta_i)| < f_i.
 
@@ -322,7 +549,7 @@ def threshold_grid(v, n: int) -> np.ndarray:
     """n equally spaced thresholds 0, R/n, ..., (n-1)R/n with R = (max v - min v)/2, units of v.
 
     A play only opens a loop when the input swings by more than 2r, so R is the largest useful
-    threshold (seed 002: r_i = P_i / 2 over the input range).
+    threshold (Rodriguez-Fortun et al. 2010: r_i = P_i / 2 over the input range).
     """
     v = np.asarray(v, dtype=np.float64)
     return np.linspace(0.0, 0.5 * float(np.ptp(v)), int(n), endpoint=False)

@@ -1,4 +1,6 @@
-"""Piezoelectric layers, stacks and amplified actuators (seed 002, Rodriguez-Fortun et al. 2010).
+"""Piezoelectric layers, stacks and amplified actuators, after Rodriguez-Fortun, J.M., Orus, J.,
+Buil, F., Castellanos, J.A. "General bond graph model for piezoelectric actuators and methodology
+for experimental identification." Mechatronics 20 (2010) 303-314 (cited below by equation).
 
 Built only from the ``bondgraph`` public API.  Domains and variables (SI):
 
@@ -26,13 +28,13 @@ from bondgraph import C, CField, Component, J0, J1, Quantity, R, TF
 
 
 def model1_cfield(name: str, ports=("x", "Q"), *, K1, a1, C1) -> CField:
-    """'Model 1' two-port C-field, U = ½·K1·(x − a1·Q)² + Q²/(2·C1)  (seed 002 eqs. 4-5)."""
+    """'Model 1' two-port C-field, U = ½·K1·(x − a1·Q)² + Q²/(2·C1)  (Rodriguez-Fortun et al. 2010, eqs. 4-5)."""
     px, pq = ports
     return CField(name, ports, energy=lambda q: K1 * (q[px] - a1 * q[pq]) ** 2 / 2 + q[pq] ** 2 / (2 * C1))
 
 
 def model2_cfield(name: str, ports=("x", "Q"), *, K2, a2, C2) -> CField:
-    """'Model 2' two-port C-field, U = ½·K2·x² + (Q − x/a2)²/(2·C2)  (seed 002 eqs. 6-7)."""
+    """'Model 2' two-port C-field, U = ½·K2·x² + (Q − x/a2)²/(2·C2)  (Rodriguez-Fortun et al. 2010, eqs. 6-7)."""
     px, pq = ports
     return CField(name, ports, energy=lambda q: K2 * q[px] ** 2 / 2 + (q[pq] - q[px] / a2) ** 2 / (2 * C2))
 
@@ -51,7 +53,7 @@ def linear_polarization(comp: Component, name: str, kx) -> C:
 
 
 def bouc_wen_polarization(comp: Component, name: str, kx, kw, q, r, n) -> C:
-    """Bouc–Wen polarization law (seed 002 eq. 9): E = kx·p + kw·z with the internal state
+    """Bouc–Wen polarization law (Rodriguez-Fortun et al. 2010, eq. 9): E = kx·p + kw·z with the internal state
     ż = q·(ṗ − r·|ṗ|·|z|^(n−1)·z + (r − 1)·ṗ·|z|^n).  Adds the C element and the state z."""
     z = comp.state(f"{name}.z", 0, unit="", doc="Bouc–Wen hysteretic variable")
     cap = comp.add(C(name, law=lambda p: kx * p + kw * z))
@@ -63,7 +65,7 @@ def bouc_wen_polarization(comp: Component, name: str, kx, kw, q, r, n) -> C:
 
 def operator_polarization(comp: Component, name: str, operator, kx=None) -> C:
     """Polarization law through a memory operator H (PI, modified PI, Maxwell slip):
-    E = kx·p + H[p] (linear part plus hysteresis, option (a) of seed 002) or, without
+    E = kx·p + H[p] (linear part plus hysteresis, option (a) of Rodriguez-Fortun et al. 2010) or, without
     ``kx``, E = H[p] (the operator replaces the capacitor, option (b))."""
     h = comp.operator(f"{name}.H", operator, Quantity("q", name))
     linear = 0 if kx is None else kx

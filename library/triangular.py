@@ -1,4 +1,6 @@
-"""Triangular-based piezoelectric drive (seed 004, Hassani & Tjahjowidodo, MSSP 36 (2013)):
+"""Triangular-based piezoelectric drive after Hassani, V., Tjahjowidodo, T. "Structural response
+investigation of a triangular-based piezoelectric drive mechanism to hysteresis effect of the
+piezoelectric actuator." Mechanical Systems and Signal Processing 36 (2013) (cited by equation):
 two piezo stacks, 90° apart, under a compliant triangular body whose head (the tip) moves in
 the x-y plane.  Built only from the ``bondgraph`` public API and :mod:`library.piezo`.
 
@@ -19,7 +21,7 @@ viscous damper (m_x, k_x, c_x and m_y, k_y, c_y; the paper's FE frequency respon
 equivalent set m_e, k_e, ζ_e and notes that y is stiffer than x).  The paper's dynamic
 stiffness K_e(ω) = k_e·(1 − (ω/ω_n)² + 2iζω/ω_n) is what a stack sees of such a body.
 
-Stacks.  Each stack is the lumped seed-002 stack (:func:`library.piezo.piezo_layer` with a
+Stacks.  Each stack is the lumped stack of Rodriguez-Fortun et al. 2010 (:func:`library.piezo.piezo_layer` with a
 linear polarization law) with N = length/h layers, expressed in the paper's data sheet
 quantities (Section 2, eqs. 3-5): stiffness K_i = A/(l·s33^E), field E = V/h, free stroke
 U = d33·E·l.  :func:`stack_constants` gives the layer constants (l, a, K, kx) for which a
@@ -67,6 +69,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import sympy as sp
 
 from bondgraph import C, CField, Component, I, J0, J1, Model, ModelError, R, Se, TF
@@ -76,8 +79,8 @@ from .piezo import layer_extension, linear_polarization, piezo_layer
 
 def stack_constants(*, d33, s33E, eps33T, area, length, h) -> dict:
     """Layer constants (l, a, K, kx) of :func:`library.piezo.piezo_layer` for a lumped stack of
-    N = length/h layers of thickness h and cross-section ``area`` (seed 004 eqs. 3-5 in the
-    seed-002 three-domain form).  Values may be numbers or sympy expressions.
+    N = length/h layers of thickness h and cross-section ``area`` (Hassani & Tjahjowidodo 2013, eqs. 3-5 in the
+    three-domain form of Rodriguez-Fortun et al. 2010).  Values may be numbers or sympy expressions.
 
     * kx = 1/(C^T·h²) with the free capacitance C^T = N·ε33^T·area/h, i.e. kx = 1/(ε33^T·area·length);
     * a = N·d33/C^T = d33·h/(ε33^T·area): free stroke per charge, so the free stroke per volt
@@ -91,13 +94,8 @@ def stack_constants(*, d33, s33E, eps33T, area, length, h) -> dict:
     return {"l": h, "a": d33 * h / (eps33T * area), "K": K_i / (1 - k33sq), "kx": 1 / (eps33T * area * length)}
 
 
-def stack_stiffness(*, s33E, area, length):
-    """Internal (short-circuit) stiffness K_i = A/(l·s33^E) (N/m), seed 004 eq. 3."""
-    return area / (length * s33E)
-
-
 def free_stroke(V, *, d33, length, h):
-    """Free stroke U = d33·E·l with E = V/h (m), seed 004 eqs. 4-5."""
+    """Free stroke U = d33·E·l with E = V/h (m), Hassani & Tjahjowidodo 2013, eqs. 4-5."""
     return d33 * (V / h) * length
 
 
@@ -108,7 +106,7 @@ def piezo_stack(name: str, *, d33, s33E, eps33T, area, length, h, c_stack=None, 
     k = stack_constants(d33=d33, s33E=s33E, eps33T=eps33T, area=area, length=length, h=h)
     return piezo_layer(name, l=k["l"], a=k["a"], K=k["K"], R_NL=c_stack,
                        polarization=lambda c, n: linear_polarization(c, n, k["kx"]),
-                       doc=doc or "lumped piezo stack of length/h layers (seed 004 eqs. 3-5)")
+                       doc=doc or "lumped piezo stack of length/h layers (Hassani & Tjahjowidodo 2013, eqs. 3-5)")
 
 
 def _sin_cos(half_angle):
@@ -155,7 +153,7 @@ def triangular_body(name: str = "body", *, k_x, k_y, m_x, m_y, c_x, c_y, half_an
 
 def drive_field(name: str, *, K, a, C1, k_x, k_y, half_angle=45) -> CField:
     """The elastic and dielectric energy of both stacks and the body as one 4-port C-field
-    (ports ``Q1``, ``d1``, ``Q2``, ``d2``): seed-002 'model 1' per stack plus the body springs,
+    (ports ``Q1``, ``d1``, ``Q2``, ``d2``): 'model 1' of Rodriguez-Fortun et al. 2010 per stack plus the body springs,
 
         U = Σ_i [½·K·(δ_i − a·Q_i)² + Q_i²/(2·C1)] + ½·k_x·x² + ½·k_y·y²,
         x = (δ1 − δ2)/(2 sinθ),  y = (δ1 + δ2)/(2 cosθ).
@@ -201,7 +199,7 @@ def add_triangular_drive(m: Model, *, V1, V2, d33, s33E, eps33T, area, length, h
     (Ω), the stacks and the body ``body`` (:func:`triangular_body`).
 
     formulation:
-      ``layers``: stacks ``stack1``/``stack2`` are seed-002 three-domain lumped stacks
+      ``layers``: stacks ``stack1``/``stack2`` are three-domain lumped stacks (Rodriguez-Fortun et al. 2010)
         (:func:`piezo_stack`, i.e. :func:`library.piezo.piezo_layer`), the body has its own
         springs.  8 states, of which two combinations are conserved (δ_i computed from the
         stack and from the tip position agree for all time): the linearisation has two
@@ -256,6 +254,98 @@ def add_triangular_drive(m: Model, *, V1, V2, d33, s33E, eps33T, area, length, h
         m.output("i1", m.flow("Re1"), "A", "drive current of stack 1")
         m.output("i2", m.flow("Re2"), "A", "drive current of stack 2")
     return TriangularDrive(x, y, deltas[0], deltas[1], consts, formulation)
+
+
+def wave_factor(omega, *, rho, s33E, length):
+    """gamma*l*cot(gamma*l) with the wave number gamma = omega*sqrt(rho*s33E) (Hassani &
+    Tjahjowidodo 2013, eqs. 10 and 17): 1 in the quasi-static limit, 1 - (gamma l)^2/3 + ... (the
+    stack's moving mass rho*A*l/3) at low frequency. Numbers (numpy) only."""
+    gl = np.asarray(omega, float) * np.sqrt(rho * s33E) * length
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(gl == 0.0, 1.0, gl / np.tan(np.where(gl == 0.0, 1.0, gl)))
+
+
+def dynamic_stiffness(omega, *, k_e, m_e, zeta):
+    """K_e(omega) = k_e*(1 - (omega/omega_n)^2 + 2i*zeta*omega/omega_n), omega_n = sqrt(k_e/m_e):
+    the structure's dynamic stiffness at the stack head (eq. 13), N/m, complex."""
+    wn = np.sqrt(k_e / m_e)
+    w = np.asarray(omega, float)
+    return k_e * (1.0 - (w / wn) ** 2 + 2j * zeta * w / wn)
+
+
+def stiffness_ratio(omega, *, K_i, k_e, m_e, zeta):
+    """r(omega) = K_e(omega)/K_i, the stiffness ratio of eq. 16 (complex)."""
+    return dynamic_stiffness(omega, k_e=k_e, m_e=m_e, zeta=zeta) / K_i
+
+
+def contact_displacement(omega, U, *, K_i, k_e, m_e, zeta, rho, s33E, length):
+    """Displacement phasor of the stack head against the structure, eq. 17 (m):
+    u(l, omega) = U / (gamma*l*cot(gamma*l) + r(omega)), with U the free stroke: d33*E*l in the
+    constitutive route, the measured (hysteretic) stroke in eqs. 18-19."""
+    r = stiffness_ratio(omega, K_i=K_i, k_e=k_e, m_e=m_e, zeta=zeta)
+    return U / (wave_factor(omega, rho=rho, s33E=s33E, length=length) + r)
+
+
+def tip_displacement(U1, U2, *, omega, K_i, k_x, k_y, m_x, m_y, c_x, c_y, rho, s33E, length, half_angle=45.0):
+    """Tip phasors (X, Y) (m) of the two-stack drive for free-stroke phasors U1, U2, eq. 17 applied
+    to the symmetric pair: in the antisymmetric motion (delta1 = -delta2) each stack sees the
+    body's x dynamic stiffness K_x(omega) = k_x - omega^2 m_x + i omega c_x as
+    K_x/(2 sin^2 theta), in the symmetric one K_y/(2 cos^2 theta), so
+
+        X = (U1 - U2) / (2 sin theta (gamma l cot gamma l + r_x)),  r_x = K_x(omega)/(2 sin^2 theta K_i)
+        Y = (U1 + U2) / (2 cos theta (gamma l cot gamma l + r_y)),  r_y = K_y(omega)/(2 cos^2 theta K_i)
+
+    (m_x, m_y: body masses without the stacks, whose inertia is in the wave term)."""
+    th = np.radians(half_angle)
+    s, c = np.sin(th), np.cos(th)
+    g = wave_factor(omega, rho=rho, s33E=s33E, length=length)
+    Kx = k_x - omega ** 2 * m_x + 1j * omega * c_x
+    Ky = k_y - omega ** 2 * m_y + 1j * omega * c_y
+    return ((U1 - U2) / (2 * s * (g + Kx / (2 * s * s * K_i))),
+            (U1 + U2) / (2 * c * (g + Ky / (2 * c * c * K_i))))
+
+
+def ellipse_axes(X, Y) -> np.ndarray:
+    """Semi-axes (major, minor) of the closed path (Re(X e^{i w t}), Re(Y e^{i w t})) traced by
+    tip phasors X, Y: the singular values of [[Re X, Im X], [Re Y, Im Y]]."""
+    return np.linalg.svd(np.array([[np.real(X), np.imag(X)], [np.real(Y), np.imag(Y)]], float),
+                         compute_uv=False)
+
+
+@dataclass(frozen=True)
+class MeasuredStroke:
+    """Free-stroke amplitude of a stack measured at several drive frequencies (Hassani &
+    Tjahjowidodo 2013, Table 1 and Sec. 4.2: the stroke falls as the frequency rises, so eqs.
+    18-19 feed the measured stroke into eq. 17 instead of d33*E*l).
+
+    frequencies: ascending drive frequencies (Hz); amplitudes: stroke amplitudes (m) measured at
+    drive amplitude ``voltage`` (V). Between the table points the amplitude is interpolated
+    linearly in log(frequency) and log(amplitude); outside it is an error."""
+
+    frequencies: tuple
+    amplitudes: tuple
+    voltage: float
+
+    def __post_init__(self):
+        f, a = np.asarray(self.frequencies, float), np.asarray(self.amplitudes, float)
+        if f.ndim != 1 or f.size < 2 or f.size != a.size or np.any(np.diff(f) <= 0) or f[0] <= 0:
+            raise ModelError("measured stroke: give at least two ascending positive frequencies, "
+                             "one amplitude each")
+        if np.any(a <= 0) or not self.voltage > 0:
+            raise ModelError("measured stroke: amplitudes and the drive voltage must be positive")
+
+    def amplitude(self, frequency: float) -> float:
+        """Stroke amplitude (m) at ``frequency`` (Hz) and the table's drive voltage."""
+        f = float(frequency)
+        lo, hi = self.frequencies[0], self.frequencies[-1]
+        if not lo <= f <= hi:
+            raise ModelError(f"measured stroke: drive frequency {f:g} Hz is outside the measured "
+                             f"{lo:g}-{hi:g} Hz; use the constitutive stroke there")
+        return float(np.exp(np.interp(np.log(f), np.log(self.frequencies), np.log(self.amplitudes))))
+
+    def per_volt(self, frequency: float) -> float:
+        """Stroke per volt of drive amplitude (m/V) at ``frequency`` (Hz)."""
+        return self.amplitude(frequency) / self.voltage
 
 
 def static_tip_displacement(U1, U2, *, K_i, k_x, k_y, half_angle=45):

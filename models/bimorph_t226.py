@@ -1,31 +1,50 @@
-"""Piezo Systems T226-H4-203X bimorph near its first resonance: PZT-5H on brass (seed 001).
+"""Piezo Systems T226-H4-203X bimorph near its first resonance: PZT-5H on brass, from
 
-"Nonlinear vibration analysis of piezoelectric bending actuators: theoretical and experimental
-studies" (seed 001). Single-mode Galerkin model, eq. 34:
+    Shahabi, P., Ghafarirad, H., Taghvaeipour, A. "Nonlinear vibration analysis of piezoelectric
+    bending actuators: theoretical and experimental studies." Comptes Rendus Mecanique 347(12)
+    (2019) 953-966, doi:10.1016/j.crme.2019.10.007.
+
+Single-mode Galerkin model, eq. 34:
 
     q'' + (mu + mu1 q^2) q' + omega_n^2 q + k1 q^3 + k2 q^5 = m_p V(t),   mu = 2 xi omega_n
 
 with the multiple-scales steady state of eq. 54 (library.bimorph.amplitude_equation_roots).
+Numbers: Table 1 (geometry and material), Sec. 4.2 (omega_n = 2637 rad/s, xi = 0.0085 from the
+FFT of a 0.5 V chirp), Sec. 4.3 (k1 = -6.94e17, k2 = 1.443e28, mu1 = 6.28e13, identified on
+0.5-4.5 V with steady sines at 2512, 2580, 2637, 2680 and 2736 rad/s).
 
 Decisions (see also library/bimorph.py):
 
-* q is the MASS-NORMALISED modal coordinate (kg^1/2 m): seed 001 normalises the mode with
-  eq. 24, eta_1 = (int rhoA phi^2 dx)^-1/2, i.e. int rhoA phi^2 dx = 1 (eq. 25), and
-  m_p = -M_p phi'(l) (eq. 32) uses that phi. From Table 1, m_p = 0.1330 N/(kg^1/2 V) in magnitude
-  (here with library.beam's sign, mp_1 = -0.1330: only |m_p| enters eq. 54), phi(L) = 69.76
-  kg^-1/2, phi(23.46 mm) = 65.58 kg^-1/2. The identified k1, k2, mu1 then make physical sense:
-  at 0.5 V on resonance the sensor amplitude is about 32 µm (linear theory 35 µm) and the cubic
-  term is 2.6 % of the linear stiffness, consistent with the paper's use of 0.5 V as the "linear"
-  drive; softening turns into hardening (3/8 k1 a^2 + 10/32 k2 a^4 = 0) only at a = 7.6e-6,
-  a tip amplitude of about 530 µm, beyond the tested range. Read with q as the tip displacement
-  in metres instead, k1 q^2 / omega_n^2 would be about 150 at 0.5 V, which is absurd.
-  Note that with these numbers the resonance peak drifts fast (about 2611 rad/s at 0.5 V, 2460 at
-  2 V, below 2400 rad/s from 3 V on) and nonlinear damping dominates above 1 V.
-* V enters as m_p V: eq. 54 is written with the forcing scaled into V (V(t) = eps V_a,
-  V_a = V/2 e^{i omega T0} + cc, i.e. V(t) = V cos(omega t)); with m_p explicit its right-hand
-  side is (m_p V)^2 / 4, V the amplitude of the sine in volts.
+* q is the mass-normalised modal coordinate (kg^1/2 m): eq. 24-25 normalise the mode,
+  int rhoA phi^2 dx = 1, and m_p = -M_p phi'(l) (eq. 32) uses that phi. From Table 1,
+  |m_p| = 0.1330 N/(kg^1/2 V) (library.beam's sign gives mp_1 = -0.1330; only |m_p| enters
+  eq. 54), phi(L) = 69.76 kg^-1/2, phi(23.46 mm) = 65.58 kg^-1/2.
+* V enters as m_p V: eq. 54 is written with the forcing scaled into V (eqs. 39-42); with m_p
+  explicit its right-hand side is (m_p V)^2 / 4, V the amplitude of the sine in volts.
+* Units of the identified k1, k2, mu1 (``coefficients``). The text never says on which
+  coordinate they act. Read on q itself (``modal``: k1 in 1/(kg m^2 s^2)), the multiple-scales
+  peak lies at 2611 rad/s at 0.5 V, 2413 at 2.5 V, 2253 at 4.5 V and 1936 at 10 V: below the
+  band 2512-2736 rad/s the paper measured in, for identification (0.5-4.5 V, Fig. 5) and for
+  validation (6, 8, 10 V, Fig. 10, "the model can still predict the behavior accurately").
+  The other unit readings scale the terms up, not down (q as the tip displacement in metres:
+  x 69.8^2; x in [0, 1] as eqs. 22 and 25 write gamma_1 = 1.8751 and int_0^1: x 1/L;
+  the forcing scaled into V, q/m_p: x 1/m_p^2), and put even the 0.5 V peak outside the band
+  (2353, 2308 rad/s; 1309 rad/s and far above at higher drive as the quintic term takes over).
+  The paper's
+  own statements single out one reading: the coefficients act on y = m_p q = -M_p w'(l), the
+  coordinate conjugate to V in eq. 31 (the charge the bending displaces, in C):
+  ``charge`` (default), k1 in 1/(C^2 s^2), k2 in 1/(C^4 s^2), mu1 in 1/(C^2 s), so that in q
+  the terms are k1 m_p^2 q^3, k2 m_p^4 q^5, mu1 m_p^2 q^2 q'. Under it
+    - the 0.5 V peak is at 2636 rad/s, the 2637 rad/s the paper took from the 0.5 V chirp as
+      the linear natural frequency (Sec. 4.2; ``modal`` puts it at 2611, 1 % off);
+    - the peaks at 0.5-10 V lie at 2636-2526 rad/s, all inside the measured band;
+    - at 2580 rad/s the amplitude grows faster than the linear model's over 0.5-4.5 V, at
+      2637 rad/s slower (Fig. 9), and the resonance stays between 2580 and 2637 rad/s up to
+      6 V (Fig. 9's caption calls them "below and above the first resonance"); under
+      ``modal`` the 2580 rad/s amplitude falls below the linear model's from 2.5 V on.
+  tests/test_bimorph.py checks each statement under both readings.
 * omega_n: the paper's measured 2637 rad/s (Sec. 4.2, 0.5 V chirp) by default. The exact
-  Euler–Bernoulli first mode of Table 1's dimensions is 2915.5 rad/s, 10.5 % higher: a real
+  Euler-Bernoulli first mode of Table 1's dimensions is 2915.5 rad/s, 10.5 % higher: a real
   model-versus-measurement gap; ``frequency=computed`` uses it instead. The mass-normalised
   shape and m_p do not depend on the stiffness (uniform beam), so they are the same either way.
 * Sensor at x_t = 23.46 mm ("close to the tip", Sec. 4.2), target = 0.9564.
@@ -35,11 +54,14 @@ from bondgraph import Experiment, Model, Parameter, Sine
 from library.beam import Bimorph
 from library.bimorph import UNITS, ModeNonlinearity, add_bimorph_modes
 
-T1 = "seed 001 Table 1"
+T1 = "Shahabi et al. 2019, Table 1"
+READINGS = ("charge", "modal")
 
 PARAMETERS = [
-    Parameter("nonlinear", False, "", "add the identified k1, k2, mu1 of seed 001 (eq. 34, Sec. 4.3)"),
-    Parameter("frequency", "measured", "", "omega_n: measured 2637 rad/s (seed 001 Sec. 4.2) or computed "
+    Parameter("nonlinear", False, "", "add the identified k1, k2, mu1 (eq. 34, Sec. 4.3)"),
+    Parameter("coefficients", "charge", "", "coordinate the identified k1, k2, mu1 act on: charge "
+              "y = m_p q (default, see the model file) or the modal q itself", choices=READINGS),
+    Parameter("frequency", "measured", "", "omega_n: measured 2637 rad/s (Sec. 4.2) or computed "
               "from Table 1 (exact modes, 2915.5 rad/s)", choices=("measured", "computed")),
     Parameter("target", 23.46 / 24.53, "1", "sensor position as a fraction of L (x_t = 23.46 mm, Sec. 4.2)",
               symbolic=False, bounds=(1e-3, 1.0)),
@@ -54,9 +76,14 @@ PARAMETERS = [
     Parameter("e31", -13.11, "C/m^2", f"PZT-5H piezoelectric constant ({T1})", symbolic=False),
 ]
 
-OMEGA_MEASURED = 2637.0   # rad/s, seed 001 Sec. 4.2 (FFT of a 0.5 V chirp response)
-XI_MEASURED = 0.0085      # seed 001 Sec. 4.2
-K1, K2, MU1 = -6.94e17, 1.443e28, 6.28e13   # seed 001 Sec. 4.3, identified on 0.5-4.5 V
+OMEGA_MEASURED = 2637.0   # rad/s, Sec. 4.2 (FFT of a 0.5 V chirp response)
+XI_MEASURED = 0.0085      # Sec. 4.2
+K1, K2, MU1 = -6.94e17, 1.443e28, 6.28e13   # Sec. 4.3, identified on 0.5-4.5 V
+#: units of the identified coefficients under each reading
+COEFFICIENT_UNITS = {
+    "charge": {"k1": "1/(C^2 s^2)", "k2": "1/(C^4 s^2)", "mu1": "1/(C^2 s)"},
+    "modal": {"k1": UNITS["k1"], "k2": UNITS["k2"], "mu1": UNITS["mu1"]},
+}
 
 # Sine drive near resonance, as in the paper's nonlinear identification (Sec. 4.3: 2512-2736
 # rad/s, nine voltages); 0.2 s is about 4.5 decay times 1/(xi omega_n).
@@ -67,21 +94,32 @@ EXPERIMENT = Experiment(t_end=0.2, dt=2e-5, inputs={"V": Sine(2.5, 2600.0 / (2 *
 CALIBRATE = ["mp_*", "omega_*", "zeta_*"]
 
 
+def modal_scale(reading: str, mp: float) -> float:
+    """s with q-coordinate coefficients k1 s^2, k2 s^4, mu1 s^2 for the paper's k1, k2, mu1 read
+    on the coordinate ``reading`` (charge: y = m_p q, s = |m_p|; modal: s = 1)."""
+    if reading not in READINGS:
+        raise ValueError(f"coefficients must be one of {READINGS}, got {reading!r}")
+    return abs(mp) if reading == "charge" else 1.0
+
+
 def build(p):
     beam = Bimorph(L=p.L, b=p.b, t_p=p.t_p, t_b=p.t_b, rho_p=p.rho_p, rho_b=p.rho_b, c_p=p.c_p, c_b=p.c_b,
                    e31=p.e31)
-    m = Model("bimorph_t226", "T226-H4-203X bimorph, first mode near resonance (seed 001)")
+    m = Model("bimorph_t226", "T226-H4-203X bimorph, first mode near resonance (Shahabi et al. 2019)")
     nonlin = None
     if p.nonlinear:
+        s = modal_scale(p.coefficients, beam.modes(1).input_gains[0])
+        u = COEFFICIENT_UNITS[p.coefficients]
+        where = f"Sec. 4.3, read on the {p.coefficients} coordinate"
         nonlin = {1: ModeNonlinearity(
-            k1=m.parameter("k1", K1, UNITS["k1"], "cubic modal stiffness (seed 001 Sec. 4.3)"),
-            k2=m.parameter("k2", K2, UNITS["k2"], "quintic modal stiffness (seed 001 Sec. 4.3)"),
-            mu1=m.parameter("mu1", MU1, UNITS["mu1"], "nonlinear damping, (mu + mu1 q^2) q' (seed 001 Sec. 4.3)"))}
+            k1=s ** 2 * m.parameter("k1", K1, u["k1"], f"cubic stiffness ({where})"),
+            k2=s ** 4 * m.parameter("k2", K2, u["k2"], f"quintic stiffness ({where})"),
+            mu1=s ** 2 * m.parameter("mu1", MU1, u["mu1"], f"nonlinear damping, (mu + mu1 y^2) y' ({where})"))}
     if p.frequency == "measured":
         omega = m.parameter("omega_1", OMEGA_MEASURED, UNITS["omega"],
-                            "natural frequency, measured (seed 001 Sec. 4.2); Table 1 gives 2915.5 rad/s")
+                            "natural frequency, measured (Sec. 4.2); Table 1 gives 2915.5 rad/s")
     else:
         omega = None   # exact Euler-Bernoulli first mode of Table 1's beam
-    xi = m.parameter("zeta_1", XI_MEASURED, UNITS["zeta"], "damping ratio, measured (seed 001 Sec. 4.2)")
+    xi = m.parameter("zeta_1", XI_MEASURED, UNITS["zeta"], "damping ratio, measured (Sec. 4.2)")
     add_bimorph_modes(m, beam, 1, p.target, omegas=[omega], zetas=[xi], nonlinear=nonlin, source=T1)
     return m

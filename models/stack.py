@@ -1,7 +1,9 @@
-"""Piezoelectric stack actuator of N layers (seed 002, Fig. 10 and eq. 13), or its lumped
+"""Piezoelectric stack actuator of N layers (Fig. 10 and eq. 13 of Rodriguez-Fortun, J.M., Orus, J.,
+Buil, F., Castellanos, J.A. "General bond graph model for piezoelectric actuators and methodology
+for experimental identification." Mechatronics 20 (2010) 303-314), or its lumped
 equivalent (Fig. 11, eq. 14) with ``lumped=true``.
 
-The stack-level parameters default to the APA-120ML values of seed 002 Table 1 (K, a, l, Re)
+The stack-level parameters default to the APA-120ML values of Rodriguez-Fortun et al. 2010, Table 1 (K, a, l, Re)
 and Table 2 (kx).  The APA's c = 3000 N·s/m damps its 160 g output; a bare stack of a few
 grams gets c = 5 N·s/m (about 5 % of critical damping of its first mode, our choice).
 Per layer (N layers in series mechanically, in parallel electrically):

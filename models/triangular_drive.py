@@ -1,14 +1,19 @@
-"""Triangular-based piezoelectric drive: two P-887.91 stacks 90° apart under a compliant
-triangular aluminium body (seed 004, Hassani & Tjahjowidodo, MSSP 36 (2013)).
+"""Triangular-based piezoelectric drive: two P-887.91 stacks 90 deg apart under a compliant
+triangular aluminium body, from
 
-Structure (library.triangular): each stack is the lumped linear seed-002 stack in the paper's
-data-sheet form, K_i = A/(l·s33^E), E = V/h, U = d33·E·l (eqs. 3-5); the body is lumped at its
+    Hassani, V., Tjahjowidodo, T. "Structural response investigation of a triangular-based
+    piezoelectric drive mechanism to hysteresis effect of the piezoelectric actuator."
+    Mechanical Systems and Signal Processing 36 (2013).
+
+Structure (library.triangular): each stack is the lumped linear stack of Rodriguez-Fortun et al.
+(Mechatronics 20 (2010), eq. 14) in the paper's data-sheet form, K_i = A/(l·s33^E), E = V/h, U = d33·E·l (eqs. 3-5); the body is lumped at its
 tip as a mass, spring and damper per direction; transformers project the stack forces onto x
 and y (stacks at ±half_angle from the vertical).  In phase the tip moves on a vertical
 straight line; with a phase difference it traces an ellipse (Sec. 3).
 
 ``formulation``: ``field`` (default) stores the stacks' elastic and dielectric energy and the
-body springs in one 4-port C-field (seed-002 'model 1' per stack plus ½k_x·x² + ½k_y·y²):
+body springs in one 4-port C-field ('model 1' of Rodriguez-Fortun et al. per stack plus
+½k_x·x² + ½k_y·y²):
 6 states.  ``layers`` builds each stack from library.piezo.piezo_layer (three domains) and
 gives the body its own springs: the same dynamics (tests/test_triangular.py checks agreement
 to 1e-7), but 8 states of which two combinations are conserved (each stack's elongation is
@@ -32,7 +37,32 @@ drive amplitude or frequency give both signals, e.g.
 Outputs: x (tip, horizontal), y (tip, vertical), delta1, delta2 (stack elongations), V1, V2,
 i1, i2.
 
-Parameter values and where they come from (the extracted seed text drops the digits 0, 1 and
+Free stroke (``stroke``), the paper's central step (Sec. 4.2-4.3, eqs. 17-19): the measured
+free stroke falls as the drive frequency rises over 5-100 Hz, while the constitutive stroke
+d33*E*l does not, so the paper feeds the measured stroke into eq. 17 in place of d33*E*l.
+
+* ``constitutive`` (default): U = d33*(V/h)*l, the same at every frequency.
+* ``measured``: U = the measured stroke at ``drive_frequency`` (Hz) per volt of drive, through an
+  effective d33 = U_meas(f)/(E*l) (the stack stiffness K_i is kept, library.triangular.stack_constants).
+  As in the paper this is a per-frequency substitution: set ``drive_frequency`` to the frequency
+  of the sine drive. Table 1 (the measured strokes) is lost in the extracted text. What
+  survives: the stack gives "36.7 um at its maximum voltage" (Sec. 4.2, "367" with the point and
+  the 120 V lost), i.e. 15.3 um per 50 V of amplitude at 5 Hz, and the measured tip x-amplitudes
+  of Table 5 fall from 13.4 um at 5 Hz to 5.5 um at 100 Hz (digits 0-2 dropped; decoded),
+  a ratio 0.41 that quasi-statically is the stroke's own. MEASURED_STROKE takes these two points
+  and interpolates log-log in between (U ~ f^-0.297): our reading, not the paper's table.
+* ``hysteretic``: the measured amplitude with the hysteretic waveform (eq. 18): each stack's
+  drive passes a Prandtl-Ishlinskii operator before the linear stack. The loop shape is not in
+  the text (Fig. 5 is lost); we take the one identified on the real PICMA P-885.91 record of
+  tests/data (same stack family, 6 plays, fitted on its first 25 s by library.identification.fit_pi,
+  thresholds scaled to this drive's 0-100 V swing and weights normalised so that the 0-100 V loop
+  spans 100 V; tests/test_triangular.py re-derives the numbers). Outputs V1, V2 are then the
+  voltages the linear stacks see, H[V].
+  With the decoded measurements the 90 deg ellipse shrinks from 12.5 x 10.0 um (x, y semi-axes) at
+  5 Hz to 5.1 x 4.1 um at 100 Hz (stroke=measured); with the constitutive stroke it is 9.8 x 7.9 um
+  at both.
+
+Parameter values and where they come from (the extracted paper text drops the digits 0, 1 and
 2, so most table entries are garbled; decoded values are marked):
 
 * stacks, PI P-887.91 (Sec. 4.2): A = 10 × 10 mm², l = 36 mm (catalogue dimensions, not in
@@ -59,15 +89,27 @@ Parameter values and where they come from (the extracted seed text drops the dig
   response is quasi-static: with r_x, r_y as above the 90° ellipse has axes
   U/(1 + r_x) = 9.8 µm (x) and U/(1 + r_y) = 7.9 µm (y) for U = 12 µm (50 V).
 
-The lumped stack neglects the axial wave of eq. 17 (γ = ω·√(ρ·s33^E)); at 100 Hz γl ≈ 0.01.
+The lumped stack neglects the axial wave of eq. 17 (γ = ω·√(ρ·s33^E)), keeping its first term
+as the stack's Rayleigh mass; at 100 Hz γl ≈ 0.01 (library.triangular.tip_displacement gives
+eq. 17 for the pair; the tests compare both).
 """
 import sympy as sp
 
 from bondgraph import Experiment, Model, Parameter, Sine
-from library.triangular import FORMULATIONS, add_triangular_drive
+from library.hysteresis import PrandtlIshlinskii
+from library.triangular import FORMULATIONS, MeasuredStroke, add_triangular_drive
 
 EPS0 = 8.854e-12
 AMPLITUDE, FREQUENCY = 50.0, 100.0  # V, Hz: the default EXPERIMENT (Sec. 5)
+STROKES = ("constitutive", "measured", "hysteretic")
+
+#: measured free-stroke amplitude at 50 V of drive amplitude (see the module docstring)
+MEASURED_STROKE = MeasuredStroke(frequencies=(5.0, 100.0),
+                                 amplitudes=(36.7e-6 * 50.0 / 120.0, 36.7e-6 * 50.0 / 120.0 * 5.5 / 13.4),
+                                 voltage=50.0)
+#: hysteretic stroke: PI thresholds (V, for a 0-100 V swing) and weights (1), from the P-885 record
+HYSTERESIS_THRESHOLDS = tuple(100.0 * k / 12 for k in range(6))
+HYSTERESIS_WEIGHTS = (0.4267, 0.5011, 0.02347, 0.1873, 0.1394, 0.0)
 
 PARAMETERS = [
     Parameter("phase", 90.0, "deg", "phase of the stack-2 drive relative to stack 1 (Sec. 5: 90)"),
@@ -90,9 +132,13 @@ PARAMETERS = [
     Parameter("m_y", 0.05, "kg", "body tip mass, vertical (our choice)", bounds=(1e-6, 100.0)),
     Parameter("c_x", 100.0, "N*s/m", "body damping, horizontal (~1.5 % of critical)", bounds=(0.0, 1e8)),
     Parameter("c_y", 100.0, "N*s/m", "body damping, vertical (~1.5 % of critical)", bounds=(0.0, 1e8)),
+    Parameter("stroke", "constitutive", "", "free stroke fed to the stacks: constitutive d33*E*l, the "
+              "measured stroke at drive_frequency, or measured and hysteretic (eqs. 17-19)", choices=STROKES),
+    Parameter("drive_frequency", FREQUENCY, "Hz", "frequency of the sine drive, for the measured stroke "
+              "(the paper's 5-100 Hz)", symbolic=False, bounds=(5.0, 100.0)),
     Parameter("half_angle", 45.0, "deg", "angle of each stack from the vertical (45: stacks 90 deg apart)",
               symbolic=False, bounds=(5.0, 85.0)),
-    Parameter("formulation", "field", "", "stacks and body as one C-field (6 states) or as seed-002 piezo "
+    Parameter("formulation", "field", "", "stacks and body as one C-field (6 states) or as three-domain piezo "
               "layers plus body springs (8 states, two conserved)", choices=FORMULATIONS),
 ]
 
@@ -104,13 +150,20 @@ EXPERIMENT = Experiment(t_end=0.03, dt=1e-5, inputs={
 
 
 def build(p):
-    m = Model("triangular_drive", "two stacks at 90 deg under a compliant triangular body (seed 004)")
+    m = Model("triangular_drive", "two stacks at 90 deg under a compliant triangular body (Hassani & Tjahjowidodo 2013)")
     V = m.input("V", "V", "drive of stack 1 (added to the bias offset)")
     Vq = m.input("Vq", "V", "quadrature reference: the stack-1 drive advanced by 90 deg")
     phi = sp.pi * p.phase / 180
+    V1, V2 = p.offset + V, p.offset + sp.cos(phi) * V + sp.sin(phi) * Vq
+    d33 = p.d33
+    if p.stroke != "constitutive":   # eqs. 18-19: the measured stroke instead of d33*E*l
+        d33 = MEASURED_STROKE.per_volt(p.drive_frequency) * p.h / p.length
+    if p.stroke == "hysteretic":
+        V1 = m.operator("H1", PrandtlIshlinskii(HYSTERESIS_THRESHOLDS, HYSTERESIS_WEIGHTS), V1)
+        V2 = m.operator("H2", PrandtlIshlinskii(HYSTERESIS_THRESHOLDS, HYSTERESIS_WEIGHTS), V2)
     add_triangular_drive(
-        m, V1=p.offset + V, V2=p.offset + sp.cos(phi) * V + sp.sin(phi) * Vq,
-        d33=p.d33, s33E=p.s33E, eps33T=p.eps33T, area=p.area, length=p.length, h=p.h, Re=p.Re,
+        m, V1=V1, V2=V2,
+        d33=d33, s33E=p.s33E, eps33T=p.eps33T, area=p.area, length=p.length, h=p.h, Re=p.Re,
         k_x=p.k_x, k_y=p.k_y, m_x=p.m_x, m_y=p.m_y, c_x=p.c_x, c_y=p.c_y, c_stack=p.c_stack,
         stack_mass=p.rho * p.area * p.length / 3, half_angle=p.half_angle, formulation=p.formulation)
     return m

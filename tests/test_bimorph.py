@@ -1,9 +1,17 @@
-"""Bimorph modal bond graphs (library.bimorph) and the model files of seeds 000 and 001.
+"""Bimorph modal bond graphs (library.bimorph) and the model files of
 
-(a) seed 000: Table 2 natural frequencies and the 0.737 L minimum-phase boundary, through
-    ``bondgraph linearize --json``;
-(b) seed 001: time-domain steady state of the nonlinear single-mode model against the
-    multiple-scales amplitude equation (eq. 54), and the softening peak drift;
+* Ghafarirad, Rezaei, Sarhan, Zareinejad, "Continuous dynamic modelling of bimorph piezoelectric
+  cantilevered actuators considering hysteresis effect and dynamic behaviour analysis", MCMDS
+  21(2) (2015) 130-152 (T215 bimorph, models/bimorph_t215.py), and
+* Shahabi, Ghafarirad, Taghvaeipour, "Nonlinear vibration analysis of piezoelectric bending
+  actuators: theoretical and experimental studies", C. R. Mecanique 347(12) (2019) 953-966
+  (T226 bimorph, models/bimorph_t226.py).
+
+(a) Ghafarirad et al.: Table 2 natural frequencies and the 0.737 L minimum-phase boundary,
+    through ``bondgraph linearize --json``;
+(b) Shahabi et al.: time-domain steady state of the nonlinear single-mode model against the
+    multiple-scales amplitude equation (eq. 54), the softening peak drift, and the reading of
+    the identified coefficients' units;
 (c) every CLI command on both model files.
 """
 from __future__ import annotations
@@ -19,7 +27,7 @@ import bondgraph as bg
 from bondgraph.cli import main
 from bondgraph.data import read_csv
 from bondgraph.linearize import linearize
-from bondgraph.modelfile import load_model
+from bondgraph.modelfile import load_model, read_model_module
 from conftest import MODELS, ROOT
 from library.beam import T215_A4_103X, T226_H4_203X
 from library.bimorph import (ModeNonlinearity, add_bimorph_modes, amplitude_equation_peak,
@@ -42,7 +50,7 @@ def cli_json(capsys, *argv: str) -> dict:
     return json.loads(cli(capsys, *argv))
 
 
-# ---- (a) seed 000: Table 2 and the non-minimum-phase boundary ------------------------------------
+# ---- (a) Ghafarirad et al. 2015: Table 2 and the non-minimum-phase boundary ------------------------------------
 def test_table2_natural_frequencies_from_the_console_script():
     """`bondgraph linearize models/bimorph_t215.py --set modes=3 --json`: Table 2 within 0.5 %."""
     run = subprocess.run([sys.executable, "-m", "bondgraph", "linearize", "models/bimorph_t215.py",
@@ -56,7 +64,7 @@ def test_table2_natural_frequencies_from_the_console_script():
 
 @pytest.mark.parametrize("target, nmp", [(0.7, True), (0.9, False), (0.95, False)])
 def test_rhp_zeros_depend_on_the_target_point(capsys, target, nmp):
-    """Seed 000 Sec. 3.1 / 4.1: two modes, non-minimum phase at 0.7 L, minimum phase at 0.9 L, 0.95 L."""
+    """Ghafarirad et al. 2015, Sec. 3.1 / 4.1: two modes, non-minimum phase at 0.7 L, minimum phase at 0.9 L, 0.95 L."""
     res = cli_json(capsys, "linearize", T215, "--set", f"target={target}", "--json")
     assert len(res["natural_frequencies_rad_s"]) == 2
     if nmp:
@@ -67,7 +75,7 @@ def test_rhp_zeros_depend_on_the_target_point(capsys, target, nmp):
 
 
 def test_minimum_phase_boundary_by_bisection(capsys):
-    """The RHP zero disappears at l_t = 0.737 L (seed 000 Fig. 8); 8 bisection steps on target."""
+    """The RHP zero disappears at l_t = 0.737 L (Ghafarirad et al. 2015, Fig. 8); 8 bisection steps on target."""
     def nmp(target):
         return cli_json(capsys, "linearize", T215, "--set", f"target={target!r}", "--json")["rhp_zeros"] > 0
 
@@ -77,7 +85,7 @@ def test_minimum_phase_boundary_by_bisection(capsys):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if nmp(mid) else (lo, mid)
     assert abs(0.5 * (lo + hi) - 0.737) < 0.005
-    # and the same boundary from the sign of a1 = 1 + mp2 phi2(lt) / (mp1 phi1(lt)) (seed 000 eq. 38)
+    # and the same boundary from the sign of a1 = 1 + mp2 phi2(lt) / (mp1 phi1(lt)) (Ghafarirad et al. 2015, eq. 38)
     modes = T215_A4_103X.modes(2)
     g = modes.input_gains
     a1 = lambda f: 1 + g[1] * modes.shape(1, f * T215_A4_103X.L) / (g[0] * modes.shape(0, f * T215_A4_103X.L))
@@ -95,7 +103,7 @@ def test_modal_bond_graph_matches_the_beam_transfer_function():
                                rtol=1e-9)
 
 
-# ---- (b) seed 001: multiple scales versus time-domain steady state ------------------------------------
+# ---- (b) Shahabi et al. 2019: multiple scales versus time-domain steady state ------------------------------------
 LEVELS = (0.5, 2.0, 4.5)          # V, the paper's identification range 0.5-4.5 V
 ABOVE = (0.0, 0.01, 0.02, 0.04)   # drive frequencies omega_peak (1 + d) on the resonant branch
 CYCLES = 80                       # from the multiple-scales state the transient is gone by ~40
@@ -103,12 +111,14 @@ PPC = 64                          # samples per cycle for the Fourier projection
 
 
 @pytest.fixture(scope="module")
-def seed001():
+def shahabi():
     """Simulated steady states of bimorph_t226 (nonlinear=true) near resonance at three drives."""
     lm = load_model(T226, {"nonlinear": True})
     sim = bg.Simulator(lm.model)
     tab = {str(k): v for k, v in lm.model.parameter_table().items()}
     wn, z, k1, k2, mu1, mp, phi = (tab[n] for n in ("omega_1", "zeta_1", "k1", "k2", "mu1", "mp_1", "phi_1"))
+    s = read_model_module(T226)[0].modal_scale("charge", mp)     # the model's default reading
+    k1, k2, mu1 = k1 * s ** 2, k2 * s ** 4, mu1 * s ** 2
     iq, ip = sim.state_names.index("q_spring_1"), sim.state_names.index("p_mass_1")
 
     def ms_state(V, w, a):
@@ -153,25 +163,25 @@ def seed001():
     return out
 
 
-def test_seed001_steady_state_agrees_with_multiple_scales(seed001):
+def test_shahabi_steady_state_agrees_with_multiple_scales(shahabi):
     """At and above the multiple-scales peak the simulated amplitude is within 3 % (measured <= 1.8 %).
 
     Below the peak first-order multiple scales is less accurate: it puts the jump too high in
     frequency and, on the lower branch, its detuning omega_n^2 - omega^2 ~ -2 sigma omega_n^2 is off by
     O(sigma) (2-5 % at these drives), so those frequencies are not compared."""
-    for V, lev in seed001["levels"].items():
+    for V, lev in shahabi["levels"].items():
         for w, x_ms, x_sim in lev["rows"]:
             assert abs(x_sim / x_ms - 1) < 0.03, f"V={V} V, omega={w:.1f} rad/s: sim {x_sim:.4e} m, MS {x_ms:.4e} m"
 
 
-def test_seed001_peak_drifts_down_with_drive(seed001):
+def test_shahabi_peak_drifts_down_with_drive(shahabi):
     """Softening: the simulated peak frequency (downward sweep) falls with the drive amplitude, as
     the multiple-scales peak does; at 0.5 V the two agree within the 0.5 % sweep step."""
-    lev = seed001["levels"]
+    lev = shahabi["levels"]
     w_sim = [lev[V]["w_sim"] for V in LEVELS]
     w_ms = [lev[V]["w_peak"] for V in LEVELS]
-    assert w_ms[0] < seed001["wn"] and all(a > b for a, b in zip(w_ms, w_ms[1:]))
-    assert w_sim[0] < seed001["wn"] and all(a > b for a, b in zip(w_sim, w_sim[1:])), w_sim
+    assert w_ms[0] < shahabi["wn"] and all(a > b for a, b in zip(w_ms, w_ms[1:]))
+    assert w_sim[0] < shahabi["wn"] and all(a > b for a, b in zip(w_sim, w_sim[1:])), w_sim
     assert abs(w_sim[0] / w_ms[0] - 1) <= 0.0051
     for V in LEVELS:   # the sweep passed the peak: the response dropped (a jump above 0.5 V)
         amps = [a for _, a in lev[V]["sweep"]]
@@ -190,6 +200,67 @@ def test_amplitude_equation_linear_limit_and_peak():
     best = max(amplitude_equation_roots(w, wn, z, F, **k).max() for w in grid)
     assert best == pytest.approx(a_pk, rel=1e-4) and w_pk < wn
     assert amplitude_equation_roots(w_pk, wn, z, F, **k).max() == pytest.approx(a_pk, rel=1e-3)
+
+
+def _t226_peaks(reading, volts):
+    """Multiple-scales peaks (rad/s) of the T226 model at the given drive amplitudes."""
+    lm = load_model(T226, {"nonlinear": True, "coefficients": reading})
+    tab = {str(k): v for k, v in lm.model.parameter_table().items()}
+    s = lm.module.modal_scale(reading, tab["mp_1"])
+    k = dict(k1=tab["k1"] * s ** 2, k2=tab["k2"] * s ** 4, mu1=tab["mu1"] * s ** 2)
+    wn, z, mp = tab["omega_1"], tab["zeta_1"], abs(tab["mp_1"])
+    peaks = [amplitude_equation_peak(wn, z, mp * V, **k)[0] for V in volts]
+
+    def per_volt(w, V):
+        return amplitude_equation_roots(w, wn, z, mp * V, **k).max() / V
+    return np.array(peaks), per_volt, k
+
+
+BAND = (2512.0, 2736.0)   # Sec. 4.3: the frequencies measured for identification and validation
+
+
+def test_t226_coefficient_units_charge_reading_matches_the_paper():
+    """Shahabi et al. 2019 never says on which coordinate its k1, k2, mu1 act. Read on the charge
+    coordinate y = m_p q (models/bimorph_t226.py) every statement of the paper holds:
+    Sec. 4.2, the 0.5 V chirp gives omega_n = 2637 rad/s (so the 0.5 V peak must sit there);
+    Sec. 4.3, Figs. 5 and 10, identification (0.5-4.5 V) and validation (6, 8, 10 V) measured at
+    2512-2736 rad/s; Fig. 9, at 2580 rad/s the amplitude grows faster than linear, at 2637 slower,
+    the two frequencies lying 'below and above the first resonance'."""
+    volts = [0.5, 1.5, 2.5, 3.5, 4.5, 6.0, 8.0, 10.0]
+    peaks, per_volt, _ = _t226_peaks("charge", volts)
+    print("\ncharge reading peaks:", dict(zip(volts, peaks.round(0))))
+    assert peaks[0] == pytest.approx(2637.0, abs=2.0)
+    assert np.all((peaks > BAND[0]) & (peaks < BAND[1]))
+    assert peaks[volts.index(4.5)] == pytest.approx(2602.0, abs=1.0)
+    assert peaks[volts.index(10.0)] == pytest.approx(2526.0, abs=1.0)
+    ident = [0.5, 1.5, 2.5, 3.5, 4.5]
+    below = [per_volt(2580.0, V) for V in ident]
+    above = [per_volt(2637.0, V) for V in ident]
+    assert all(a < b for a, b in zip(below, below[1:]))      # Fig. 9a: faster than linear
+    assert all(a > b for a, b in zip(above, above[1:]))      # Fig. 9b: slower than linear
+    assert np.all((peaks[:6] > 2580.0) & (peaks[:6] < 2637.0))  # Fig. 9 caption, 0.5-6 V
+
+
+def test_t226_coefficient_units_modal_reading_contradicts_the_paper():
+    """The literal SI reading on the mass-normalised q puts the peaks at 2413 rad/s (2.5 V) and
+    2253 rad/s (4.5 V), below the measured band, and the 0.5 V peak 1 % below the 2637 rad/s the
+    paper identified at 0.5 V; every other unit reading (q as the tip displacement, x in [0, 1],
+    the forcing scaled into V) scales the nonlinear terms up: the peaks leave the band even at
+    0.5 V (down to 2308-2353 rad/s, or to 1309 rad/s and then far up once the quintic term
+    dominates)."""
+    peaks, per_volt, k = _t226_peaks("modal", [0.5, 2.5, 4.5, 10.0])
+    assert peaks == pytest.approx([2611.0, 2413.0, 2253.0, 1936.0], abs=1.0)
+    assert peaks[1] < BAND[0] and peaks[0] < 2637.0 - 20.0
+    assert per_volt(2580.0, 4.5) < per_volt(2580.0, 0.5)     # contradicts Fig. 9a
+    beam = T226_H4_203X
+    modes = beam.modes(1)
+    mp, phi_tip = abs(modes.input_gains[0]), modes.shape(0, beam.L)
+    for s in (phi_tip, beam.L ** -0.5, 1.0 / mp):             # tip metres, x in [0, 1], q / m_p
+        assert s > 1.0
+        for V in (0.5, 4.5):
+            w, _ = amplitude_equation_peak(2637.0, 0.0085, mp * V, k["k1"] * s ** 2, k["k2"] * s ** 4,
+                                           k["mu1"] * s ** 2)
+            assert not BAND[0] < w < BAND[1]
 
 
 # ---- (c) every CLI command on both model files --------------------------------------------------------
@@ -219,7 +290,7 @@ def test_every_cli_command(capsys, tmp_path, model, sets):
 def test_model_parameters_and_options(capsys):
     assert "2637" in cli(capsys, "params", T226)
     comp = cli_json(capsys, "linearize", T226, "--set", "frequency=computed", "--json")
-    assert comp["natural_frequencies_rad_s"][0] == pytest.approx(2915.5, rel=1e-4)   # REFERENCE §3
+    assert comp["natural_frequencies_rad_s"][0] == pytest.approx(2915.5, rel=1e-4)   # Table 1, exact modes
     meas = cli_json(capsys, "linearize", T226, "--json")
     assert meas["natural_frequencies_rad_s"][0] == pytest.approx(2637.0, rel=1e-9)
     assert meas["damping_ratios"][0] == pytest.approx(0.0085, rel=1e-9)
@@ -264,5 +335,5 @@ def test_per_mode_nonlinearity_and_parameters():
 
 def test_effective_tip_mass():
     m = T226_H4_203X.mass
-    assert effective_tip_mass(T226_H4_203X) == pytest.approx(33 / 140 * m, rel=1e-9)   # seed 003
+    assert effective_tip_mass(T226_H4_203X) == pytest.approx(33 / 140 * m, rel=1e-9)   # Wood et al. 2005, eq. 6
     assert effective_tip_mass(T226_H4_203X, mode=1) == pytest.approx(m / 4, rel=1e-6)  # 1/phi_1(L)^2

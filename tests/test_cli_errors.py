@@ -1,9 +1,12 @@
 """Bad inputs through the command line: exit status 2, exactly one line on stderr starting
-with 'bondgraph: error:', no traceback, and a message that names the problem.
+with 'bondgraph: error:', no traceback, a message that names the problem (and the fix, where
+the table says so), and nothing written: the working directory is byte for byte the same.
 
-The cases are one table (``CASES``); each runs in-process through ``bondgraph.cli.main``.
-A few also run as real processes (``python -m bondgraph``) to check the exit status the
-shell sees.  The small model files the cases need are written into a temporary directory.
+The cases are one table (``CASES``), built from the deviations a new user reported and from
+every promise the README and ``--help`` make; each runs in-process through
+``bondgraph.cli.main``.  A few also run as real processes (``python -m bondgraph``) to check
+the exit status the shell sees.  The small model and data files the cases need are written
+into a temporary directory.
 """
 from __future__ import annotations
 
@@ -33,7 +36,8 @@ GOOD = textwrap.dedent("""\
         Parameter("c", 2.0, "N s/m", "damping"),
         Parameter("lumped", True, "", "a boolean switch"),
         Parameter("mode", "a", "", "a choice", choices=("a", "b")),
-        Parameter("layers", 3, "", "an integer"),
+        Parameter("layers", 3, "", "an integer", bounds=(1, 100)),
+        Parameter("zeta", 0.1, "", "a bounded real", bounds=(0.0, 1.0)),
     ]
     EXPERIMENT = Experiment(t_end=0.05, dt=1e-3, inputs={"V": Step(1.0)})
 
@@ -165,6 +169,41 @@ FILES = {
     "list.json": "[1, 2]",
     "unknown.json": '{"params": {"zz_top": 1.0}}',
 }
+FILES.update({
+    "exits.py": HEAD + "import sys\nsys.exit(3)\n",
+    "exits_in_build.py": HEAD + "import sys\ndef build(p):\n    sys.exit(4)\n",
+    "twice.py": "from bondgraph import *\nPARAMETERS = [Parameter('k', 1.0), Parameter('k', 2.0)]\n"
+                "def build(p):\n    return Model('x')\n",
+    "badname.py": "from bondgraph import *\nPARAMETERS = [Parameter('1k', 1.0)]\ndef build(p):\n    return Model('x')\n",
+    "textparam.py": "from bondgraph import *\nPARAMETERS = [Parameter('mode', 'a')]\ndef build(p):\n    return Model('x')\n",
+    "recursion.py": HEAD + "def build(p):\n    return build(p)\n",
+    "empty.py": "",
+    "returns_none.py": HEAD + "def build(p):\n    return None\n",
+    "noio.py": _model("""\
+        def build(p):
+            g = Model("noio")
+            g.add(Se("s", 1.0), J1("j"), C("c", p.k), R("r", 1.0))
+            g.bond("s", "j")
+            g.bond("j", "c")
+            g.bond("j", "r")
+            return g
+        """),
+    "badexpinput.py": GOOD.replace('inputs={"V": Step(1.0)}', 'inputs={"W": Step(1.0)}'),
+    "dup_key.json": '{"k": 1.0, "k": 2.0}',
+    "null.json": '{"k": null}',
+    "params_list.json": '{"params": [1, 2]}',
+    "bad_offset.json": '{"params": {"k": 100.0}, "output": "x", "offset": "abc"}',
+    "offset_elsewhere.json": '{"params": {"k": 100.0}, "output": "y", "offset": 0.001}',
+    "bounds.json": '{"zeta": 5}',
+    "params_dir.json/": None,
+    "data.csv": "t,V,x\n" + "".join(f"{k * 1e-3!r},{(k % 7) * 0.1!r},{(k % 5) * 1e-6!r}\n" for k in range(60)),
+    "data_nan.csv": "t,V,x\n0,0,0\n0.001,nan,0\n0.002,1,0\n",
+    "data_decreasing.csv": "t,V,x\n0,0,0\n0.002,1,0\n0.001,1,0\n",
+    "data_text.csv": "t,V,x\n0,0,0\n0.001,abc,0\n0.002,1,0\n",
+    "data_header_only.csv": "t,V,x\n",
+    "data_empty.csv": "",
+    "data_no_x.csv": "t,V,y\n0,0,0\n0.001,1,0\n0.002,1,0\n",
+})
 BINARY = b"\xff\xfe\x00\x01garbage\x00"
 
 N = "!"  # needle prefix: this text must NOT be in the message
@@ -267,13 +306,163 @@ CASES = [
     pytest.param(["params", "good.py", "--set"], ["--set", "expected one argument"], id="option-missing-value"),
     pytest.param(["--no-such-flag"], ["--no-such-flag"], id="unknown-global-option"),
     pytest.param([], ["command"], id="no-arguments"),
+    # ---- model files: more ---------------------------------------------------------------------
+    pytest.param(["params", "exits.py"], ["exits.py:4", "sys.exit(3)"], id="model-file-calls-sys-exit"),
+    pytest.param(["equations", "exits_in_build.py"], ["exits_in_build.py:5", "sys.exit(4)", "return"],
+                 id="build-calls-sys-exit"),
+    pytest.param(["params", "twice.py"], ["'k'", "declared twice", "once"], id="parameter-declared-twice"),
+    pytest.param(["params", "badname.py"], ["'1k'", "identifier"], id="parameter-name-not-identifier"),
+    pytest.param(["params", "textparam.py"], ["'mode'", "choices"], id="text-parameter-without-choices"),
+    pytest.param(["equations", "recursion.py"], ["recursion.py:4", "RecursionError"], id="build-recurses-forever"),
+    pytest.param(["params", "empty.py"], ["empty.py", "PARAMETERS"], id="empty-model-file"),
+    pytest.param(["params", "returns_none.py"], ["Model", "NoneType"], id="build-returns-none"),
+    pytest.param(["simulate", "badexpinput.py"], ["'W'", "V"], id="EXPERIMENT-drives-unknown-input"),
+    pytest.param(["linearize", "noio.py"], ["declares no input"], id="linearize-model-without-input"),
+    pytest.param(["fit", "noio.py", "data.csv", "--params", "k"], ["declares no input"], id="fit-model-without-input"),
+    # ---- degenerate and out-of-range parameter values ---------------------------------------------
+    pytest.param(["simulate", "good.py", "--set", "m=0", "--out", "r.csv"], ["m=0", "divide by zero", "physical value"],
+                 id="simulate-mass-zero"),
+    pytest.param(["simulate", "good.py", "--set", "m=1e-300", "--out", "r.csv"], ["m=1e-300", "time constant"],
+                 id="simulate-mass-1e-300"),
+    pytest.param(["linearize", "good.py", "--set", "m=0"], ["m=0", "not finite"], id="linearize-mass-zero"),
+    pytest.param(["linearize", "good.py", "--set", "m=1e-300"], ["m=1e-300"], id="linearize-mass-1e-300"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--set", "m=0"], ["m=0"], id="fit-mass-zero"),
+    pytest.param(["simulate", "good.py", "--set", "k=1e400"], ["'1e400'", "'k'", "finite"], id="set-overflows-to-inf"),
+    pytest.param(["params", "good.py", "--set", "zeta=2"], ["'zeta'", "outside its bounds [0.0, 1.0]"],
+                 id="set-real-out-of-bounds"),
+    pytest.param(["params", "good.py", "--set", "layers=0"], ["'layers'", "outside its bounds [1, 100]"],
+                 id="set-int-out-of-bounds"),
+    pytest.param(["params", "good.py", "--set", "k=1", "--set", "k=2"], ["--set k given twice", "once"],
+                 id="set-same-name-twice"),
+    # ---- parameter files: more --------------------------------------------------------------------
+    pytest.param(["params", "good.py", "--params-file", "dup_key.json"], ["dup_key.json", "'k'", "twice"],
+                 id="params-file-duplicate-name"),
+    pytest.param(["params", "good.py", "--params-file", "null.json"], ["null.json", "'k'", "null"],
+                 id="params-file-null-value"),
+    pytest.param(["params", "good.py", "--params-file", "params_list.json"], ["'params'", "object"],
+                 id="params-file-params-not-object"),
+    pytest.param(["simulate", "good.py", "--params-file", "bad_offset.json"], ["'offset'", "finite number"],
+                 id="params-file-offset-not-number"),
+    pytest.param(["simulate", "good.py", "--params-file", "offset_elsewhere.json"], ["output 'y'", "x"],
+                 id="params-file-offset-for-unknown-output"),
+    pytest.param(["params", "good.py", "--params-file", "bounds.json"], ["'zeta'", "bounds"],
+                 id="params-file-value-out-of-bounds"),
+    pytest.param(["params", "good.py", "--params-file", "params_dir.json"], ["params_dir.json", "directory"],
+                 id="params-file-is-a-directory"),
+    # ---- output paths: checked before any work, nothing written -------------------------------------
+    pytest.param(["simulate", "good.py", "--out", "r.csv", "--plot", "no/such/p.png"],
+                 ["--plot no/such/p.png", "does not exist", "create it"], id="plot-into-missing-directory"),
+    pytest.param(["simulate", "good.py", "--out", "subdir"], ["--out subdir", "is a directory", "file name"],
+                 id="out-is-a-directory"),
+    pytest.param(["simulate", "good.py", "--plot", "p.txt"], ["--plot p.txt", "'.txt'", ".png"],
+                 id="plot-unknown-format"),
+    pytest.param(["simulate", "good.py", "--plot", "p"], ["--plot p", ".png"], id="plot-without-suffix"),
+    pytest.param(["simulate", "good.py", "--out", "r.png", "--plot", "r.png"], ["r.png", "same file"],
+                 id="out-and-plot-same-file"),
+    pytest.param(["simulate", "good.py", "--out", "good.py"], ["--out good.py", "overwrite the input file"],
+                 id="out-overwrites-the-model-file"),
+    pytest.param(["simulate", "good.py", "--input", "V=csv(file=data.csv, column=V)", "--out", "data.csv"],
+                 ["--out data.csv", "overwrite the input"], id="out-overwrites-a-csv-input"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--out", "data.csv"],
+                 ["--out data.csv", "overwrite the input"], id="fit-out-overwrites-the-data"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--out", "f.json", "--params-file", "f.json"],
+                 ["--out f.json", "overwrite the input file f.json"], id="fit-out-overwrites-the-params-file"),
+    pytest.param(["simulate", "raises.py", "--out", "no/dir/r.csv"], ["--out no/dir/r.csv", "does not exist"],
+                 id="output-checked-before-the-model-is-built"),
+    pytest.param(["simulate", "good.py", "--out", ""], ["--out", "empty file name"], id="out-empty-name"),
+    pytest.param(["equations", "good.py", "--out", "no/dir/eq.txt"], ["--out no/dir/eq.txt", "does not exist"],
+                 id="equations-out-missing-directory"),
+    pytest.param(["causality", "good.py", "--plot", "no/dir/bg.png"], ["--plot no/dir/bg.png", "does not exist"],
+                 id="causality-plot-missing-directory"),
+    pytest.param(["linearize", "good.py", "--bode", "no/dir/b.csv"], ["--bode no/dir/b.csv", "does not exist"],
+                 id="linearize-bode-missing-directory"),
+    pytest.param(["linearize", "good.py", "--plot", "b.jpeg"], ["--plot b.jpeg", "'.jpeg'"],
+                 id="linearize-plot-unknown-format"),
+    pytest.param(["linearize", "good.py", "--out", "no/dir/lin.py"], ["--out no/dir/lin.py", "does not exist"],
+                 id="linearize-out-missing-directory"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--plot", "f.gif"], ["--plot f.gif", "'.gif'"],
+                 id="fit-plot-unknown-format"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--out", "no/dir/f.json"],
+                 ["--out no/dir/f.json", "does not exist"], id="fit-out-missing-directory"),
+    pytest.param(["diagnose", "good.py", "data.csv", "--plot", "no/dir/d.png"], ["--plot no/dir/d.png", "does not exist"],
+                 id="diagnose-plot-missing-directory"),
+    # ---- measured inputs of simulate --------------------------------------------------------------
+    pytest.param(["simulate", "good.py", "--input", "V=csv(file=data.csv, column=V)", "--t-end", "5"],
+                 ["--t-end 5", "beyond the end of the input data", "0.059", "shorten --t-end"],
+                 id="t-end-beyond-the-csv-input"),
+    pytest.param(["simulate", "good.py", "--input", "V=csv(file=data.csv, column=Q)"], ["data.csv", "'Q'"],
+                 id="csv-input-unknown-column"),
+    pytest.param(["simulate", "good.py", "--input", "V=csv(column=V)"], ["csv(file=PATH, column=NAME)"],
+                 id="csv-input-without-file"),
+    pytest.param(["simulate", "good.py", "--input", "V=1", "--input", "V=2"], ["--input V given twice", "once"],
+                 id="input-given-twice"),
+    pytest.param(["simulate", "good.py", "--input", "=1"], ["--input '=1'", "NAME=SIGNAL"], id="input-empty-name"),
+    # ---- tolerances and counts --------------------------------------------------------------------
+    pytest.param(["simulate", "good.py", "--rtol", "0"], ["--rtol", "between 0 and 1"], id="rtol-zero"),
+    pytest.param(["simulate", "good.py", "--rtol", "2"], ["--rtol", "between 0 and 1"], id="rtol-above-one"),
+    pytest.param(["simulate", "good.py", "--rtol", "nan"], ["--rtol", "between 0 and 1"], id="rtol-nan"),
+    pytest.param(["simulate", "good.py", "--atol", "-1"], ["--atol", "positive"], id="atol-negative"),
+    pytest.param(["simulate", "good.py", "--t-end", "0"], ["t_end=0"], id="zero-t-end"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--starts", "0"], ["--starts", "at least 1"],
+                 id="fit-starts-zero"),
+    pytest.param(["diagnose", "good.py", "data.csv", "--workers", "0"], ["--workers", "at least 1"],
+                 id="diagnose-workers-zero"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--validation", "0"], ["--validation", "between 0 and 1"],
+                 id="fit-validation-zero"),
+    pytest.param(["diagnose", "good.py", "data.csv", "--validation", "1.5"], ["--validation", "between 0 and 1"],
+                 id="diagnose-validation-above-one"),
+    # ---- fit ---------------------------------------------------------------------------------------
+    pytest.param(["fit", "good.py", "data.csv"], ["give the parameters to fit", "--params"], id="fit-without-params"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "kk"], ["'kk'", "did you mean 'k'"],
+                 id="fit-unknown-parameter"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k,k"], ["k listed twice", "once"],
+                 id="fit-parameter-listed-twice"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "lumped"], ["'lumped'", "true or false",
+                                                                         "only real-valued"],
+                 id="fit-boolean-parameter"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--split", "random"], ["'random'", "blocks"],
+                 id="fit-unknown-split"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--loss", "l3"], ["'l3'", "soft_l1"],
+                 id="fit-unknown-loss"),
+    pytest.param(["fit", "good.py", "missing.csv", "--params", "k"], ["missing.csv"], id="fit-data-file-missing"),
+    pytest.param(["fit", "good.py", "data_no_x.csv", "--params", "k"], ["data_no_x.csv", "'x'", "--output"],
+                 id="fit-data-without-output-column"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--input", "Vin"], ["data.csv", "'Vin'"],
+                 id="fit-data-input-column-missing"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--model-input", "W"], ["'W'", "V"],
+                 id="fit-unknown-model-input"),
+    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--model-output", "y"], ["'y'", "x"],
+                 id="fit-unknown-model-output"),
+    pytest.param(["fit", "good.py", "data_nan.csv", "--params", "k"], ["data_nan.csv:3", "nan"], id="fit-data-nan"),
+    pytest.param(["fit", "good.py", "data_decreasing.csv", "--params", "k"], ["data_decreasing.csv", "increasing"],
+                 id="fit-data-time-decreasing"),
+    pytest.param(["fit", "good.py", "data_text.csv", "--params", "k"], ["data_text.csv:3", "abc"],
+                 id="fit-data-non-numeric-cell"),
+    pytest.param(["fit", "good.py", "data_header_only.csv", "--params", "k"], ["data_header_only.csv"],
+                 id="fit-data-header-only"),
+    pytest.param(["fit", "good.py", "data_empty.csv", "--params", "k"], ["data_empty.csv", "empty"],
+                 id="fit-data-empty-file"),
+    pytest.param(["diagnose", "good.py", "missing.csv"], ["missing.csv"], id="diagnose-data-file-missing"),
+    # ---- linearize -------------------------------------------------------------------------------------
+    pytest.param(["linearize", "good.py", "--json", "--format", "python-control"], ["--json", "contradict"],
+                 id="linearize-json-and-python-control"),
+    pytest.param(["linearize", "good.py", "--format", "matlab"], ["'matlab'", "python-control"],
+                 id="linearize-unknown-format"),
+    # ---- options after the subcommand -----------------------------------------------------------------
+    pytest.param(["params", "good.py", "--set", "kk=2", "--no-debug"], ["--no-debug"], id="unknown-option-near-debug"),
+    pytest.param(["equations", "--format", "latex"], ["MODEL", "required"], id="equations-without-model"),
+    pytest.param(["fit", "good.py"], ["DATA", "required"], id="fit-without-data"),
 ]
+
 
 
 @pytest.fixture
 def workdir(tmp_path, monkeypatch):
     for name, text in FILES.items():
-        (tmp_path / name).write_text(text, encoding="utf-8")
+        if text is None:
+            (tmp_path / name.rstrip("/")).mkdir()
+        else:
+            (tmp_path / name).write_text(text, encoding="utf-8")
     (tmp_path / "binary.py").write_bytes(BINARY)
     (tmp_path / "subdir").mkdir()
     monkeypatch.chdir(tmp_path)
@@ -303,11 +492,32 @@ def check_one_error_line(rc, out, err, needles):
             assert needle in line, f"{needle!r} not in {line!r}"
 
 
+def snapshot(directory):
+    """Every file below ``directory`` with its size, modification time and content hash."""
+    import hashlib
+    out = {}
+    for root, dirs, files in os.walk(directory):
+        for name in dirs + files:
+            p = os.path.join(root, name)
+            st = os.stat(p)
+            digest = hashlib.sha1(open(p, "rb").read()).hexdigest() if os.path.isfile(p) else "dir"
+            out[os.path.relpath(p, directory)] = (st.st_size, st.st_mtime_ns, digest)
+    return out
+
+
 @pytest.mark.parametrize("argv, needles", CASES)
 def test_bad_input_is_one_error_line_and_exit_2(argv, needles, workdir, capsys):
+    before = snapshot(workdir)
     rc, out, err = run_cli(argv, capsys)
     check_one_error_line(rc, out, err, needles)
-    assert not [p for p in os.listdir(workdir) if p.endswith(".tmp") or p.endswith(".csv")]
+    after = snapshot(workdir)
+    assert after == before, f"files changed: {sorted(set(after.items()) ^ set(before.items()))}"
+
+
+def test_the_table_has_the_promised_size():
+    assert len(CASES) >= 116
+    ids = [c.id for c in CASES]
+    assert len(ids) == len(set(ids)), "case ids are unique"
 
 
 def test_the_good_model_runs(workdir, capsys):
@@ -340,7 +550,7 @@ def test_real_processes_exit_2_without_traceback(workdir):
     assert not (workdir / "never.csv").exists()
 
 
-# ---- --out: nothing on failure, the CONTRACT CSV on success --------------------------------------------
+# ---- --out: nothing on failure, the documented CSV on success --------------------------------------------
 @pytest.mark.parametrize("argv", [
     pytest.param(["simulate", "conflict.py"], id="causal-conflict"),
     pytest.param(["simulate", "typo_elem.py"], id="model-error"),
@@ -370,12 +580,12 @@ def test_out_into_a_missing_directory_is_an_input_error(workdir, capsys):
     assert not (workdir / "no").exists()
 
 
-def test_simulate_out_writes_the_contract_csv(workdir, capsys):
+def test_simulate_out_writes_the_documented_csv(workdir, capsys):
     rc, out, err = run_cli(["simulate", "good.py", "--out", "result.csv", "--quiet", "--states",
                             "--set", "k=400", "--t-end", "0.02", "--dt", "0.001"], capsys)
     assert rc == 0, err
     assert err == "" and out == ""
-    assert sorted(os.listdir(workdir)) == sorted([*FILES, "binary.py", "subdir", "result.csv"])
+    assert sorted(os.listdir(workdir)) == sorted([*(f.rstrip("/") for f in FILES), "binary.py", "subdir", "result.csv"])
     text = (workdir / "result.csv").read_text(encoding="utf-8")
     lines = text.splitlines()
     comments = [ln for ln in lines if ln.startswith("#")]

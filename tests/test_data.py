@@ -504,3 +504,28 @@ def test_resample_interpolates_onto_uniform_grid():
     r = ds.resample(1e-3)
     assert r.is_uniform and r.t[0] == t[0] and r.t[-1] <= t[-1]
     np.testing.assert_allclose(r.output(), 2 * r.t + 1, rtol=1e-12)
+
+
+# --------------------------------------------------------------------------- one definition of uniform sampling
+
+
+def test_uniform_sampling_has_one_definition_and_a_config_tolerance():
+    from bondgraph import config, identify
+    from bondgraph.data import uniform_step
+
+    assert identify.uniform_step is uniform_step
+    t = np.cumsum(np.r_[0, np.tile([1.0, 1.01], 50)])  # steps 0.5 % from the mean
+    ds = Dataset(t, {"x": np.zeros_like(t)})
+    assert ds.is_uniform and uniform_step(t) == pytest.approx(1.005)
+    with config.override({"data.uniform_rtol": 1e-3}):
+        assert not ds.is_uniform and uniform_step(t) is None
+
+
+def test_unit_checks_of_the_physics_come_from_installed_libraries():
+    from bondgraph.data.checks import installed_checks
+    from library.data_checks import displacement_in_metres
+
+    assert displacement_in_metres in installed_checks()
+    ds = Dataset([0.0, 1.0, 2.0], {"V": [0.0, 1.0, 2.0], "x": [0.0, 3.0, 6.0]})
+    assert len(displacement_in_metres(ds)) == 1
+    assert not displacement_in_metres(Dataset([0.0, 1.0], {"V": [0.0, 100.0]}))

@@ -1,4 +1,4 @@
-"""Every model file of the contract runs through every CLI command."""
+"""Every model file in models/ runs through every CLI command."""
 import json
 
 import pytest
@@ -10,8 +10,9 @@ from conftest import MODELS
 MODEL_FILES = sorted(p.name for p in MODELS.glob("*.py"))
 
 
-def test_contract_model_files_exist():
-    for name in ("apa120ml.py", "stack.py", "bimorph_t215.py", "bimorph_t226.py", "triangular_drive.py"):
+def test_model_files_exist():
+    for name in ("apa120ml.py", "stack.py", "bimorph_t215.py", "bimorph_t226.py", "triangular_drive.py",
+                 "bender_highfield.py"):
         assert name in MODEL_FILES
 
 
@@ -44,3 +45,15 @@ def test_every_command_runs(name, tmp_path, capsys):
 def test_apa_hysteresis_options_simulate(setting, tmp_path):
     assert main(["simulate", str(MODELS / "apa120ml.py"), "--set", setting, "--quiet",
                  "--out", str(tmp_path / "o.csv")]) == 0
+
+
+def test_readme_images_exist_and_are_small():
+    """Every image the README shows is committed in docs/img and stays under 100 kB."""
+    import re
+    from conftest import ROOT
+    shown = re.findall(r"!\[[^\]]*\]\((docs/img/[^)]+\.png)\)", (ROOT / "README.md").read_text())
+    assert len(shown) >= 6
+    for rel in shown:
+        path = ROOT / rel
+        assert path.exists(), rel
+        assert path.stat().st_size < 100_000, rel

@@ -1,4 +1,4 @@
-"""Seed 002 (Rodriguez-Fortun et al. 2010): layers, stacks, the APA-120ML."""
+"""Rodriguez-Fortun et al. 2010, (Rodriguez-Fortun et al. 2010): layers, stacks, the APA-120ML."""
 import numpy as np
 import pytest
 import sympy as sp
@@ -71,7 +71,7 @@ def test_lumped_and_n_layer_stack_agree_quasi_statically():
 
 
 def test_lumped_stack_equations_match_eq14():
-    """Compare the printed state equations of the lumped stack with seed 002 eq. (14):
+    """Compare the printed state equations of the lumped stack with Rodriguez-Fortun et al. 2010, eq. (14):
     Ve = i·Re + V, V = (E2 − E3)·l, E2 = p/C_NL, ṗ = i·l, E3·l = a·F1, F1 = K_NL·(x − a·p/l),
     F = M·ẍ + K_NL·(x − a·p/l) + c·ẋ.  Our states are p, the spring compression
     s = a·p/l − x and the momentum P = M·ẋ."""

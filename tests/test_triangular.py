@@ -1,10 +1,12 @@
-"""Triangular-based piezoelectric drive (seed 004, Hassani & Tjahjowidodo 2013):
+"""Triangular-based piezoelectric drive of Hassani & Tjahjowidodo, "Structural response
+investigation of a triangular-based piezoelectric drive mechanism to hysteresis effect of the
+piezoelectric actuator", Mechanical Systems and Signal Processing 36 (2013):
 library.triangular and models/triangular_drive.py.
 
 The reference values come from a hand derivation of the lumped linear model, written out
 here independently of the framework (no ``linearize``, no library formulas):
 
-* stack i (seed-002 'model 1', open-circuit stiffness K = K_i/(1 − k33²), free capacitance
+* stack i ('model 1' of Rodriguez-Fortun et al. 2010, open-circuit stiffness K = K_i/(1 − k33²), free capacitance
   C^T = N·ε33^T·A/h, free stroke per charge a = N·d33/C^T, N = l/h) behind the amplifier
   resistance Re, elongation δ_i, charge Q_i:
       V_i = jω·Re·Q_i − K·a·(δ_i − a·Q_i) + Q_i/C^T,   F_i = K·(a·Q_i − δ_i) − jω·c_s·δ_i
@@ -33,7 +35,12 @@ from bondgraph.cli import main
 from bondgraph.data import read_csv
 from bondgraph.modelfile import load_model
 from conftest import MODELS
-from library.triangular import static_tip_displacement
+from bondgraph.errors import ModelError
+from bondgraph.modelfile import read_model_module
+from library.identification import fit_pi
+from library.triangular import ellipse_axes as phasor_ellipse
+from library.triangular import (MeasuredStroke, contact_displacement, static_tip_displacement,
+                                stiffness_ratio, tip_displacement)
 
 TRI = str(MODELS / "triangular_drive.py")
 A = 50.0  # V, drive amplitude of the default EXPERIMENT
@@ -166,7 +173,7 @@ def test_other_stack_angle_and_the_layer_formulation_match_the_analytic_ellipse(
 
 def test_quasi_static_tip_amplitudes_follow_the_free_stroke_mapping(field):
     """5 Hz, phase 90: x = (U1 − U2)/(√2·(1 + r_x)), y = (U1 + U2)/(√2·(1 + r_y)) with
-    U = d33·(V/h)·l and r_x = k_x/K_i, r_y = k_y/K_i (seed 004 eqs. 3-5, 17 at γl → 0); with
+    U = d33·(V/h)·l and r_x = k_x/K_i, r_y = k_y/K_i (eqs. 3-5, 17 at γl → 0); with
     a body of no stiffness the tip follows the stacks' free strokes, |x| = |y| = U."""
     sim, p = field
     K_i, _, _, _, U_per_V = stack_numbers(p)
@@ -189,7 +196,7 @@ def test_quasi_static_tip_amplitudes_follow_the_free_stroke_mapping(field):
         assert np.max(np.abs((d1 + d2) / math.sqrt(2) - y)) < 1e-9 * y_amp
 
 
-# ---- the seed-002 layer formulation agrees with the C-field -------------------------------------
+# ---- the three-domain layer formulation agrees with the C-field -------------------------------------
 def test_piezo_layer_formulation_matches_the_field_formulation(field):
     sim, p = field
     layers = bg.Simulator(load_model(TRI, {"formulation": "layers"}).model)
@@ -261,3 +268,120 @@ def test_cli_linearize_json_against_the_analytic_poles_and_gain(capsys):
     np.testing.assert_allclose(lay["natural_frequencies_rad_s"], wn, rtol=1e-6)
     nonzero = np.array([complex(*z) for z in lay["poles"] if abs(complex(*z)) > 1e-3])
     assert np.max(np.abs(np.sort_complex(nonzero) - expect) / np.abs(expect)) < 1e-6
+
+
+# ---- eq. 17: the stack against the structure's dynamic stiffness -------------------------------------
+def test_eq17_against_a_finite_difference_wave_solution():
+    """Eq. 17, u(l) = U/(γl·cot γl + r(ω)), against an independent route: the axial wave equation
+    u'' + γ²u = 0 on a 2000-cell grid with u(0) = 0 and the head condition of eqs. 12-15,
+    u'(l) + (s33^E·K_e(ω)/A)·u(l) = d33·E (second-order one-sided difference), at frequencies where
+    γl is far from small (10, 20, 30 kHz) and the structure's resonance matters."""
+    rho, s33E, A, l, d33, E = 7800.0, 20.7e-12, 1e-4, 36e-3, 400e-12, 50.0 / 60e-6
+    K_i = A / (l * s33E)
+    body = dict(k_e=5e7, m_e=0.05, zeta=0.03)
+    for f in (10e3, 20e3, 30e3):
+        w = 2 * math.pi * f
+        gamma = w * math.sqrt(rho * s33E)
+        n = 2000
+        h = l / n
+        M = np.zeros((n + 1, n + 1), complex)
+        b = np.zeros(n + 1, complex)
+        M[0, 0] = 1.0
+        for i in range(1, n):
+            M[i, i - 1], M[i, i], M[i, i + 1] = 1 / h ** 2, -2 / h ** 2 + gamma ** 2, 1 / h ** 2
+        Ke = stiffness_ratio(w, K_i=K_i, **body) * K_i
+        M[n, n - 2], M[n, n - 1], M[n, n] = 1 / (2 * h), -4 / (2 * h), 3 / (2 * h) + s33E * Ke / A
+        b[n] = d33 * E
+        u_fd = np.linalg.solve(M, b)[n]
+        u_17 = contact_displacement(w, d33 * E * l, K_i=K_i, rho=rho, s33E=s33E, length=l, **body)
+        print(f"{f:g} Hz: gamma l = {gamma * l:.3f}, eq. 17 {abs(u_17):.4e} m, wave grid {abs(u_fd):.4e} m")
+        assert abs(u_17 / u_fd - 1) < 1e-5
+
+
+def _phasors(x, y):
+    """First-harmonic phasors of x and y over whole periods (uniform samples)."""
+    k = np.arange(x.size)
+    e = np.exp(-2j * np.pi * k / (x.size // 2))     # two periods in the window
+    return 2 * np.mean((x - x.mean()) * e).conjugate(), 2 * np.mean((y - y.mean()) * e).conjugate()
+
+
+@pytest.mark.parametrize("stroke", ["constitutive", "measured"])
+def test_ellipse_versus_frequency_matches_eq17(stroke):
+    """Sec. 4.3 and Fig. 11: the 90° ellipse at 5 Hz and 100 Hz. With the constitutive stroke it is
+    the same at both; with the measured stroke (eqs. 18-19) it shrinks as the stroke does, by
+    U(100 Hz)/U(5 Hz) = 5.5/13.4. Simulated axes against (a) eq. 17 for the pair
+    (library.triangular.tip_displacement, wave term γl·cot γl) and (b) the hand-derived lumped
+    model of this file, with the effective d33 = U_meas/(E·l)."""
+    mod, _ = read_model_module(TRI)
+    axes = {}
+    for f in (5.0, 100.0):
+        lm = load_model(TRI, {"stroke": stroke, "drive_frequency": f})
+        p = dict(lm.model.values)
+        r, keep = run(bg.Simulator(lm.model), p, f, periods=2, n=400, settle=0.02)
+        sim_axes = ellipse_axes(r["x"][keep], r["y"][keep])[0]
+        K_i, _, _, _, U_per_V = stack_numbers(p)
+        if stroke == "measured":
+            U_per_V = mod.MEASURED_STROKE.per_volt(f)
+        w = 2 * math.pi * f
+        X, Y = tip_displacement(U_per_V * A, U_per_V * A * 1j, omega=w, K_i=K_i, k_x=p["k_x"], k_y=p["k_y"],
+                                m_x=p["m_x"], m_y=p["m_y"], c_x=p["c_x"], c_y=p["c_y"], rho=p["rho"],
+                                s33E=p["s33E"], length=p["length"], half_angle=p["half_angle"])
+        eq17 = phasor_ellipse(X, Y)
+        lumped = analytic_axes({**p, "d33": U_per_V * p["h"] / p["length"]}, f, 90.0)
+        print(f"{stroke} {f:g} Hz: simulated {sim_axes * 1e6} um, eq. 17 {eq17 * 1e6}, lumped {lumped * 1e6}")
+        np.testing.assert_allclose(sim_axes, lumped, rtol=1e-5)
+        np.testing.assert_allclose(sim_axes, eq17, rtol=2e-3)   # amplifier and coupling terms
+        axes[f] = sim_axes
+    ratio = axes[100.0] / axes[5.0]
+    expect = 5.5 / 13.4 if stroke == "measured" else 1.0
+    np.testing.assert_allclose(ratio, expect, rtol=1e-3)
+    if stroke == "measured":   # the numbers of the model file's docstring
+        np.testing.assert_allclose(axes[5.0] * 1e6, [12.50, 10.05], atol=0.01)
+        np.testing.assert_allclose(axes[100.0] * 1e6, [5.13, 4.13], atol=0.01)
+
+
+def test_measured_stroke_table():
+    """Sec. 4.2: 36.7 um at the stack's 120 V maximum, i.e. 15.3 um per 50 V at 5 Hz; Table 5's
+    decoded 13.4 -> 5.5 um fall to 100 Hz; log-log interpolation; no extrapolation."""
+    mod, _ = read_model_module(TRI)
+    ms = mod.MEASURED_STROKE
+    assert ms.amplitude(5.0) == pytest.approx(15.29e-6, rel=1e-3)
+    assert ms.amplitude(100.0) / ms.amplitude(5.0) == pytest.approx(5.5 / 13.4)
+    slope = math.log(ms.amplitude(50.0) / ms.amplitude(10.0)) / math.log(5.0)
+    assert slope == pytest.approx(math.log(5.5 / 13.4) / math.log(20.0))
+    with pytest.raises(ModelError, match="outside the measured"):
+        ms.amplitude(150.0)
+    with pytest.raises(ModelError):
+        MeasuredStroke((5.0, 5.0), (1e-6, 1e-6), 50.0)
+    assert main(["params", TRI, "--set", "drive_frequency=300"]) == 2
+
+
+def test_hysteretic_stroke_loop_from_the_p885_record(capsys):
+    """The hysteretic stroke option (eq. 18) uses the loop shape identified on the real P-885
+    record: re-derive the normalised weights, then check the drive: at 5 Hz the tip motion is no
+    longer an ellipse and stack 1's stroke traces a loop against its drive voltage."""
+    from bondgraph.data import read_csv
+    from conftest import ROOT
+    mod, _ = read_model_module(TRI)
+    ds = read_csv(ROOT / "tests" / "data" / "p885_bursts.csv")
+    train = ds.t < 25.0
+    V, x = ds.columns["V"][train], ds.columns["x"][train]
+    pi, _ = fit_pi(V, x, n=6)
+    span = float(np.ptp(V))
+    u = np.r_[np.linspace(0, 1, 201), np.linspace(1, 0, 201)[1:]]
+    loop = type(pi)(pi.thresholds / span, pi.weights).run(np.r_[u, u])
+    np.testing.assert_allclose(pi.weights / np.ptp(loop[401:]), mod.HYSTERESIS_WEIGHTS, rtol=2e-3, atol=1e-4)
+    np.testing.assert_allclose(mod.HYSTERESIS_THRESHOLDS, 100.0 * pi.thresholds / span, rtol=1e-12)
+    lm = load_model(TRI, {"stroke": "hysteretic", "drive_frequency": 5.0})
+    p = dict(lm.model.values)
+    r, keep = run(bg.Simulator(lm.model), p, 5.0, periods=1, n=400, settle=0.4)
+    x1, y1 = r["x"][keep], r["y"][keep]
+    X, Y = _phasors(np.r_[x1, x1], np.r_[y1, y1])
+    k = np.arange(x1.size)
+    fit_x = x1.mean() + np.real(X * np.exp(2j * np.pi * k / x1.size))
+    assert np.max(np.abs(x1 - fit_x)) > 0.02 * np.ptp(x1)          # harmonics: not an ellipse
+    d1, v1 = r["delta1"][keep], r["V"][keep]
+    up = np.argsort(v1)
+    assert np.ptp(d1) > 0 and abs(np.corrcoef(v1, d1)[0, 1]) < 0.999  # a loop, not a line
+    out = cli(capsys, "equations", TRI, "--set", "stroke=hysteretic")
+    assert "H1" in out and "H2" in out

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -43,34 +42,56 @@ def command(name: str, help: str, args: list):
 
 MODEL_ARGS = [
     arg("model", metavar="MODEL", help="model file (.py)"),
-    arg("--set", metavar="NAME=VALUE", action="append", default=[], help="override a parameter (repeatable)"),
-    arg("--params-file", metavar="FILE.json", help="parameter values, e.g. from 'bondgraph fit'"),
+    arg("--set", metavar="NAME=VALUE", action="append", default=[],
+        help="override a parameter (repeatable; each name at most once)"),
+    arg("--params-file", metavar="FILE.json", help="parameter values, e.g. the fit file of 'bondgraph fit' "
+                                                   "(its output offset is applied too); --set overrides it"),
 ]
 
 DATA_ARGS = [
-    arg("data", metavar="DATA", help="measured data (CSV: t, V, x)"),
-    arg("--input", metavar="COL", help="data column that drives the model (default: the model input name)"),
-    arg("--output", metavar="COL", help="data column to compare with the model output"),
-    arg("--model-input", default="V", help="model input (default V)"),
-    arg("--model-output", default="x", help="model output (default x)"),
+    arg("data", metavar="DATA", help="measured data: CSV with a header line, time column t in s"),
+    arg("--input", metavar="COL", help="data column that drives the model (default: the column named like "
+                                       "the model input)"),
+    arg("--output", metavar="COL", help="data column to compare with the model output (default: the column "
+                                        "named like the model output)"),
+    arg("--model-input", metavar="NAME", help="model input driven by the data (default: the model's first input)"),
+    arg("--model-output", metavar="NAME", help="model output compared with the data (default: the model's "
+                                               "first output)"),
     arg("--validation", type=float, default=0.3, help="share of the data held out (default 0.3)"),
 ]
 
+QUIET_ARG = arg("--quiet", action="store_true", help="no progress or summary on stderr")
+
+#: figure formats that --plot options accept
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+
 
 def load(args):
-    """The model file of ``args`` built with ``--params-file`` and ``--set`` applied."""
-    from ..modelfile import load_model
-    from ..parameters import parse_assignments, read_params_file
+    """The model file of ``args`` built with ``--params-file`` and ``--set`` applied.
 
-    overrides = {}
+    Also fills in ``args.model_input``/``args.model_output`` (when the command has them and
+    they were not given) with the model's first declared input and output."""
+    from ..modelfile import load_model
+    from ..parameters import parse_assignments, read_fit_file
+
+    overrides, offsets = {}, {}
     if args.params_file:
-        overrides.update(read_params_file(args.params_file))
+        overrides, offsets = read_fit_file(args.params_file)
     overrides.update(parse_assignments(args.set))
-    return load_model(args.model, overrides)
+    lm = load_model(args.model, overrides)
+    lm.offsets = offsets
+    for attr, declared, what in (("model_input", lm.model.inputs, "input"),
+                                 ("model_output", lm.model.outputs, "output")):
+        if hasattr(args, attr) and getattr(args, attr) is None:
+            if not declared:
+                raise UsageError(f"model {args.model} declares no {what}; a command on measured data needs one")
+            setattr(args, attr, next(iter(declared)))
+    return lm
 
 
 def read_data(args):
-    """The measured data of ``args``, with ``--input``/``--output`` mapped to the model's names."""
+    """The measured data of ``args``, with ``--input``/``--output`` mapped to the model's names
+    (call :func:`load` first: it resolves the model's input and output names)."""
     from ..data import read_csv
 
     rename = {}
@@ -81,42 +102,67 @@ def read_data(args):
     return read_csv(args.data, required=("t", args.model_input, args.model_output), rename=rename or None)
 
 
-def write_text(path: str | None, text: str):
-    """Write ``text`` to ``path`` atomically, or to stdout when no path is given."""
-    if path:
+def outputs(args, *dests: str, inputs=()):
+    """An :class:`~bondgraph.atomic.Outputs` with the output options ``dests`` of ``args``
+    (e.g. ``"out", "plot"``) checked now, before any work: directory exists and is writable,
+    not an input file of the run, not given twice, a figure format for ``plot``, matplotlib
+    installed for figures.  ``inputs``: further files the run reads."""
+    from ..atomic import Outputs
+
+    data = getattr(args, "data", None)
+    out = Outputs([getattr(args, "model", None), *(data if isinstance(data, list) else [data]),
+                   getattr(args, "params_file", None), *inputs])
+    try:
+        for dest in dests:
+            path = getattr(args, dest, None)
+            if path is None:
+                continue
+            option = "--" + dest.replace("_", "-")
+            if dest == "plot":
+                need_matplotlib()
+                out.add(path, option, suffixes=PLOT_SUFFIXES)
+            else:
+                out.add(path, option)
+    except BaseException:
+        out.discard()
+        raise
+    return out
+
+
+def need_matplotlib():
+    """UsageError unless matplotlib (the ``plot`` extra) is installed."""
+    import importlib.util
+
+    if importlib.util.find_spec("matplotlib") is None:
+        raise UsageError("plots need matplotlib: pip install 'bondgraph[plot]' (or leave out --plot)")
+
+
+def write_text(path: str | None, text: str, out=None):
+    """Write ``text`` to ``path`` (through the run's :class:`Outputs` ``out`` if given, else
+    atomically on its own), or to stdout when no path is given."""
+    if not path:
+        sys.stdout.write(text)
+    elif out is not None:
+        with out.open(path, "w") as fh:
+            fh.write(text)
+    else:
         from ..atomic import atomic_write
         with atomic_write(path, "w", encoding="utf-8") as fh:
             fh.write(text)
-    else:
-        sys.stdout.write(text)
 
 
-def progress(label: str):
-    """A progress callback (fraction done) printing to stderr once a run has taken more than 2 s."""
-    state = {"t0": time.time(), "last": 0.0, "shown": False}
-
-    def report(fraction: float):
-        now = time.time()
-        if fraction < 1.0 and (now - state["last"] < 0.5 or now - state["t0"] < 2.0):
-            return
-        if fraction >= 1.0 and not state["shown"]:
-            return
-        state["last"], state["shown"] = now, True
-        end = "\n" if fraction >= 1.0 else "\r"
-        print(f"{label}: {100 * fraction:5.1f} %  ({now - state['t0']:.1f} s)", end=end, file=sys.stderr, flush=True)
-    return report
+def progress(label: str, quiet: bool = False):
+    """A :class:`~bondgraph.progress.Progress` for a fraction done (0..1), e.g. for
+    ``Simulator.run(progress=...)``; silent with ``quiet``."""
+    from ..progress import Progress
+    return Progress(label, total=1.0, mode="quiet" if quiet else "auto")
 
 
-def counter(label: str):
-    """A progress callback for iterative work: prints the evaluation count every 2 s."""
-    state = {"t0": time.time(), "last": time.time()}
-
-    def report(count: int):
-        now = time.time()
-        if now - state["last"] >= 2.0:
-            state["last"] = now
-            print(f"{label}: {count} simulations ({now - state['t0']:.0f} s)", file=sys.stderr, flush=True)
-    return report
+def counter(label: str, unit: str = "simulations", quiet: bool = False):
+    """A :class:`~bondgraph.progress.Progress` for a count with no known end, e.g. for
+    ``Identification.fit(progress=...)``; silent with ``quiet``."""
+    from ..progress import Progress
+    return Progress(label, unit=unit, mode="quiet" if quiet else "auto")
 
 
 class Parser(argparse.ArgumentParser):
@@ -124,3 +170,24 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message):
         raise UsageError(f"{self.prog}: {message} (see {self.prog} --help)")
+
+
+def module_constant(module: str, name: str) -> tuple:
+    """A tuple constant of a framework module (``module_constant("bondgraph.simulate",
+    "METHODS")``) read from the module's source without importing it, so argument choices
+    come from the module that defines them while ``--help`` stays fast (no sympy, no numba).
+    Falls back to importing the module if the constant is not a plain top-level literal."""
+    import ast
+    import importlib
+    import importlib.util
+
+    spec = importlib.util.find_spec(module)
+    try:
+        with open(spec.origin, encoding="utf-8") as fh:
+            tree = ast.parse(fh.read())
+        for node in tree.body:
+            if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == name for t in node.targets):
+                return tuple(ast.literal_eval(node.value))
+    except (OSError, TypeError, ValueError, SyntaxError, AttributeError):
+        pass
+    return tuple(getattr(importlib.import_module(module), name))

@@ -14,7 +14,8 @@ from .. import config
 from ..data import Dataset
 from ..equations import derive
 from ..graph import Model
-from ..identify import Identification, check_varies, uniform_step
+from ..data import uniform_step
+from ..identify import Identification, check_varies
 from ..lti import LTI, first_input, first_output
 from ..simulate import Simulator
 

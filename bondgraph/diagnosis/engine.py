@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -142,8 +142,8 @@ def load_candidates() -> list[Candidate]:
 def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | None = None,
              calibrate_first: Sequence[str] | None = None, input: str | None = None, output: str | None = None,
              data_input: str | None = None, data_output: str | None = None, validation: float = 0.3,
-             workers: int = 2, chain: bool = True, progress: Callable[[str], None] | None = None,
-             source: str = "", equations: bool = True) -> Report:
+             workers: int = 2, chain: bool = True, progress=None, source: str = "",
+             equations: bool = True) -> Report:
     """Diagnose what ``model`` misses in ``data`` (see the package docstring).
 
     ``candidates``: the causes to try (default: the installed entry points);
@@ -151,9 +151,12 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     cannot be told apart (e.g. the model file's ``CALIBRATE``); ``input``/``output``: the
     model's (default: its first declared); ``data_input``/``data_output``: the data columns
     (default: the same names); ``workers``: parallel processes; ``chain``: keep naming
-    causes on the extended model until none passes."""
+    causes on the extended model until none passes; ``progress``: a
+    :class:`bondgraph.progress.Progress` (one count per candidate fitted, notes for the
+    stages) or any callable taking a line of text."""
     started = time.time()
-    say = progress or (lambda s: None)
+    say = getattr(progress, "note", None) or progress or (lambda s: None)
+    tick = getattr(progress, "advance", None)
     cands = list(candidates) if candidates is not None else load_candidates()
     ctx = Context(model, data, input, output, data_input, data_output, validation, say)
     state, cal = calibrate(ctx, calibrate_first, say)
@@ -168,7 +171,10 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
             outcomes = {}
             for n, (i, oc) in enumerate(pool.run(state, pending), 1):
                 outcomes[i] = oc
-                say(_line(k + 1, n, len(pending), oc.result))
+                if tick is not None:
+                    tick(status=_line(k + 1, n, len(pending), oc.result))
+                else:
+                    say(_line(k + 1, n, len(pending), oc.result))
             ordered = [outcomes[i] for i in pending]
             step, winner = assess(ctx, state, View(ctx, state, cal.free), ordered)
             steps.append(step)

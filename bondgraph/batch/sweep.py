@@ -1,0 +1,119 @@
+"""Parameter sweeps and Monte Carlo tolerance analysis of a model file's simulation.
+
+    from bondgraph import batch
+    res = batch.sweep("models/apa120ml.py", {"K": "normal(10.77e6, 5%)", "c": "uniform(2500, 3500)"},
+                      draws=1000, seed=1, metrics=["peak(x)", "resonance"])
+    res.table.write("mc.csv"); print(res.text()); res.plot("mc.png")
+
+The runs come from :mod:`~bondgraph.batch.sampling` (reproducible with ``seed``), each one
+simulation of the model's experiment (or ``inputs``/``t_end``/``dt``) with the scalar outputs of
+:mod:`~bondgraph.batch.metrics`; statistics and sensitivities from :mod:`~bondgraph.batch.analysis`.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Mapping, Sequence
+
+from ..errors import UsageError
+from . import analysis
+from .runs import Progress, checked_model, execute, model_io, simulation_options
+from .sampling import Distribution, Grid, default_design, design_points, parse_spec
+from .jobs import Job
+from .table import Table
+
+
+@dataclass
+class SweepResult:
+    """The runs of a sweep (``table``: one row per run, the varied parameters then the metrics)
+    and what produced them."""
+
+    table: Table
+    space: dict
+    design: str
+    metrics: list[str]
+    seed: int | None = None
+    nominal: dict = field(default_factory=dict)
+
+    @property
+    def params(self) -> list[str]:
+        return list(self.space)
+
+    def summary(self) -> list[dict]:
+        return analysis.summary(self.table, self.metrics)
+
+    def sensitivity(self) -> list[dict]:
+        """One ranking per metric (see :func:`bondgraph.batch.analysis.sensitivity`)."""
+        return [analysis.sensitivity(self.table, self.params, m, self.design) for m in self.metrics]
+
+    def as_json(self) -> dict:
+        """Statistics and sensitivities as strict JSON (a missing or non-finite number is null)."""
+        return _finite({"design": self.design, "runs": len(self.table), "failed": len(self.table.failed), "seed": self.seed,
+                "space": {k: str(v) for k, v in self.space.items()}, "nominal": self.nominal,
+                "summary": self.summary(), "sensitivity": self.sensitivity()})
+
+    def text(self) -> str:
+        lines = [f"{self.design} sweep: {len(self.table)} runs, {len(self.table.failed)} failed"
+                 + (f", seed {self.seed}" if self.seed is not None and self.design in ("random", "lhs") else "")]
+        lines += [f"  {k} = {v}" for k, v in self.space.items()]
+        lines += ["", f"  {'metric':<16} {'n':>5} {'mean':>12} {'std':>11} {'min':>12} {'p5':>12} {'median':>12} "
+                      f"{'p95':>12} {'max':>12}"]
+        for s in self.summary():
+            if s["n"]:
+                lines.append(f"  {s['metric']:<16} {s['n']:>5} {s['mean']:>12.5g} {s['std']:>11.4g} {s['min']:>12.5g} "
+                             f"{s['p5']:>12.5g} {s['median']:>12.5g} {s['p95']:>12.5g} {s['max']:>12.5g}")
+            else:
+                lines.append(f"  {s['metric']:<16} {0:>5}  (every run failed)")
+        for sens in self.sensitivity():
+            lines += ["", f"  sensitivity of {sens['metric']} (baseline {sens['baseline']:.5g}"
+                          + (f", linear fit R² {sens['r2']:.3f}" if "r2" in sens else "") + "):"]
+            for r in sens["ranking"]:
+                extra = (f"  SRC {r['src']:+.3f}  Spearman {r['spearman']:+.3f}" if "src" in r else "")
+                lines.append(f"    {r['parameter']:<14} swing {r['swing']:<11.4g} low {r['low']:<12.5g} "
+                             f"high {r['high']:<12.5g}{extra}")
+        return "\n".join(lines) + "\n"
+
+    def plot(self, path: str) -> None:
+        """Histograms of the metrics (top) and tornado plots of their sensitivities (bottom)."""
+        from .plots import plot_sweep
+        plot_sweep(self, path)
+
+
+def sweep(model, space: Mapping[str, str | Distribution | Grid], *, metrics: Sequence[str],
+          design: str | None = None, draws: int | None = None, seed: int | None = None,
+          params: Mapping | None = None, inputs: Mapping | None = None, t_end: float | None = None,
+          dt: float | None = None, method: str | None = None, rtol: float | None = None,
+          input: str | None = None, output: str | None = None, scheduler=None, workers: int | None = None,
+          progress: Progress | None = None, say=None, per_task: int | None = None) -> SweepResult:
+    """Simulate the model at every point of ``design`` over ``space`` (default: ``grid`` when
+    every parameter has grid levels, else ``random`` with ``draws`` draws) and evaluate
+    ``metrics`` on each run."""
+    if not metrics:
+        raise UsageError("give at least one metric, e.g. --metric 'peak(x)'")
+    space = {k: parse_spec(v) if isinstance(v, str) else v for k, v in space.items()}
+    design = design or default_design(space)
+    lm = checked_model(model, params, [space])
+    nominal = {n: _nominal(lm.model, n) for n in space}
+    points = design_points(space, design, draws, seed, nominal)
+    opts = simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol,
+                              *model_io(lm, input, output, required=False))
+    table = execute(opts, [Job(i, tuple(p.items())) for i, p in enumerate(points)], scheduler, workers,
+                    progress, say, per_task)
+    return SweepResult(table, space, design, [m.text for m in opts.metrics], seed, nominal)
+
+
+def _finite(obj):
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def _nominal(model, name: str):
+    if name in model.values:
+        return model.values[name]
+    value = model.parameters[name][1]
+    return float(value) if isinstance(value, (int, float)) and math.isfinite(value) else value

@@ -1,0 +1,101 @@
+"""``bondgraph compensate``: the feedforward drive that makes a model follow a desired output
+(wraps :func:`bondgraph.compensate.feedforward`)."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from ..errors import UsageError
+from .registry import MODEL_ARGS, arg, command, counter, load
+
+
+@command("compensate", "feedforward drive that makes the model's output follow a desired trajectory "
+         "(hysteresis inverted), with the predicted tracking error with and without compensation",
+         MODEL_ARGS + [
+             arg("reference", metavar="REFERENCE", help="desired trajectory (CSV with t and the output column)"),
+             arg("--column", metavar="COL", help="reference column (default: the model output name)"),
+             arg("--model-input", default="V", help="model input to compute (default V)"),
+             arg("--model-output", default="x", help="model output to follow (default x)"),
+             arg("--input", metavar="NAME=SIGNAL", action="append", default=[],
+                 help="drive another model input during the run, as for simulate (default 0)"),
+             arg("--iterations", type=int, default=10,
+                 help="at most this many model simulations refining the drive (default 10)"),
+             arg("--tol", type=float, default=1e-4,
+                 help="stop when the largest error is below this fraction of the reference's range"),
+             arg("--out", metavar="FILE.csv", help="write t, the compensated drive, the reference, the "
+                 "predicted output, the linear-inverse drive and its predicted output (default: stdout)"),
+             arg("--plot", metavar="FILE.png", help="plot reference, predicted outputs and drives"),
+             arg("--json", action="store_true", help="print the summary as JSON on stdout"),
+             arg("--quiet", action="store_true", help="no progress or summary on stderr"),
+         ])
+def run(args):
+    from ..compensate import feedforward
+    from ..data import read_csv, write_csv
+    from ..signals import parse_signal
+
+    if args.iterations < 1:
+        raise UsageError(f"--iterations must be at least 1, got {args.iterations}")
+    if not 0.0 < args.tol < 1.0:
+        raise UsageError(f"--tol must be between 0 and 1, got {args.tol}")
+    lm = load(args)
+    col = args.column or args.model_output
+    ref = read_csv(args.reference, required=("t", col))
+    others = {}
+    for item in args.input:
+        name, sep, spec = item.partition("=")
+        if not sep:
+            raise UsageError(f"bad --input {item!r}: expected NAME=SIGNAL, e.g. F=0")
+        others[name.strip()] = parse_signal(spec, base_dir=str(Path(args.model).parent))
+    res = feedforward(lm.model, ref.t, ref.columns[col], input=args.model_input, output=args.model_output,
+                      inputs=others, iterations=args.iterations, tol=args.tol,
+                      progress=None if args.quiet else counter("compensating"))
+    u, y = args.model_input, args.model_output
+    columns = {u: res.drive, f"{y}_ref": res.reference, f"{y}_pred": res.predicted,
+               f"{u}_linear": res.linear_drive, f"{y}_pred_linear": res.linear_predicted}
+    summary = res.summary()
+    meta = {"model": str(args.model), "reference": str(args.reference), "method": summary["method"],
+            "max_error": repr(summary["max_error"]),
+            "max_error_uncompensated": repr(summary["max_error_uncompensated"])}
+    if args.out:
+        write_csv(args.out, res.t, columns, meta)
+    elif not args.json:
+        print("t," + ",".join(columns))
+        for k in range(res.t.size):
+            print(",".join(repr(float(v)) for v in [res.t[k], *(c[k] for c in columns.values())]))
+    if args.plot:
+        _plot(res, args.plot, u, y, lm.model.name)
+    if args.json:
+        print(json.dumps(summary, indent=1))
+    if not args.quiet:
+        print(f"{summary['method']}: largest tracking error {summary['max_error']:.4g} "
+              f"({100 * summary['relative_error']:.3g} % of the reference's range) with compensation, "
+              f"{summary['max_error_uncompensated']:.4g} ({100 * summary['relative_error_uncompensated']:.3g} %) "
+              f"with the linear inverse: {summary['improvement']:.3g}x less"
+              + (f"; wrote {args.out}" if args.out else "") + (f", {args.plot}" if args.plot else ""),
+              file=sys.stderr)
+
+
+def _plot(res, path: str, u: str, y: str, title: str) -> None:
+    from ..plotting import _pyplot, save
+
+    plt = _pyplot()
+    fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
+    a1.plot(res.t, res.reference, "k", lw=1.6, label="reference")
+    a1.plot(res.t, res.linear_predicted, lw=1.0, label="linear inverse")
+    a1.plot(res.t, res.predicted, "--", lw=1.0, label="compensated")
+    a1.set_ylabel(y)
+    a1.legend(fontsize=8)
+    a2.plot(res.t, res.linear_predicted - res.reference, lw=1.0, label="linear inverse")
+    a2.plot(res.t, res.predicted - res.reference, lw=1.0, label="compensated")
+    a2.set_ylabel(f"{y} error")
+    a2.legend(fontsize=8)
+    a3.plot(res.t, res.linear_drive, lw=1.0, label="linear inverse")
+    a3.plot(res.t, res.drive, lw=1.0, label="compensated")
+    a3.set_ylabel(u)
+    a3.set_xlabel("t (s)")
+    a3.legend(fontsize=8)
+    for a in (a1, a2, a3):
+        a.grid(alpha=0.3)
+    a1.set_title(f"{title}: feedforward compensation")
+    save(fig, path)
