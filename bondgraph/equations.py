@@ -63,11 +63,11 @@ class Equations:
     def state_symbols(self) -> list[sp.Symbol]:
         return [s.symbol for s in self.states]
 
-    def program_values(self) -> dict:
-        """Every program variable as an expression of states, inputs and parameters
-        (operator outputs kept as symbols)."""
+    def program_values(self, roots=None) -> dict:
+        """Every program variable (or those ``roots`` depend on) as an expression of states,
+        inputs and parameters (operator outputs kept as symbols)."""
         full: dict = {}
-        for st in self.program:
+        for st in self.program if roots is None else self.needed(roots)[0]:
             if st.op is None:
                 full[st.var] = st.expr.xreplace(full)
         return full
@@ -119,7 +119,7 @@ class Equations:
             rows.append([g.get(w, sp.Integer(0)) for w in wrt])
         J = sp.Matrix(rows) if rows else sp.zeros(0, len(wrt))
         if inline and any(e.free_symbols & grad.keys() for e in J):
-            J = J.xreplace(self.program_values())
+            J = J.xreplace(self.program_values(list(J)))
         return J
 
 
