@@ -156,6 +156,22 @@ def test_csv_input_spans_the_data_not_the_experiment(work, capsys):
     assert rc == 2 and "beyond the end of the input data" in err and "3.999 s" in err
 
 
+def test_unused_text_column_is_left_out_not_refused(work, capsys):
+    lines = (work / "data.csv").read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    rows = [ln for ln in lines if not ln.startswith("#")]
+    noted = [rows[0] + ",note,stamp"] + [f"{r},{'pause' if k % 500 == 0 else ''},2026-11-23T10:00:{k % 60:02d}"
+                                         for k, r in enumerate(rows[1:])]
+    (work / "noted.csv").write_text("\n".join(head + noted) + "\n")
+    rc, out, err = run(["fit", "osc.py", "noted.csv", "--params", "k", "--quiet"], capsys)
+    assert rc == 0, err
+    rc, out, err = run(["simulate", "osc.py", "--input", "V=csv(file=noted.csv, column=V)", "--quiet", "--t-end", "0.1"],
+                       capsys)
+    assert rc == 0, err
+    rc, out, err = run(["fit", "osc.py", "noted.csv", "--params", "k", "--output", "note"], capsys)
+    assert rc == 2 and "non-numeric cell" in err and "'note'" in err     # a needed text column is still refused
+
+
 # ---- items 4 and 5: nothing replaced unless the whole run succeeded ---------------------------------------
 def test_a_run_failing_at_its_last_step_keeps_the_existing_file(work, capsys, monkeypatch):
     import bondgraph.plotting as plotting
