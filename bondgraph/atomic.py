@@ -50,9 +50,6 @@ __all__ = ["atomic_write", "Outputs", "remove_temporary_files", "COMMIT_LOCK"]
 
 _MODES = {"w", "wt", "wb"}
 
-_LIVE = TEMPORARY  # temporary files not yet moved into place (the interrupt handler removes them)
-
-
 def _create_temp(directory: str, base: str, suffix: str = "") -> tuple[int, str]:
     """Create a new, empty, exclusively-owned temp file next to the target.
 
@@ -67,7 +64,7 @@ def _create_temp(directory: str, base: str, suffix: str = "") -> tuple[int, str]
             fd = os.open(tmp, flags, 0o666)
         except FileExistsError:
             continue
-        _LIVE.add(tmp)
+        TEMPORARY.add(tmp)
         return fd, tmp
     raise FileExistsError(f"could not create a temporary file in {directory!r}")
 
@@ -135,18 +132,22 @@ def atomic_write(
                 f.flush()
                 os.fsync(f.fileno())
         if not still_open:  # the block closed the file itself: sync through a new descriptor
-            sync_fd = os.open(tmp, os.O_RDWR)
-            try:
-                os.fsync(sync_fd)
-            finally:
-                os.close(sync_fd)
+            _fsync_file(tmp)
         _replace(tmp, target)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
-        _LIVE.discard(tmp)
+        TEMPORARY.discard(tmp)
         raise
     _fsync_directory(directory)
+
+
+def _fsync_file(path: str) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def _replace(tmp: str, target: str) -> None:
@@ -156,7 +157,7 @@ def _replace(tmp: str, target: str) -> None:
     except OSError:
         pass  # no previous file (or not ours to inspect): keep umask-derived mode
     os.replace(tmp, target)
-    _LIVE.discard(tmp)
+    TEMPORARY.discard(tmp)
 
 
 class Outputs:
@@ -250,11 +251,7 @@ class Outputs:
             for target, tmp in list(self._temps.items()):
                 if target not in self._written:
                     continue
-                fd = os.open(tmp, os.O_RDONLY)
-                try:
-                    os.fsync(fd)
-                finally:
-                    os.close(fd)
+                _fsync_file(tmp)
                 _replace(tmp, target)
                 _fsync_directory(os.path.dirname(target))
                 del self._temps[target]
@@ -264,7 +261,7 @@ class Outputs:
         for tmp in self._temps.values():
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
-            _LIVE.discard(tmp)
+            TEMPORARY.discard(tmp)
         self._temps.clear()
 
     def __enter__(self) -> "Outputs":

@@ -480,3 +480,41 @@ def _ppid(pid: int) -> int:
             return int(fh.read().rsplit(")", 1)[1].split()[1])
     except (OSError, ValueError, IndexError):
         return -1
+
+
+# ---- bondgraph.atomic.Outputs: the machinery behind items 4-6 ----------------------------------------------
+def test_outputs_commit_together_or_not_at_all(tmp_path):
+    from bondgraph.atomic import Outputs
+    from bondgraph.errors import UsageError
+    from bondgraph.interrupt import TEMPORARY
+
+    (tmp_path / "a.csv").write_text("old a\n")
+    os.chmod(tmp_path / "a.csv", 0o640)
+    with pytest.raises(RuntimeError):
+        with Outputs() as out:
+            out.add(tmp_path / "a.csv")
+            out.add(tmp_path / "b.png", "--plot", suffixes=(".png",))
+            with out.open(tmp_path / "a.csv") as fh:
+                fh.write("new a\n")
+            raise RuntimeError("the plot failed")
+    assert sorted(os.listdir(tmp_path)) == ["a.csv"] and (tmp_path / "a.csv").read_text() == "old a\n"
+    with Outputs() as out:
+        out.add(tmp_path / "a.csv")
+        out.add(tmp_path / "never.csv")            # reserved but not written: not created
+        with out.path(tmp_path / "a.csv") as tmp:
+            assert tmp.endswith(".csv") and os.path.basename(tmp).startswith(".a.csv.")
+            with open(tmp, "w") as fh:
+                fh.write("new a\n")
+    assert sorted(os.listdir(tmp_path)) == ["a.csv"] and (tmp_path / "a.csv").read_text() == "new a\n"
+    assert os.stat(tmp_path / "a.csv").st_mode & 0o777 == 0o640, "the file keeps its permissions"
+    assert not [t for t in TEMPORARY if str(tmp_path) in t]
+    out = Outputs(inputs=[tmp_path / "a.csv"])
+    for path, needle in ((tmp_path / "a.csv", "would overwrite the input"), (tmp_path, "is a directory"),
+                         (tmp_path / "no" / "x.csv", "does not exist")):
+        with pytest.raises(UsageError, match=needle):
+            out.add(path)
+    out.add(tmp_path / "x.csv", "--out")
+    with pytest.raises(UsageError, match="already the output of --out"):
+        out.add(tmp_path / "x.csv", "--bode")
+    out.discard()
+    assert sorted(os.listdir(tmp_path)) == ["a.csv"]
