@@ -44,7 +44,7 @@ import stat
 from typing import IO, Iterable, Iterator
 
 from .errors import BondGraphError, UsageError
-from .interrupt import COMMIT_LOCK, TEMPORARY, remove_temporary_files
+from .interrupt import COMMIT_LOCK, COMMITTED, TEMPORARY, remove_temporary_files
 
 __all__ = ["atomic_write", "Outputs", "remove_temporary_files", "COMMIT_LOCK"]
 
@@ -173,6 +173,7 @@ class Outputs:
         self._temps: dict[str, str] = {}     # target (real path) -> temporary file
         self._names: dict[str, str] = {}     # target (real path) -> option that named it
         self._written: set[str] = set()      # targets whose content was written
+        self._shown: dict[str, str] = {}     # target (real path) -> the name the user gave
 
     def add(self, path: str | os.PathLike | None, option: str = "--out",
             suffixes: Iterable[str] | None = None) -> str | None:
@@ -213,6 +214,7 @@ class Outputs:
         os.close(fd)
         self._temps[target] = tmp
         self._names[target] = option
+        self._shown[target] = name
         return name
 
     def _temp(self, path: str | os.PathLike) -> str:
@@ -254,6 +256,7 @@ class Outputs:
                 _fsync_file(tmp)
                 _replace(tmp, target)
                 _fsync_directory(os.path.dirname(target))
+                COMMITTED.append(self._shown[target])
                 del self._temps[target]
 
     def discard(self) -> None:

@@ -416,8 +416,8 @@ def test_sigterm_while_writing_removes_the_temporary_file(work):
     deadline = time.monotonic() + 60
     tmp = None
     while time.monotonic() < deadline and proc.poll() is None:
-        tmp = next((p for p in os.listdir(work) if p.startswith(".big.csv.") and (work / p).exists()
-                    and (work / p).stat().st_size > 0), None)
+        tmp = next((p for p in os.listdir(work) if ".big.csv." in p and p.endswith(".tmp") and (work / p).exists()
+                    and (work / p).stat().st_size > 0), None)   # the CSV writer's file, being filled
         if tmp:
             break
         time.sleep(0.005)
@@ -518,3 +518,32 @@ def test_outputs_commit_together_or_not_at_all(tmp_path):
         out.add(tmp_path / "x.csv", "--bode")
     out.discard()
     assert sorted(os.listdir(tmp_path)) == ["a.csv"]
+
+
+AFTER_COMMIT = textwrap.dedent("""\
+    import sys, time
+    from bondgraph.cli import registry
+
+    @registry.command("slow-end", "writes its output, then takes its time", [registry.arg("--out")])
+    def run(args):
+        with registry.outputs(args, "out") as out:
+            with out.open(args.out) as fh:
+                fh.write("done\\n")
+        print("committed", flush=True)
+        time.sleep(60)
+
+    from bondgraph.__main__ import run as entry
+    sys.argv = ["bondgraph", "slow-end", "--out", "result.txt"]
+    entry()
+    """)
+
+
+def test_an_interrupt_after_the_outputs_are_in_place_says_so(tmp_path):
+    (tmp_path / "after.py").write_text(AFTER_COMMIT)
+    proc = subprocess.Popen([sys.executable, "after.py"], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "committed"
+    proc.send_signal(signal.SIGINT)
+    err = proc.communicate(timeout=30)[1]
+    assert proc.returncode == 130 and err == "bondgraph: interrupted; after writing result.txt\n"
+    assert (tmp_path / "result.txt").read_text() == "done\n"
