@@ -11,6 +11,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -101,6 +102,10 @@ def test_fit_file_reproduces_the_fit_offset_included(work, capsys):
     assert fit["params"]["k"] == pytest.approx(TRUE["k"], rel=1e-3)
     assert fit["offset"] == pytest.approx(OFFSET, rel=0.05) and fit["offset_unit"] == "m"
     assert fit["settings"] == {"validation": 0.3, "split": "blocks", "loss": "linear", "starts": 1}
+    from conftest import ROOT
+    docs = (ROOT / "docs" / "json-outputs.md").read_text().split("## Fit files")[1].split("\n## ")[0]
+    documented = {k for row in docs.splitlines() if row.startswith("| `") for k in re.findall(r"`(\w+)`", row.split("|")[1])}
+    assert documented == set(fit), "docs/json-outputs.md lists every field of the fit file"
 
     # re-simulate with the fit file and the measured drive: the RMS is the fit's
     rc, out, err = run(["simulate", "osc.py", "--params-file", "fitted.json", "--input", "V=csv(file=data.csv, column=V)",
