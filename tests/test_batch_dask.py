@@ -213,7 +213,7 @@ def test_readme_cluster_example_on_a_scheduler_and_workers_started_here(schedule
     i = argv.index(pattern)
     argv[i:i + 1] = files
     assert main(argv) == 0
-    assert f"batch: running on the Dask cluster at {scheduler} (2 workers" in capsys.readouterr().err
+    assert f"running on the Dask cluster at {scheduler} (2 workers" in capsys.readouterr().err
     out = next(argv[k + 1] for k, a in enumerate(argv) if a == "--out")
     with open(out, newline="") as fh:
         rows = [{k: _typed(k, v) for k, v in r.items()} for r in csv.DictReader(fh)]

@@ -43,8 +43,8 @@ class Options:
     kind: str                                   # "diagnose", "fit" or "simulate"
     model: str                                  # absolute path of the model file
     base: tuple = ()                            # parameter values applied to every job
-    input: str = "V"                            # model input (driven by the data's column)
-    output: str = "x"                           # model output (compared with the data's column)
+    input: str | None = None                    # model input (driven by the data's column)
+    output: str | None = None                   # model output (compared with the data's column)
     data_input: str | None = None               # data column names, when they differ
     data_output: str | None = None
     validation: float = 0.3                     # diagnose/fit: held-out share
