@@ -34,6 +34,9 @@ DEFAULTS: dict[str, Default] = {
     "simulate.atol_floor": Default(1e-20, "absolute tolerance floor; the error is otherwise relative to each "
                                           "state's peak"),
     "simulate.table_steps": Default(10, "no step spans more than this many sample intervals of a tabulated input"),
+    "simulate.max_steps": Default(50_000_000, "a run stops with an error after this many integrator steps"),
+    "simulate.explicit_step_limit": Default(3e6, "method 'auto' picks radau when the explicit method would need more "
+                                                 "steps than this (from the start-point Jacobian's eigenvalues)"),
     "batch.connect_timeout": Default(10.0, "seconds to wait for the Dask scheduler named by --scheduler"),
     "batch.tasks_per_worker": Default(4, "short jobs (simulations) are grouped into about this many Dask tasks "
                                          "per worker"),

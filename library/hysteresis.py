@@ -27,8 +27,7 @@ import numba
 import numpy as np
 from scipy.optimize import nnls
 
-from bondgraph.errors import ParameterError
-from bondgraph.memory import MemoryOperator
+from bondgraph import MemoryOperator, ParameterError
 
 
 def _vector(name: str, values, n: int | None = None, nonneg: bool = False) -> np.ndarray:

@@ -275,6 +275,17 @@ def test_help_imports_neither_sympy_nor_numba():
     assert out.strip() == "[]"
 
 
+def test_help_exits_0_and_names_every_command():
+    for argv, needles in ((["--help"], ["COMMAND", "simulate", "fit", "130"]),
+                          (["simulate", "--help"], ["--params-file", "--plot", "auto", "dopri5", "--debug"])):
+        proc = subprocess.run([sys.executable, "-m", "bondgraph", *argv], capture_output=True, text=True)
+        assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+        for needle in needles:
+            assert needle in proc.stdout
+        for jargon in ("CONTRACT", "seed 00", "../shared"):
+            assert jargon not in proc.stdout
+
+
 def test_lazy_package_names_still_import():
     code = ("import bondgraph.simulate, bondgraph.linearize\n"
             "import bondgraph as bg\n"

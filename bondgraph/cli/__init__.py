@@ -79,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:  # only without signal handlers (not in the main thread)
             print("bondgraph: interrupted; no output file was changed", file=sys.stderr)
             return 130
-        except SystemExit as exc:  # a library called sys.exit: report it, do not obey it
+        except SystemExit as exc:  # the command (a library it calls) called sys.exit: report it, do not obey it
             print(f"bondgraph: internal error: unexpected exit (status {exc.code}) "
                   f"(run with --debug for the traceback)", file=sys.stderr)
             if debug:

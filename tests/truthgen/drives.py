@@ -10,7 +10,8 @@ Kinds (every drive starts at 0 V, from rest; offsets are reached by a smooth ram
 * ``noise``: Gaussian noise band-limited to ``[f_lo, f_hi]`` (FFT shaping), RMS ``rms``
   around ``offset``, kept within the device range by a soft clip;
 * ``bursts``: sine bursts with amplitude ramps and pauses (holds at the centre voltage), as in
-  real stack records driven by a control loop;
+  real stack records driven by a control loop; ``resonant-bursts``: the same at the device's
+  resonance, around 0 V;
 * ``stepped-sine``: consecutive sine dwells at frequencies ``freqs`` and amplitudes ``amps``
   with continuous phase (resonance testing).
 
@@ -23,7 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-KINDS = ("sine", "triangle", "steps", "chirp", "noise", "bursts", "stepped-sine")
+from .draws import loguniform
+
+KINDS = ("sine", "triangle", "steps", "chirp", "noise", "bursts", "resonant-bursts", "stepped-sine")
 
 
 @dataclass(frozen=True)
@@ -114,10 +117,6 @@ def signal(spec: dict, t: np.ndarray) -> np.ndarray:
     raise ValueError(f"unknown drive kind {kind!r}")
 
 
-def _loguniform(rng, lo, hi):
-    return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
-
-
 def _window(r: DriveRange, rng, fraction_lo=0.35):
     """(offset, amplitude) of a drive that swings over a random part of the device range."""
     if r.bipolar:
@@ -141,21 +140,21 @@ def draw(kind: str, r: DriveRange, T: float, fs: float, rng: np.random.Generator
         ((r.vmin, r.vmax) if r.bipolar else (max(r.vmin, 0.0), r.vmax))
     spec: dict = {"kind": kind}
     if kind in ("sine", "triangle"):
-        spec.update(freq=_loguniform(rng, f_min, f_hi), amp=amp, offset=offset,
+        spec.update(freq=loguniform(rng, f_min, f_hi), amp=amp, offset=offset,
                     phase=0.0 if r.bipolar else -np.pi / 2)
     elif kind == "steps":
         hold_hi = min(max(T / 4, 0.02), 2.0)
         hold_lo = min(max(T / 40, 0.005), hold_hi / 2)
-        times, levels, t0 = [], [], _loguniform(rng, hold_lo, hold_hi) / 2
+        times, levels, t0 = [], [], loguniform(rng, hold_lo, hold_hi) / 2
         while t0 < T * 0.97:
             times.append(t0)
             levels.append(rng.uniform(lo, hi) if rng.uniform() < 0.85 else 0.0)
-            t0 += _loguniform(rng, hold_lo, hold_hi)
-        spec.update(times=times, levels=levels, rise=_loguniform(rng, 2.0 / fs, max(4.0 / fs, 3e-3)))
+            t0 += loguniform(rng, hold_lo, hold_hi)
+        spec.update(times=times, levels=levels, rise=loguniform(rng, 2.0 / fs, max(4.0 / fs, 3e-3)))
     elif kind == "chirp":
         ramp = min(0.1 * T, 0.2)
         amp_c = amp if r.amp_dyn is not None else rng.uniform(0.1, 0.5) * amp
-        spec.update(f0=_loguniform(rng, max(1.0, 2.0 / T), max(2.02 / T, 50.0)),
+        spec.update(f0=loguniform(rng, max(1.0, 2.0 / T), max(2.02 / T, 50.0)),
                     f1=rng.uniform(0.3, 0.45) * fs, amp=amp_c, offset=offset, ramp=ramp, sweep=T - ramp)
     elif kind == "noise":
         spec.update(seed=int(rng.integers(2**31)), f_lo=rng.uniform(0.5, 5.0),
@@ -165,7 +164,7 @@ def draw(kind: str, r: DriveRange, T: float, fs: float, rng: np.random.Generator
         if kind == "resonant-bursts":
             freq, full, centre = rng.uniform(0.92, 1.06) * r.f_res, rng.uniform(*r.amp_res), 0.0
         else:
-            freq, full = _loguniform(rng, min(2 * f_min, f_hi), f_hi), amp
+            freq, full = loguniform(rng, min(2 * f_min, f_hi), f_hi), amp
             centre = offset
         period = 1.0 / freq
         env_t, env_a, t0 = [0.0], [0.0], 0.0

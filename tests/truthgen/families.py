@@ -8,7 +8,6 @@ is never within 2 % of 1 (:func:`factor`); the sensor gain and offset are drawn 
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -16,18 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from . import bimorph, stack
+from .draws import factor
 from .drives import DriveRange
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def factor(rng: np.random.Generator, lo: float, hi: float, gap: float = 0.02) -> float:
-    """A log-uniform factor in [lo, hi] at least ``gap`` away from 1 (a drawn device is never
-    the nominal one)."""
-    g = math.log1p(gap)
-    span_up, span_down = max(math.log(hi) - g, 0.0), max(-math.log(lo) - g, 0.0)
-    r = rng.uniform(0.0, span_up + span_down)
-    return math.exp(g + r) if r < span_up else math.exp(-(g + r - span_up))
 
 
 @lru_cache(maxsize=None)

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import drives, measure
+from .draws import loguniform
 from .families import FAMILIES
 from .mechanisms import MECHANISMS
 from .system import simulate
@@ -69,6 +70,8 @@ class Record:
     effect_size: tuple           # RMS(with - without effect) / noise RMS, per cause
     visible_size: tuple          # what the best plausible linear refit leaves / noise RMS
     attempts: int                # rounds of the visibility rule used
+    clean: np.ndarray            # noise-free x (m, before the sensor) at the instants x was taken
+    clean0: np.ndarray           # the same without the hidden effects
     seconds: float = 0.0         # generation time
     extra: dict = field(default_factory=dict)
 
@@ -125,10 +128,6 @@ def _drive_summary(spec: dict) -> dict:
     return {k: (v if not isinstance(v, list) or len(v) <= 6 else f"{len(v)} values") for k, v in spec.items()}
 
 
-def _loguniform(rng, lo, hi):
-    return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
-
-
 def _rms(a):
     return float(np.sqrt(np.mean(np.square(a))))
 
@@ -171,7 +170,7 @@ def draw(seed: int, size: str = "ci") -> Record:
         usable = [m_ for _, m_ in sorted(MECHANISMS[fam.physics][c].items()) if m_.applies(ctx)]
         mechs.append(usable[int(r_mech.integers(len(usable)))])
     shapes = [mech.shape(r_mech, ctx) for mech in mechs]
-    strengths = [_loguniform(r_mech, mech.lo, mech.hi) for mech in mechs]
+    strengths = [loguniform(r_mech, mech.lo, mech.hi) for mech in mechs]
 
     cache: dict = {}
 
@@ -217,7 +216,7 @@ def draw(seed: int, size: str = "ci") -> Record:
             ctx["ref"] = ref
             drive_version += 1
     order = sorted(range(len(mechs)), key=lambda i: -visible[i]) if mechs else []
-    t, Vs, x, noise_rms = measure.sample(t_fine, V, y, shape.fs, n, noise, stroke)
+    t, Vs, x, noise_rms, (clean, clean0) = measure.sample(t_fine, V, y, shape.fs, n, noise, stroke, [y, y0])
     return Record(
         seed=int(seed), size=size, family=fam.name, model=fam.model, overrides=overrides,
         t=t, V=Vs, x=x, causes=tuple(causes[i] for i in order),
@@ -226,5 +225,5 @@ def draw(seed: int, size: str = "ci") -> Record:
         params=p, nominal=nominal, drive=spec, fs=shape.fs, duration=shape.T, noise=noise,
         noise_rms=noise_rms, stroke=stroke,
         effect_size=tuple(effect[i] for i in order), visible_size=tuple(visible[i] for i in order),
-        attempts=attempts, seconds=time.perf_counter() - start,
+        attempts=attempts, clean=clean, clean0=clean0, seconds=time.perf_counter() - start,
         extra={"regime": shape.regime, "substeps": m})

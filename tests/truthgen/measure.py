@@ -21,16 +21,16 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.signal import lfilter
 
-from .families import factor
+from .draws import factor, loguniform
 
 
 def draw(rng: np.random.Generator) -> dict:
     colour = str(rng.choice(["white", "ar1", "pink", "hum"], p=[0.3, 0.3, 0.25, 0.15]))
     return {
-        "level": float(np.exp(rng.uniform(np.log(0.001), np.log(0.02)))),
+        "level": loguniform(rng, 0.001, 0.02),
         "colour": colour,
         "coloured_share": 0.0 if colour == "white" else rng.uniform(0.2, 0.7),
-        "corner": float(np.exp(rng.uniform(np.log(0.5), np.log(50.0)))),
+        "corner": loguniform(rng, 0.5, 50.0),
         "hum": float(rng.choice([50.0, 60.0])),
         "gain": factor(rng, 0.9, 1.1, gap=0.01),
         "offset": rng.uniform(-0.05, 0.05),
@@ -39,7 +39,7 @@ def draw(rng: np.random.Generator) -> dict:
         "delay": 0.0 if rng.uniform() < 0.5 else rng.uniform(0.0, 0.2),
         "x_bits": [None, 16, 14, 12][int(rng.choice(4, p=[0.4, 0.3, 0.2, 0.1]))],
         "v_bits": [None, 16, 14, 12][int(rng.choice(4, p=[0.5, 0.25, 0.15, 0.1]))],
-        "v_noise": 0.0 if rng.uniform() < 0.5 else float(np.exp(rng.uniform(np.log(1e-4), np.log(5e-4)))),
+        "v_noise": 0.0 if rng.uniform() < 0.5 else loguniform(rng, 1e-4, 5e-4),
         "seed": int(rng.integers(2**31)),
     }
 
@@ -70,8 +70,9 @@ def _quantise(x, lsb):
     return np.round(x / lsb) * lsb
 
 
-def sample(t_fine, V_fine, y_fine, fs: float, n: int, spec: dict, stroke: float):
-    """(t, V, x, noise RMS) of ``n`` samples at ``fs`` measured from the fine-grid truth.
+def sample(t_fine, V_fine, y_fine, fs: float, n: int, spec: dict, stroke: float, others=()):
+    """(t, V, x, noise RMS, [other fine-grid signals at the instants x is taken]) of ``n``
+    samples at ``fs`` measured from the fine-grid truth ``y_fine``.
 
     ``stroke`` is the effect-free peak-to-peak displacement (m) the noise level refers to."""
     rng = np.random.default_rng(spec["seed"])
@@ -88,7 +89,9 @@ def sample(t_fine, V_fine, y_fine, fs: float, n: int, spec: dict, stroke: float)
     else:
         t = instants = k
     V = np.interp(instants, t_fine, V_fine)
-    y = CubicSpline(t_fine, y_fine)(instants + spec["delay"] * dt)
+    at = instants + spec["delay"] * dt
+    y = CubicSpline(t_fine, y_fine)(at)
+    sampled = [CubicSpline(t_fine, o)(at) for o in others]
 
     gain = spec["gain"]
     sigma = spec["level"] * stroke * gain
@@ -104,4 +107,4 @@ def sample(t_fine, V_fine, y_fine, fs: float, n: int, spec: dict, stroke: float)
         V = V + spec["v_noise"] * v_span * rng.standard_normal(n)
     if spec["v_bits"]:
         V = _quantise(V, v_span / 2 ** spec["v_bits"])
-    return t, V, x, float(np.sqrt(np.mean((x - gain * y - spec["offset"] * stroke) ** 2)))
+    return t, V, x, float(np.sqrt(np.mean((x - gain * y - spec["offset"] * stroke) ** 2))), sampled

@@ -15,7 +15,7 @@ Strengths (dimensionless unless stated):
 cause              mechanism                   strength
 =================  ==========================  ================================================
 hysteresis         preisach, bouc-wen, duhem   width of the quasi-static major loop over its
-                                               range (largest vertical gap), 0.05-0.2
+                                               range (largest vertical gap), 0.06-0.25
 hysteresis         maxwell-slip                total slider stiffness over the device stiffness
                                                (stack: K; bimorph: omega_1^2), 0.05-0.6
 creep              log-time                    strain gain per decade of time, 0.005-0.03
@@ -45,6 +45,7 @@ from typing import Callable
 import numpy as np
 
 from . import bimorph as bim
+from .draws import loguniform
 from .operators import HYSTERESIS, MaxwellSlip, loop_stats, saturation_curve
 from .terms import FieldLaw
 
@@ -64,10 +65,6 @@ class Mechanism:
     applies: Callable = _always   # (ctx) -> bool: can the record show it at all?
 
 
-def _loguniform(rng, lo, hi):
-    return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
-
-
 def _centre_half(lo_hi):
     lo, hi = lo_hi
     return (lo + hi) / 2, max((hi - lo) / 2, 1e-30)
@@ -85,7 +82,7 @@ def _creep_shape(kind):
             taus = 10 ** np.arange(math.log10(max(5 * h, 1e-4)), math.log10(30 * T), 1 / 3)
             return {"taus": taus, "alpha": rng.uniform(0.1, 0.4)}
         count = int(rng.integers(1, 4))
-        return {"taus": np.sort([_loguniform(rng, 0.01 * T, 0.5 * T) for _ in range(count)]),
+        return {"taus": np.sort([loguniform(rng, 0.01 * T, 0.5 * T) for _ in range(count)]),
                 "share": rng.dirichlet(np.ones(count))}
     return shape
 
@@ -108,13 +105,13 @@ def creep_cells(kind, strength, shape, T):
 # ----------------------------------------------------------------------------- stacks
 
 def _hysteresis_shape(name):
-    """A random operator of the family whose own loop is at least 0.3 of its range wide (so that
+    """A random operator of the family whose own loop is at least 0.4 of its range wide (so that
     realistic loop widths need no more hysteretic than reversible response)."""
     def shape(rng, ctx):
         for _ in range(50):
             op = HYSTERESIS[name](rng)
             gap, span = loop_stats(op)
-            if gap >= 0.3 * span:
+            if gap >= 0.4 * span:
                 break
         return {"op": op, "gap": gap, "span": span}
     return shape
@@ -133,7 +130,7 @@ def _stack_field_hysteresis(name):
     return _hysteresis_shape(name), apply
 
 
-def _stack_slip_shape(rng, ctx):
+def _slip_shape(rng, ctx):
     return {"op": MaxwellSlip(rng)}
 
 
@@ -176,7 +173,8 @@ def _stop_apply(fx, s, shape, ctx):
     fx.force = _Stop(s * ctx["p"]["K"], top, shape["knee"], shape["width"], both)
 
 
-def _stack_creep(kind):
+def _creep(kind):
+    """Creep cells in the field domain (both physics keep them in ``Effects.creep``)."""
     def apply(fx, s, shape, ctx):
         fx.creep.extend(creep_cells(kind, s, shape, ctx["T"]))
     return _creep_shape(kind), apply
@@ -206,7 +204,7 @@ def _amp_pole_apply(fx, s, shape, ctx):
 def _mode_shape(rng, ctx):
     """A structural mode between 1.5 kHz (above the actuator's own) and 0.42 fs (<= 6 kHz)."""
     top = min(0.42 * ctx["fs"], 6000.0)
-    return {"f": rng.uniform(min(1500.0, 0.8 * top), top), "zeta": _loguniform(rng, 0.01, 0.08)}
+    return {"f": rng.uniform(min(1500.0, 0.8 * top), top), "zeta": loguniform(rng, 0.01, 0.08)}
 
 
 def _shell_apply(fx, s, shape, ctx):
@@ -226,16 +224,18 @@ def _sensor_apply(fx, s, shape, ctx):
     fx.mode = ("sensor", {"gamma": s, "omega": 2 * np.pi * shape["f"], "zeta": shape["zeta"]})
 
 
+def _shared(field_hysteresis, slip_apply, saturation):
+    """The mechanisms both physics have, with the same strength ranges."""
+    out = [Mechanism("hysteresis", n, 0.06, 0.25, *field_hysteresis(n)) for n in ("preisach", "bouc-wen", "duhem")]
+    out.append(Mechanism("hysteresis", "maxwell-slip", 0.05, 0.6, _slip_shape, slip_apply))
+    out.append(Mechanism("creep", "log-time", 0.005, 0.03, *_creep("log-time")))
+    out += [Mechanism("creep", n, 0.02, 0.12, *_creep(n)) for n in ("fractional", "kv-cells")]
+    out += [Mechanism("saturation", n, 0.03, 0.2, *saturation(n)) for n in ("tanh", "polynomial", "piecewise")]
+    return out
+
+
 def _stack_mechanisms():
-    out = []
-    for name in ("preisach", "bouc-wen", "duhem"):
-        out.append(Mechanism("hysteresis", name, 0.05, 0.2, *_stack_field_hysteresis(name)))
-    out.append(Mechanism("hysteresis", "maxwell-slip", 0.05, 0.6, _stack_slip_shape, _stack_slip_apply))
-    out.append(Mechanism("creep", "log-time", 0.005, 0.03, *_stack_creep("log-time")))
-    out.append(Mechanism("creep", "fractional", 0.02, 0.12, *_stack_creep("fractional")))
-    out.append(Mechanism("creep", "kv-cells", 0.02, 0.12, *_stack_creep("kv-cells")))
-    for name in ("tanh", "polynomial", "piecewise"):
-        out.append(Mechanism("saturation", name, 0.03, 0.2, *_stack_saturation(name)))
+    out = _shared(_stack_field_hysteresis, _stack_slip_apply, _stack_saturation)
     out.append(Mechanism("saturation", "stop", 0.1, 0.8, _stop_shape, _stop_apply))
     out.append(Mechanism("electrical", "series-r", 10.0, 200.0, _no_shape, _series_r_apply))
     out.append(Mechanism("electrical", "series-rl", 5e-5, 2e-3, _series_rl_shape, _series_rl_apply))
@@ -254,7 +254,8 @@ def _bim_input_hysteresis(name):
         op, w = shape["op"], hysteretic_weight(s, shape)
 
         def drive_map(V):
-            return V + w * half * op.apply((V - c) / half)
+            h_ = op.apply((V - c) / half)
+            return V + w * half * (h_ - h_[0])
         fx.drive_map = drive_map
     return _hysteresis_shape(name), apply
 
@@ -292,12 +293,6 @@ def _bim_saturation(name):
             return V + s * top * deficit(V / top)
         fx.drive_map = drive_map
     return shape, apply
-
-
-def _bim_creep(kind):
-    def apply(fx, s, shape, ctx):
-        fx.creep.extend(creep_cells(kind, s, shape, ctx["T"]))
-    return _creep_shape(kind), apply
 
 
 def _qref(ctx):
@@ -371,7 +366,7 @@ def _below_nyquist(omega, ctx):
 
 
 def _beam_shape(rng, ctx):
-    return {"jitter": rng.uniform(0.95, 1.05), "zeta": _loguniform(rng, 0.005, 0.08)}
+    return {"jitter": rng.uniform(0.95, 1.05), "zeta": loguniform(rng, 0.005, 0.08)}
 
 
 def _beam_apply(fx, s, shape, ctx):
@@ -386,7 +381,7 @@ def _beam_apply(fx, s, shape, ctx):
 def _offbeam_shape(rng, ctx):
     top = 2 * np.pi * 0.42 * ctx["fs"]
     lo = 1.3 * max(ctx["p"]["omega"])
-    return {"omega": _loguniform(rng, lo, max(top, lo * 1.1)), "zeta": _loguniform(rng, 0.005, 0.05),
+    return {"omega": loguniform(rng, lo, max(top, lo * 1.1)), "zeta": loguniform(rng, 0.005, 0.05),
             "sign": float(rng.choice([-1.0, 1.0]))}
 
 
@@ -400,7 +395,7 @@ def _offbeam_apply(fx, s, shape, ctx):
 def _fixture_shape(rng, ctx):
     top = 2 * np.pi * 0.42 * ctx["fs"]
     lo = 1.3 * ctx["p"]["omega"][0]
-    return {"omega": _loguniform(rng, lo, max(top, lo * 1.1)), "zeta": _loguniform(rng, 0.01, 0.06)}
+    return {"omega": loguniform(rng, lo, max(top, lo * 1.1)), "zeta": loguniform(rng, 0.01, 0.06)}
 
 
 def _fixture_apply(fx, s, shape, ctx):
@@ -408,15 +403,7 @@ def _fixture_apply(fx, s, shape, ctx):
 
 
 def _bimorph_mechanisms():
-    out = []
-    for name in ("preisach", "bouc-wen", "duhem"):
-        out.append(Mechanism("hysteresis", name, 0.05, 0.2, *_bim_input_hysteresis(name)))
-    out.append(Mechanism("hysteresis", "maxwell-slip", 0.05, 0.6, _stack_slip_shape, _bim_slip_apply))
-    out.append(Mechanism("creep", "log-time", 0.005, 0.03, *_bim_creep("log-time")))
-    out.append(Mechanism("creep", "fractional", 0.02, 0.12, *_bim_creep("fractional")))
-    out.append(Mechanism("creep", "kv-cells", 0.02, 0.12, *_bim_creep("kv-cells")))
-    for name in ("tanh", "polynomial", "piecewise"):
-        out.append(Mechanism("saturation", name, 0.03, 0.2, *_bim_saturation(name)))
+    out = _shared(_bim_input_hysteresis, _bim_slip_apply, _bim_saturation)
     for name in ("cubic", "cubic-quintic", "tip-cubic", "field-stiffness"):
         out.append(Mechanism("softening", name, 0.01, 0.12, *_softening(name)))
     for name in ("quadratic", "amplitude", "friction"):

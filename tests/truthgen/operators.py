@@ -10,7 +10,9 @@ candidate model of the diagnosis:
 * :class:`Preisach` — relays ``gamma_{ab}`` (up at ``a``, down at ``b < a``) on a triangular
   threshold grid, weighted by a random density: a mixture of Gaussian bumps in (bias, half
   width) plus a smooth background (Mayergoyz, *Mathematical Models of Hysteresis*, 1991);
-* :class:`BoucWen` — ``dz = A du - beta |du| |z|^(n-1) z - gamma du |z|^n`` (Wen 1976);
+* :class:`BoucWen` — ``dz = du - beta |du| |z|^(n-1) z - gamma du |z|^n`` (Wen 1976), in the
+  complement form ``u - lam z`` (``z`` leads ``u`` like an elastoplastic element; the
+  polarization must lag the field);
 * :class:`Duhem` — Coleman–Hodgdon form ``dz = alpha |du| (f(u) - z) + b du`` with a
   saturating anhysteretic curve ``f``;
 * :class:`MaxwellSlip` — elasto-slide elements (spring ``k_j`` in series with a Coulomb slider
@@ -175,12 +177,6 @@ def loop_stats(op: Operator) -> tuple[float, float]:
     return float(np.max(down_branch[::-1] - up_branch)), float(np.ptp(last))
 
 
-def loop_width(op: Operator) -> float:
-    """Loop width of the operator: largest gap over the output range."""
-    gap, span = loop_stats(op)
-    return gap / span if span > 0 else 0.0
-
-
 def saturation_curve(kind: str, rng: np.random.Generator):
     """A saturating static curve as a deficit function ``u -> s(u) - u`` (relative, odd or
     mildly asymmetric) whose deficit at |u| = 1 is 1; multiply by the strength."""
@@ -206,5 +202,3 @@ def saturation_curve(kind: str, rng: np.random.Generator):
         raise ValueError(f"unknown saturation curve {kind!r}")
     return deficit
 
-
-SATURATION = ("tanh", "polynomial", "piecewise")

@@ -122,13 +122,3 @@ def system(p: dict, fx: Effects | None = None, probes: bool = False):
 def static_gain(p: dict) -> float:
     """Quasi-static x/V of the linear device (m/V): x = a Q, V = S Q."""
     return p["a"] / p["S"]
-
-
-def capacitance(p: dict) -> float:
-    """Small-signal capacitance seen by the source at low frequency (F): 1/S (x follows aQ)."""
-    return 1.0 / p["S"]
-
-
-def mechanical_rate(p: dict) -> float:
-    """sqrt(K/M), rad/s."""
-    return float(np.sqrt(p["K"] / p["M"]))

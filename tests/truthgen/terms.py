@@ -30,24 +30,25 @@ class Term:
 
 
 class FieldLaw:
-    """A field-domain charge law ``e -> Q``: ``strength * half * op((e - centre) / half)`` for a
-    memory operator, or ``strength * top * deficit(e / top)`` for a static saturating curve."""
+    """A law ``e -> value``: ``strength * half * (op(u) - op(u_0))``, ``u = (e - centre) / half``
+    for a memory operator (zero in the initial, remanent state: the device starts at rest), or
+    ``strength * top * deficit(e / top)`` for a static saturating curve."""
 
     def __init__(self, strength, operator=None, centre=0.0, half=1.0, deficit=None, top=1.0):
         self.strength, self.operator, self.deficit = strength, operator, deficit
         self.centre, self.half, self.top = centre, half, top
-        self.started = False
+        self.origin = None
 
     def reset(self):
-        self.started = False
+        self.origin = None
 
     def __call__(self, e):
         if self.operator is not None:
             u = (e - self.centre) / self.half
-            if not self.started:
+            if self.origin is None:
                 self.operator.start(u)
-                self.started = True
-            return self.strength * self.half * self.operator(u)
+                self.origin = self.operator(u)
+            return self.strength * self.half * (self.operator(u) - self.origin)
         return self.strength * self.top * float(self.deficit(np.asarray(e / self.top)))
 
 
