@@ -249,4 +249,12 @@ def test_ctrl_c_stops_diagnosis_and_workers(tmp_path):
     assert "Traceback" not in err
     assert took < 5.0  # 2 s on a quiet machine; the shared test machine is loaded
     time.sleep(0.5)
-    assert not [k for k in kids if Path(f"/proc/{k}").exists()], "orphan workers"
+    assert not [k for k in kids if _running(k)], "orphan workers"
+
+
+def _running(pid) -> bool:
+    """The process exists and is not a zombie (dead, waiting to be reaped)."""
+    try:
+        return (Path(f"/proc/{pid}") / "stat").read_text().split(") ")[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return False
