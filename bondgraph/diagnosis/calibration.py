@@ -25,6 +25,7 @@ from scipy import signal
 from scipy.optimize import least_squares
 
 from .. import config
+from ..errors import UsageError
 from .context import SENSOR_GAIN, Context, State
 from .projection import Param, projected_fit
 
@@ -167,6 +168,10 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None) -> 
     """Calibrate every identifiable linear parameter (see the module docstring)."""
     say = say or (lambda s: None)
     names = linear_parameters(ctx)
+    known = list(ctx.model.all_parameters())
+    for pat in priority or ():
+        if not patterns(known, [pat]):
+            raise UsageError(f"CALIBRATE entry '{pat}' matches no parameter of {ctx.model.name}")
     nominal = {n: ctx.ident.current(n) for n in names}
     raw0 = ctx.ident.predict(nominal)
     idx = ctx.ident.fit_idx

@@ -241,14 +241,20 @@ class View:
         return ident.predict({k: v for k, v in values.items() if k in known})
 
     def fit_model(self, model: Model, new: Sequence[Spec], max_nfev: int = 20, refit: bool = True,
-                  start: Mapping[str, float] | None = None):
+                  start: Mapping[str, float] | None = None,
+                  predict: Callable[[Mapping[str, float]], np.ndarray] | None = None):
         """Fit the new parameters ``new`` of an extended model (and, with ``refit``, the
         calibrated linear ones, from ``start`` or the current values) by variable projection
         over sensor gain and offset; exact linear route when the extended model stays linear,
-        else the compiled integrator.  A spec with lower = upper is held.
-        Returns (values, raw prediction, success, message, names at a bound)."""
-        ident = self.identification(model)
-        known = {p.name for p in ident.sim.eqs.params}
+        else the compiled integrator, or ``predict(values)`` if given (e.g. :meth:`lure`).  A spec
+        with lower = upper is held.  Returns (values, raw prediction, success, message, names at
+        a bound)."""
+        if predict is None:
+            ident = self.identification(model)
+            known = {p.name for p in ident.sim.eqs.params}
+            predict = ident.predict
+        else:
+            known = set(model.all_parameters())
         base = {k: v for k, v in {**self.values, **(start or {})}.items() if k in known}
         lin = [Param(p.name, base.get(p.name, p.start), p.lower, p.upper) for p in self._linear_params()] \
             if refit else []
@@ -264,7 +270,7 @@ class View:
             return vals
 
         def columns(z):
-            return np.column_stack([ident.predict(values_of(z)), np.ones(len(self._ctx.y))])
+            return np.column_stack([predict(values_of(z)), np.ones(len(self._ctx.y))])
 
         z0 = [s.to_z(s.start) for s in specs] + [p.to_z(p.start) for p in lin]
         lb = [s.z_bounds()[0] for s in specs] + [p.z_bounds()[0] for p in lin]
@@ -273,6 +279,18 @@ class View:
                             max_nfev=max_nfev)
         names = [s.name for s in specs] + [p.name for p in lin]
         return (values_of(sol.z), sol.columns[:, 0], sol.success, sol.message, [names[i] for i in sol.at_bounds])
+
+    def lure(self, model: Model, elements: Sequence[str], partners: Mapping[str, str | None]):
+        """A :class:`~bondgraph.diagnosis.lure.Lure` system of ``model`` (linear) for nonlinear
+        terms on ``elements``, on this record's grid; None when the model is not linear."""
+        from ..errors import BondGraphError
+        from .lure import Lure
+        if not self.exact or self.reduced:
+            return None
+        try:
+            return Lure(model, self.input, self.output, elements, partners, self._ctx.dt)
+        except BondGraphError:
+            return None
 
     def states(self, values: Mapping[str, float] | None = None) -> dict[str, np.ndarray]:
         """State trajectories (and the output's rate, key ``"output rate"``) of the current

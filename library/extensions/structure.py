@@ -1,24 +1,29 @@
 """Nonlinear laws inside the structure, found through element roles (``stiffness``,
-``damping``) and fitted with the compiled integrator (Shahabi, Ghafarirad & Taghvaeipour,
-C. R. Mécanique 347 (2019): cubic softening and amplitude-dependent damping of a bender)."""
+``damping``): cubic softening and amplitude-dependent damping of a bender (Shahabi,
+Ghafarirad & Taghvaeipour, C. R. Mécanique 347 (2019)).  When the rest of the model is
+linear they are simulated on the exact linear route as a Lur'e system
+(:meth:`bondgraph.diagnosis.View.lure`), else, or when that iteration does not converge (a
+strong nonlinear resonance), with the compiled integrator."""
 from __future__ import annotations
 
 from abc import abstractmethod
 
 import numpy as np
-import sympy as sp
 
 from bondgraph import Quantity
 from bondgraph.diagnosis import Candidate, Extension
+from bondgraph.diagnosis.lure import NotConverged
 from bondgraph.diagnosis.rewrite import modify_law, neighbours, slope
 from bondgraph.identify import Spec
 from bondgraph.simulate import SimulationError
 
 
 class _Centred(Candidate):
-    """A structural nonlinearity, one coefficient per element of ``role``, centred on the
-    data's amplitude (see the subclasses): scanned upwards on a log grid of its scale with
-    the integrator, then fitted with the calibration from the best grid point."""
+    """A structural nonlinearity: each element of ``role`` gets law(x) + term(c, r², x, a),
+    one coefficient c ≥ 0 per element, centred on the data's amplitude by r² (see the
+    subclasses).  The coefficient is scanned upwards on a log grid of its scale, each point
+    refitting the linear parameters briefly (a nonlinear resonance moves with the
+    calibration), then fitted with the calibration from the best point."""
 
     role = ""
     prefix = ""
@@ -34,39 +39,68 @@ class _Centred(Candidate):
                     f"quasi-static effect is a drive nonlinearity)")
         return True
 
+    @staticmethod
     @abstractmethod
-    def refs(self, view, series) -> dict[str, tuple[float, float]]:
-        """(scale of the coefficient, centring amplitude²) per element."""
+    def term(c, r2, x, a):
+        """The term added to the law (sympy or numpy arithmetic alike)."""
+
+    def partner(self, model, el) -> str | None:
+        return None
 
     @abstractmethod
-    def rewrite(self, view, model, el, coef, r2) -> None:
-        """Give element ``el`` of ``model`` the nonlinear law."""
+    def refs(self, view, el, x, a) -> tuple[float, float]:
+        """(scale of the coefficient, r²) of element ``el`` from its variable's series ``x``
+        (and the partner's ``a``) in the current model."""
 
-    def build(self, view, coefs: dict, refs: dict):
+    def build(self, view, coefs: dict, r2s: dict):
         model = view.rewrite()
         for el in view.model.with_role(self.role):
             c = model.parameter(f"{self.prefix}_{el}", coefs[el], "", f"{self.label}: {el}", bounds=(0, 1e40))
-            r2 = model.parameter(f"{self.prefix}_r2_{el}", refs[el][1], "", f"centring amplitude² of {el}")
-            self.rewrite(view, model, el, c, r2)
+            r2 = model.parameter(f"{self.prefix}_r2_{el}", r2s[el], "", f"centring amplitude² of {el}")
+            p = self.partner(model, el)
+            a = Quantity("q", p) if p else None
+            modify_law(model, el, lambda x, old, c=c, r2=r2, a=a: old + self.term(c, r2, x, a))
         return model
 
     def fit(self, view):
-        refs = self.refs(view, view.states())
-        els = list(refs)
-        model = self.build(view, {el: 0.0 for el in els}, refs)
+        els = list(view.model.with_role(self.role))
+        partners = {el: self.partner(view.model, el) for el in els}
         names = [f"{self.prefix}_{el}" for el in els]
+        lure = view.lure(view.rewrite(), els, partners)
+        if lure is not None:
+            series = lure.linear_responses(dict(view.values), np.asarray(view.u))
+            xs = {el: series[f"diag.x{k}"] for k, el in enumerate(els)}
+            az = {el: series.get(f"diag.a{k}") for k, el in enumerate(els)}
+        else:
+            st = view.states()
+            xs = {el: st[view.state_of(el)] if self.role == "stiffness" else st["output rate"] for el in els}
+            az = {el: st[view.state_of(partners[el])] if partners[el] else None for el in els}
+        refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
+        r2s = {el: refs[el][1] for el in els}
+        model = self.build(view, {el: 0.0 for el in els}, r2s)
+        predict = None
+        if lure is not None:
+            u = np.asarray(view.u)
 
-        def spec(f, lo=None, hi=None):
-            return [Spec(n, f * refs[el][0], f * refs[el][0] if lo is None else lo,
-                         f * refs[el][0] if hi is None else hi, scale=refs[el][0]) for n, el in zip(names, els)]
+            def predict(values):
+                cs = [values[n] for n in names]
+                return lure.simulate(values, u, lambda k, x, a: self.term(cs[k], r2s[els[k]], x, a))
 
-        # a nonlinear resonance moves with the calibration: each grid point refits the linear
-        # parameters briefly (the coefficient held); the scan stops once two points in a row
-        # do not improve
+        def fitted(specs, nfev, start=None):
+            try:
+                return view.fit_model(model, specs, max_nfev=nfev, start=start, predict=predict)
+            except NotConverged:  # a strong nonlinear resonance: integrate the rewritten model
+                return view.fit_model(model, specs, max_nfev=nfev, start=start)
+
+        def spec(f, free=False):
+            return [Spec(n, f * refs[el][0], 0.0 if free else f * refs[el][0],
+                         self.upper * refs[el][0] if free else f * refs[el][0], scale=refs[el][0])
+                    for n, el in zip(names, els)]
+
         best, worse = None, 0
         for f in self.grid:
             try:
-                values, raw, *_ = view.fit_model(model, spec(f), max_nfev=3)
+                values, raw, *_ = fitted(spec(f), 3)
             except SimulationError:
                 break
             rf = view.score(raw)[2]
@@ -79,11 +113,8 @@ class _Centred(Candidate):
         if best is None:
             raise SimulationError(f"{self.cause}: the extended model could not be simulated")
         start = {k: v for k, v in best[2].items() if k not in names}
-        fitted = view.fit_model(model, [Spec(n, best[1] * refs[el][0], 0.0, self.upper * refs[el][0],
-                                             scale=refs[el][0]) for n, el in zip(names, els)],
-                                max_nfev=12, start=start)
-        values, raw, ok, msg, at = fitted
-        return Extension(self.build(view, {el: values[n] for n, el in zip(names, els)}, refs), values, names,
+        values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
+        return Extension(self.build(view, {el: values[n] for n, el in zip(names, els)}, r2s), values, names,
                          raw, None, None, at, ok, msg)
 
 
@@ -97,16 +128,13 @@ class StiffnessSoftening(_Centred):
     label = "cubic softening of the stiffness elements"
     role, prefix, upper = "stiffness", "soft.k3", 2.0
 
-    def refs(self, view, series):
-        out = {}
-        for el in view.model.with_role(self.role):
-            q = series[view.state_of(el)]
-            peak = float(np.max(np.abs(q))) or 1.0
-            out[el] = (abs(slope(view.model, el, view.values)) / peak ** 2, 1.5 * float(np.mean(q ** 2)))
-        return out
+    @staticmethod
+    def term(c, r2, x, a):
+        return -c * x * (x ** 2 - r2)
 
-    def rewrite(self, view, model, el, coef, r2):
-        modify_law(model, el, lambda q, old: old - coef * q * (q ** 2 - r2))
+    def refs(self, view, el, x, a):
+        peak = float(np.max(np.abs(x))) or 1.0
+        return abs(slope(view.model, el, view.values)) / peak ** 2, 1.5 * float(np.mean(x ** 2))
 
 
 class NonlinearDamping(_Centred):
@@ -129,30 +157,22 @@ class NonlinearDamping(_Centred):
         ok = super().applies(view)
         if ok is not True or self.velocity:
             return ok
-        if not any(self._partner(view.model, el) for el in view.model.with_role(self.role)):
+        if not any(self.partner(view.model, el) for el in view.model.with_role(self.role)):
             return "no damping element has a stiffness partner (the velocity-cubic form covers it)"
         return True
 
-    def _partner(self, model, el):
+    def partner(self, model, el):
         if self.velocity:
             return None
         return next((o for o in neighbours(model, el) if getattr(model.elements[o], "role", None) == "stiffness"),
                     None)
 
-    def refs(self, view, series):
-        out = {}
-        for el in view.model.with_role(self.role):
-            c_lin = abs(slope(view.model, el, view.values))
-            partner = self._partner(view.model, el)
-            a = series[view.state_of(partner)] if partner else series["output rate"]
-            peak = float(np.max(np.abs(a))) or 1.0
-            out[el] = (c_lin / peak ** 2, (0.5 if partner else 1.5) * float(np.mean(a ** 2)))
-        return out
+    @staticmethod
+    def term(c, r2, x, a):
+        return c * ((x if a is None else a) ** 2 - r2) * x
 
-    def rewrite(self, view, model, el, coef, r2):
-        partner = self._partner(model, el)
-        if partner:
-            a = Quantity("q", partner)
-            modify_law(model, el, lambda f, old: old + coef * (a ** 2 - r2) * f)
-        else:
-            modify_law(model, el, lambda f, old: old + coef * (f ** 2 - r2) * f)
+    def refs(self, view, el, x, a):
+        amp = x if a is None else a
+        peak = float(np.max(np.abs(amp))) or 1.0
+        return (abs(slope(view.model, el, view.values)) / peak ** 2,
+                (1.5 if a is None else 0.5) * float(np.mean(amp ** 2)))
