@@ -129,7 +129,11 @@ def main(argv=None) -> int:
         if seed in done:
             continue
         t0 = time.perf_counter()
-        rec = draw(seed, size)
+        try:
+            rec = draw(seed, size)
+        except RuntimeError as exc:          # the visibility rule refused the seed
+            print(f"[{k}/{len(seeds)}] seed {seed}: not generated ({exc})", file=sys.stderr, flush=True)
+            continue
         gen = time.perf_counter() - t0
         print(f"[{k}/{len(seeds)}] seed {seed} {rec.family} {rec.label} ({', '.join(rec.mechanisms) or '-'}), "
               f"{len(rec.t)} samples, generated in {gen:.1f} s ... ", end="", file=sys.stderr, flush=True)
