@@ -92,8 +92,8 @@ def cmd_compile(a):
     th = np.array([float(v) for v in eqs.model.parameter_table().values()])
     mem = np.zeros(max(comp.layout.n_mem, 1))
     out = np.zeros(max(nx, len(eqs.outputs), 1))
-    comp.rhs(0.0, x, u, u, th, mem, out)
-    comp.output(0.0, x, u, u, th, mem, out)
+    comp.rhs(0.0, x, u, u, th, mem, comp.aux.copy(), out)
+    comp.output(0.0, x, u, u, th, mem, comp.aux.copy(), out)
     t5 = time.perf_counter()
     print(json.dumps({"build": t1 - t0, "derive": t2 - t1, "generate_source": t3 - t2,
                       "compile": t5 - t4, "source_bytes": len(src), "states": nx,

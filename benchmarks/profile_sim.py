@@ -35,10 +35,10 @@ N_CALLS = 1_000_000
 
 
 @njit
-def _loop_fc(fn, n, t, x, u, du, th, mem, out):
+def _loop_fc(fn, n, t, x, u, du, th, mem, aux, out):
     acc = 0.0
     for k in range(n):
-        fn(t + k * 1e-12, x, u, du, th, mem, out)
+        fn(t + k * 1e-12, x, u, du, th, mem, aux, out)
         acc += out[0]
     return acc
 
@@ -67,14 +67,18 @@ def fc_loop(fn_type):
     from numba import types
 
     sig = types.float64(fn_type, types.int64, types.float64, types.float64[::1], types.float64[::1],
-                        types.float64[::1], types.float64[::1], types.float64[::1], types.float64[::1])
+                        types.float64[::1], types.float64[::1], types.float64[::1], types.float64[::1],
+                        types.float64[::1])
     return njit(sig)(_loop_fc.py_func)
 
 
 def profile_case(case, t_end: float):
     import bondgraph.integrators as integ
+    from bondgraph.model_functions import FUNCTION_TYPE
     from bondgraph import Simulator
-    from bondgraph.simulate import ATOL_FLOOR
+    from bondgraph import config
+
+    ATOL_FLOOR = config.get("simulate.atol_floor")
 
     import sim_bench
     from handwritten import integrator, _A, _P
@@ -102,12 +106,12 @@ def profile_case(case, t_end: float):
     nu = max(len(sim.input_names), 1)
     u, du = np.ones(nu), np.zeros(nu)
     out = np.zeros(max(len(x), len(sim.output_names), 4))
-    loop = fc_loop(integ._FN)
+    loop = fc_loop(FUNCTION_TYPE)
     cost = {}
     for name in ("rhs", "output", "opin", "commit"):
         fn = getattr(c, name)
         m = mem.copy()
-        cost[name] = _per_call(lambda n, fn=fn, m=m: loop(fn, n, 0.0, x, u, du, th, m, out))
+        cost[name] = _per_call(lambda n, fn=fn, m=m: loop(fn, n, 0.0, x, u, du, th, m, c.aux.copy(), out))
     args = tuple(bank.args())
 
     @njit

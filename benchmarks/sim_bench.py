@@ -264,7 +264,9 @@ def run_limit(case, sim, t, atol_vec):
 
 def bench_case(case, repeat: int, naive_limit: float, t_end: float = T_END, log=print) -> dict:
     from bondgraph import Simulator
-    from bondgraph.simulate import ATOL_FLOOR
+    from bondgraph import config
+
+    ATOL_FLOOR = config.get("simulate.atol_floor")
 
     t = np.linspace(0.0, t_end, int(round(t_end / DT)) + 1)
     res: dict = {"case": case["name"], "desc": case["desc"], "t_end": t_end, "samples": int(t.size), "rtol": RTOL}

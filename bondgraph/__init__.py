@@ -2,7 +2,8 @@
 
 Build a :class:`Model` from elements (:class:`Se`, :class:`Sf`, :class:`C`, :class:`I`,
 :class:`R`, :class:`TF`, :class:`GY`, :class:`J0`, :class:`J1`, :class:`CField`) and
-components, then :func:`derive` its equations, :func:`simulate` it, or linearise it.
+components, then :func:`derive` its equations, :func:`simulate` it, or linearise it.  New
+kinds of element subclass :class:`Element` (the element protocol, see ``docs/extending.md``).
 
 The names below are imported on first use (PEP 562), so ``import bondgraph`` and the
 ``bondgraph --help`` command stay fast: sympy and the compiled integrator load only when
@@ -19,6 +20,7 @@ _EXPORTS = {
     "Causality": "causality", "assign_causality": "causality",
     "C": "elements", "CField": "elements", "GY": "elements", "I": "elements", "J0": "elements",
     "J1": "elements", "R": "elements", "Se": "elements", "Sf": "elements", "TF": "elements",
+    "Element": "elements",
     "Equations": "equations", "derive": "equations",
     "BondGraphError": "errors", "CausalityError": "errors", "DataError": "errors", "ModelError": "errors",
     "ParameterError": "errors", "SignalError": "errors", "UsageError": "errors",

@@ -73,8 +73,9 @@ def _problem(sim, values: Mapping[str, float], inputs, t0: float) -> str | None:
         eval_inputs(t0, *bank.args(), u, du)
         mem = sim.initial_memory(t0, x, th, bank)
         c = sim.compiled
-        c.rhs(t0, x, u, du, th, mem, f0)
-        c.output(t0, x, u, du, th, mem, y)
+        aux = c.aux.copy()
+        c.rhs(t0, x, u, du, th, mem, aux, f0)
+        c.output(t0, x, u, du, th, mem, aux, y)
         if not (np.all(np.isfinite(f0)) and np.all(np.isfinite(y))):
             return "are not finite at the initial state"
         radius = 0.0
@@ -84,7 +85,7 @@ def _problem(sim, values: Mapping[str, float], inputs, t0: float) -> str | None:
                 xp = x.copy()
                 dx = 1e-7 * max(abs(x[j]), 1e-9)
                 xp[j] += dx
-                c.rhs(t0, xp, u, du, th, mem, f1)
+                c.rhs(t0, xp, u, du, th, mem, aux, f1)
                 J[:, j] = (f1[:n] - f0[:n]) / dx
             if not np.all(np.isfinite(J)):
                 return "have a non-finite Jacobian at the initial state"

@@ -1,17 +1,15 @@
 """Compile a straight-line program to numba-compiled numeric functions.
 
-Generated functions share one signature ``f(t, x, u, du, th, mem, out)`` (float64 scalar
-and contiguous float64 arrays) so one compiled integrator serves every model:
-
-* ``rhs``    out = dx/dt
-* ``output`` out = named outputs
-* ``opin``   out = inputs of the memory operators (for step-reversal checks)
-* ``commit`` advance the operators' memory to the current input (accepted steps only)
-* ``jac``    out = ∂(dx/dt)/∂x, row-major (generated on demand for implicit solvers)
+The generated functions follow the calling convention of :mod:`bondgraph.model_functions`
+(``rhs``, ``output``, ``opin``, ``commit`` and, on demand, ``jac``).  Memory operators are
+called through their compiled kernels (:meth:`MemoryOperator.kernels`), which the generated
+module receives as globals before it is compiled; a fingerprint of the kernels' code is part
+of the source, so changed kernels make a new module.
 
 The source is written to a cache directory named by its hash and compiled by numba with
 ``cache=True``: a second run of the same model structure loads machine code from disk.
-No sympy is evaluated when the functions run.
+No sympy is evaluated when the functions run.  Programs longer than the setting
+``codegen.tape_threshold`` run on the tape interpreter (:mod:`bondgraph.tape`) instead.
 """
 from __future__ import annotations
 
@@ -26,10 +24,11 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
+from . import config
 from .equations import Equations
+from .model_functions import ARGUMENTS, SIGNATURE, ModelFunctions
 
-SIGNATURE = "void(float64, float64[::1], float64[::1], float64[::1], float64[::1], float64[::1], float64[::1])"
-FUNCTIONS = ("rhs", "output", "opin", "commit")
+_NO_AUX = np.zeros(1)
 
 
 def cache_dir() -> Path:
@@ -113,44 +112,29 @@ def generate_source(eqs: Equations, with_jacobian: bool = False) -> str:
     lines = ["import math", "import numpy as np", "from numba import njit", "",
              f"SIG = {SIGNATURE!r}", ""]
     for k, ob in enumerate(eqs.operators):
-        lines += [ob.operator.kernel_source(f"op{k}"), "",
-                  f"op{k}_output = njit(cache=True)(op{k}_output)",
-                  f"op{k}_commit = njit(cache=True)(op{k}_commit)", ""]
+        kind = type(ob.operator)
+        lines.append(f"# op{k}_output, op{k}_commit: kernels of {kind.__module__}.{kind.__qualname__} "
+                     f"(code {ob.operator.kernels().fingerprint})")
+    signature = ", ".join(ARGUMENTS)
 
-    def body(roots: list[sp.Expr]) -> list[str]:
-        need = set()
-        for r in roots:
-            need |= r.free_symbols
-        stmts = []
-        for k in range(len(eqs.program) - 1, -1, -1):
-            st = eqs.program[k]
-            if st.var in need:
-                need |= st.expr.free_symbols
-                stmts.append(k)
-        out = []
-        for k in reversed(stmts):
-            st = eqs.program[k]
+    def function(name: str, targets: list[sp.Expr], extra: list[str] | None = None) -> list[str]:
+        src = ["", "@njit(SIG, cache=True)", f"def {name}({signature}):"]
+        for st in eqs.needed(targets)[0]:
             if st.op is not None:
                 j = op_index[st.var]
                 (a, b), (c, d) = lay.mem_slices[j], lay.prm_slices[j]
-                out.append(f"    v{k} = op{j}_output({pr.doprint(st.expr)}, mem[{a}:{b}], th[{c}:{d}])")
+                src.append(f"    {lay.names[st.var]} = op{j}_output({pr.doprint(st.expr)}, mem[{a}:{b}], th[{c}:{d}])")
             else:
-                out.append(f"    v{k} = {pr.doprint(st.expr)}")
-        return out
-
-    def function(name: str, targets: list[sp.Expr], extra: list[str] | None = None) -> list[str]:
-        src = ["@njit(SIG, cache=True)", f"def {name}(t, x, u, du, th, mem, out):"]
-        src += body(targets)
+                src.append(f"    {lay.names[st.var]} = {pr.doprint(st.expr)}")
         src += [f"    out[{i}] = {pr.doprint(e)}" for i, e in enumerate(targets)]
         src += extra or []
         src.append("    return")
-        return src + [""]
+        return src
 
     rates = [eqs.rates[s] for s in eqs.state_symbols]
-    outputs = list(eqs.outputs.values())
     opins = [st.expr for st in eqs.program if st.op is not None]
     lines += function("rhs", rates)
-    lines += function("output", outputs)
+    lines += function("output", list(eqs.outputs.values()))
     lines += function("opin", opins)
     commits = []
     for j, _ in enumerate(eqs.operators):
@@ -159,57 +143,22 @@ def generate_source(eqs: Equations, with_jacobian: bool = False) -> str:
     lines += function("commit", opins, commits)
     if with_jacobian:
         xs = eqs.state_symbols
-        lines += function("jac", list(eqs.jacobian([eqs.rates[s] for s in xs], xs)))
+        lines += function("jac", list(eqs.jacobian([eqs.rates[s] for s in xs], xs, inline=False)))
     return "\n".join(lines) + "\n"
 
 
-@dataclass
-class Compiled:
-    """Compiled numeric functions of a model plus the layout of their arrays."""
-
-    module: object
-    layout: Layout
-    source_path: Path
-
-    def __getattr__(self, name):
-        if name in FUNCTIONS or name == "jac":
-            return getattr(self.module, name)
-        raise AttributeError(name)
-
-
-@dataclass
-class Taped:
-    """A large model run by the tape interpreter (see :mod:`bondgraph.tape`): the same function
-    interface as :class:`Compiled`, with the tape as the initial ``mem``."""
-
-    layout: Layout
-    tape: np.ndarray
-
-    def __getattr__(self, name):
+def compile_equations(eqs: Equations, with_jacobian: bool = False) -> ModelFunctions:
+    """The numeric functions of ``eqs``: generated, cached and compiled by numba, or for long
+    programs (more statements than ``codegen.tape_threshold``) the tape interpreter."""
+    if len(eqs.program) > config.get("codegen.tape_threshold") and not with_jacobian:
         from . import tape
-        if name in ("rhs", "output"):
-            return getattr(tape, name)
-        if name in ("opin", "commit"):
-            return tape.nothing
-        raise AttributeError(name)
-
-
-#: programs longer than this run on the tape interpreter instead of being compiled by numba
-TAPE_THRESHOLD = 300
-
-
-def compile_equations(eqs: Equations, with_jacobian: bool = False) -> Compiled | Taped:
-    """Generate, cache and load the compiled functions of ``eqs`` (large models: a tape)."""
-    if len(eqs.program) > TAPE_THRESHOLD and not with_jacobian:
-        from .tape import TapeUnsupported, build_tape
         try:
-            tape = build_tape(eqs)
-        except TapeUnsupported:
+            program = tape.build_tape(eqs)
+        except tape.TapeUnsupported:
             pass
         else:
-            lay = layout(eqs)
-            lay.n_mem = tape.size
-            return Taped(lay, tape)
+            return ModelFunctions(tape.rhs, tape.output, tape.nothing, tape.nothing, layout(eqs), program,
+                                  route="tape")
     src = generate_source(eqs, with_jacobian)
     key = hashlib.sha256(src.encode()).hexdigest()[:20]
     path = cache_dir() / f"bg_{key}.py"
@@ -222,9 +171,18 @@ def compile_equations(eqs: Equations, with_jacobian: bool = False) -> Compiled |
     if module is None:
         spec = importlib.util.spec_from_file_location(modname, path)
         module = importlib.util.module_from_spec(spec)
-        sys.modules[modname] = module
-        spec.loader.exec_module(module)
-    return Compiled(module, layout(eqs), path)
+        for k, ob in enumerate(eqs.operators):  # the kernels the source calls, before it compiles
+            kernels = ob.operator.kernels()
+            setattr(module, f"op{k}_output", kernels.output)
+            setattr(module, f"op{k}_commit", kernels.commit)
+        sys.modules[modname] = module  # numba finds the module's globals through sys.modules
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[modname]
+            raise
+    return ModelFunctions(module.rhs, module.output, module.opin, module.commit, layout(eqs), _NO_AUX,
+                          getattr(module, "jac", None), str(path), "numba")
 
 
 def parameter_vector(eqs: Equations) -> np.ndarray:

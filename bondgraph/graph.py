@@ -226,6 +226,7 @@ class Component:
             raise ModelError(f"{self.name}: operator '{name}' declared twice")
         if not isinstance(op, MemoryOperator):
             raise ModelError(f"{self.name}: operator '{name}' must be a MemoryOperator, got {op!r}")
+        op.kernels()  # compiled and checked now: a broken kernel is an error at the line that applies it
         values = op.parameter_values()
         syms = [self.parameter(f"{name}.{pn}", v, doc=f"{op.kind} parameter")
                 for pn, v in zip(op.parameter_names, values)]

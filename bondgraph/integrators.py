@@ -19,10 +19,13 @@ Error weight per state: ``atol_i + rtol·max(|x_i|, peak_i)``, where ``peak_i`` 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, types
 from scipy.integrate import RK45
+
+from .model_functions import FUNCTION_TYPE
 
 
 #: signal kinds (see bondgraph.signals) and the length of a signal's parameter row
@@ -112,8 +115,6 @@ def sample_inputs(t, kind, par, off, ln, tt, tv, cur, out):
         out[k, :] = u
 
 
-_FN = types.FunctionType(types.void(types.float64, types.float64[::1], types.float64[::1], types.float64[::1],
-                                    types.float64[::1], types.float64[::1], types.float64[::1]))
 _A = np.ascontiguousarray(RK45.A, float)
 _B = np.ascontiguousarray(RK45.B, float)
 _C = np.ascontiguousarray(RK45.C, float)
@@ -163,24 +164,49 @@ def _dense(x, Q, h, theta, out):
         out[i] = x[i] + h * acc
 
 
-@njit(types.int64(_FN, _FN, _FN, _FN, _f1, _f1, _f1, types.int64, _i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1,
-                  types.float64, _f1, types.float64, types.float64, types.int64, _f2, _f2, _i1, _i1),
+class Flags(NamedTuple):
+    """What the model's functions read, so the integrator evaluates inputs only when needed."""
+
+    input_rates: bool          # the laws use input rates (evaluate du at every stage)
+    outputs_use_inputs: bool   # the outputs read inputs or input rates
+    opins_use_inputs: bool     # the operator inputs read inputs or input rates
+
+
+class Stats(NamedTuple):
+    """Outcome of :func:`dopri5`: status code (0 ok, see STATUS) and counts."""
+
+    status: int
+    steps: int
+    rejected: int
+    rhs_calls: int
+    reversal_rejections: int
+    written: int  # output samples written (the failure time when status != 0)
+
+
+_FLAGS = types.NamedUniTuple(types.boolean, len(Flags._fields), Flags)
+_STATS = types.NamedUniTuple(types.int64, len(Stats._fields), Stats)
+_FN4 = (FUNCTION_TYPE,) * 4
+
+
+@njit(_STATS(*_FN4, _f1, _f1, _f1, _f1, types.int64, _i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1,
+             types.float64, _f1, types.float64, types.float64, types.int64, _f2, _f2, _FLAGS),
       cache=True)
-def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, slen, stt, stv, scur, t_out, t_break,
-           rtol, atol, h_init, h_max, max_steps, X, Y, stats, flags):
+def dopri5(rhs, output, opin, commit, x0, th, mem, aux, n_ops, skind, spar, soff, slen, stt, stv, scur, t_out,
+           t_break, rtol, atol, h_init, h_max, max_steps, X, Y, flags):
     """Integrate from t_out[0] to t_out[-1]; write states X and outputs Y at t_out.
 
-    Returns a status code (0 ok, see STATUS); ``stats`` receives steps, rejections,
-    right-hand-side calls, reversal rejections and output samples written.  ``flags``: [the laws use input rates,
-    the outputs use inputs, the operator inputs use inputs].
+    ``rhs``, ``output``, ``opin``, ``commit`` are the model's functions (calling convention of
+    :mod:`bondgraph.model_functions`), ``mem`` the operator memory, ``aux`` the model's
+    auxiliary data, ``n_ops`` the number of memory operators; the signal arrays come from
+    :meth:`bondgraph.signals.SignalBank.args`.  Returns :class:`Stats`.
     """
     n = x0.shape[0]
     nu = skind.shape[0]
     ny = Y.shape[1]
     nv = n_ops
-    rates = flags[0] != 0
-    out_inputs = flags[1] != 0
-    opin_inputs = flags[2] != 0
+    rates = flags.input_rates
+    out_inputs = flags.outputs_use_inputs
+    opin_inputs = flags.opins_use_inputs
     A, B, C, E, P = _A, _B, _C, _E, _P
     ns = B.shape[0]
     u = np.zeros(max(nu, 1))
@@ -206,14 +232,14 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
     while ib < t_break.shape[0] and t_break[ib] <= t:
         ib += 1
     eval_inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-    rhs(t, x, u, du, th, mem, K[0])
+    rhs(t, x, u, du, th, mem, aux, K[0])
     n_rhs = 1
     if nv:
-        commit(t, x, u, du, th, mem, v1)
+        commit(t, x, u, du, th, mem, aux, v1)
     # outputs at the start
     while k_out < n_out and t_out[k_out] <= t:
         X[k_out, :] = x
-        output(t, x, u, du, th, mem, y)
+        output(t, x, u, du, th, mem, aux, y)
         Y[k_out, :ny] = y[:ny]
         k_out += 1
     # initial step (Hairer & Wanner), as in scipy
@@ -233,7 +259,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
         for i in range(n):
             xn[i] = x[i] + h * K[0, i]
         eval_inputs(t + h, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-        rhs(t + h, xn, u, du, th, mem, err)
+        rhs(t + h, xn, u, du, th, mem, aux, err)
         n_rhs += 1
         d2 = 0.0
         for i in range(n):
@@ -277,7 +303,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             if hit and ts >= t_stop:
                 ts = t_left  # inputs jump at a breakpoint: the step sees their left limit
             eval_inputs(ts, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-            rhs(ts, xs, u, du, th, mem, K[s])
+            rhs(ts, xs, u, du, th, mem, aux, K[s])
         for i in range(n):
             acc = 0.0
             for j in range(ns):
@@ -286,7 +312,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
         t_new = t_stop if hit else t + h
         t_eval = t_left if hit else t_new
         eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-        rhs(t_eval, xn, u, du, th, mem, K[ns])
+        rhs(t_eval, xn, u, du, th, mem, aux, K[ns])
         n_rhs += ns
         _weights(x, xn, peak, atol, rtol, w)
         en = 0.0
@@ -315,18 +341,18 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
         if nv:
             if opin_inputs:
                 eval_inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-            opin(t, x, u, du, th, mem, v0)
+            opin(t, x, u, du, th, mem, aux, v0)
             reversal = -1.0
             if opin_inputs:
                 eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-            opin(t_eval, xn, u, du, th, mem, v1)
+            opin(t_eval, xn, u, du, th, mem, aux, v1)
             _coeffs(K, P, Q)
             for c in range(1, _N_CHECK + 1):
                 theta = c / (_N_CHECK + 1.0)
                 _dense(x, Q, h, theta, xd)
                 if opin_inputs:
                     eval_inputs(t + theta * h, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-                opin(t + theta * h, xd, u, du, th, mem, vt)
+                opin(t + theta * h, xd, u, du, th, mem, aux, vt)
                 for j in range(nv):
                     tol = 1e-9 * (abs(v0[j]) + abs(v1[j])) + 1e-300
                     d_in = vt[j] - v0[j]
@@ -347,16 +373,16 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
             _dense(x, Q, h, theta, xd)
             if out_inputs:
                 eval_inputs(t_out[k_out], skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-            output(t_out[k_out], xd, u, du, th, mem, y)
+            output(t_out[k_out], xd, u, du, th, mem, aux, y)
             X[k_out, :] = xd
             Y[k_out, :ny] = y[:ny]
             k_out += 1
         if nv:
             if hit:  # follow the input up to the jump, then across it
                 eval_inputs(t_eval, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-                commit(t_eval, xn, u, du, th, mem, v1)
+                commit(t_eval, xn, u, du, th, mem, aux, v1)
             eval_inputs(t_new, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-            commit(t_new, xn, u, du, th, mem, v1)
+            commit(t_new, xn, u, du, th, mem, aux, v1)
         else:
             eval_inputs(t_new, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
         for i in range(n):
@@ -367,11 +393,11 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
         n_steps += 1
         if hit and ib < t_break.shape[0] and t >= t_break[ib]:
             ib += 1
-            rhs(t, x, u, du, th, mem, K[0])  # restart after a discontinuity
+            rhs(t, x, u, du, th, mem, aux, K[0])  # restart after a discontinuity
             n_rhs += 1
         else:
             if nv:
-                rhs(t, x, u, du, th, mem, K[0])  # memory changed: FSAL value is stale
+                rhs(t, x, u, du, th, mem, aux, K[0])  # memory changed: FSAL value is stale
                 n_rhs += 1
             else:
                 for i in range(n):
@@ -379,10 +405,5 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, n_ops, skind, spar, soff, sle
         fac = _MAX_FACTOR if en == 0.0 else min(_MAX_FACTOR, _SAFETY * en ** -0.2)
         # a step shortened to land on a breakpoint keeps the size the controller had proposed
         h = min(h_full, h_max) if hit else min(h * fac, h_max)
-    stats[0] = n_steps
-    stats[1] = n_rej
-    stats[2] = n_rhs
-    stats[3] = n_rev
-    stats[4] = k_out  # output samples written (the failure time when status != 0)
-    return status
+    return Stats(status, n_steps, n_rej, n_rhs, n_rev, k_out)
 

@@ -83,15 +83,24 @@ def _derivative(sym: sp.Symbol, fmt: str) -> str:
     return r"\frac{d}{dt}" + sp.latex(sym)
 
 
+def _substituted(eqs: Equations):
+    """State equations, outputs and operator inputs, fully substituted in one pass over the
+    program (the same as ``state_equations()``, ``output_equations()``, ``operator_inputs()``)."""
+    ops = {st.var: st.expr for st in eqs.program if st.op is not None}
+    both = eqs.substituted({**{("x", k): v for k, v in eqs.rates.items()},
+                            **{("y", k): v for k, v in eqs.outputs.items()},
+                            **{("h", k): v for k, v in ops.items()}})
+    return ({k: both[("x", k)] for k in eqs.rates}, {k: both[("y", k)] for k in eqs.outputs},
+            {k: both[("h", k)] for k in ops})
+
+
 def render(eqs: Equations, fmt: str = "text") -> str:
     """The complete printout of ``eqs`` in ``fmt`` (text, latex or markdown)."""
     if fmt not in FORMATS:
         raise ValueError(f"format must be one of {FORMATS}")
     sstr, latex = _Str().doprint, _Latex().doprint
     m = eqs.model
-    states = eqs.state_equations()
-    outputs = eqs.output_equations()
-    op_inputs = eqs.operator_inputs()
+    states, outputs, op_inputs = _substituted(eqs)
     if fmt == "latex":
         return _latex(eqs, states, outputs, op_inputs, latex)
     md = fmt == "markdown"

@@ -19,7 +19,7 @@ import math
 import os
 import re
 from dataclasses import dataclass
-from typing import Mapping
+from typing import Mapping, NamedTuple
 
 import numpy as np
 
@@ -120,6 +120,19 @@ def _row(*vals) -> tuple:
     return tuple(float(v) for v in vals) + (0.0,) * (NPAR - len(vals))
 
 
+class SignalArrays(NamedTuple):
+    """All inputs as arrays: kind and parameter row per input, offset and length of its table
+    in ``tt``/``tv`` (times and values), and ``cur``, the table interval last used per input."""
+
+    kind: np.ndarray
+    par: np.ndarray
+    off: np.ndarray
+    len: np.ndarray
+    tt: np.ndarray
+    tv: np.ndarray
+    cur: np.ndarray
+
+
 class SignalBank:
     """All inputs of a model packed into arrays for the compiled integrator."""
 
@@ -145,8 +158,10 @@ class SignalBank:
                 if k == PWL and n > 1]
         return float(min(gaps)) if gaps else math.inf
 
-    def args(self):
-        return self.kind, self.par, self.off, self.len, self.tt, self.tv, np.zeros(len(self.names), np.int64)
+    def args(self) -> "SignalArrays":
+        """The arrays the compiled integrator and :func:`eval_inputs` take, in their order."""
+        return SignalArrays(self.kind, self.par, self.off, self.len, self.tt, self.tv,
+                            np.zeros(len(self.names), np.int64))
 
     def sample(self, t) -> np.ndarray:
         """Values of all inputs at times ``t``: array (len(t), n_inputs)."""

@@ -8,30 +8,30 @@ stability-bound for more than a few million steps.
 An integrator sees the inputs only where it evaluates them, and a step the error test allows
 can stride over a feature of a tabulated input that falls between two stages (a pulse reaching
 a model at rest, whose error estimate is zero): with tables, every method's step is capped at
-``TABLE_STEPS`` sample intervals of the tables.
+``simulate.table_steps`` sample intervals of the tables.
+
+Defaults (tolerances, the step cap, the stiffness threshold of ``auto``) are settings of
+:mod:`bondgraph.config` (section ``simulate``), read when a run starts.
 """
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
 import scipy.integrate as si
 
-from .codegen import Compiled, Taped, compile_equations, parameter_vector
+from . import config
+from .codegen import compile_equations, parameter_vector
 from .equations import Equations, derive
 from .errors import BondGraphError, ParameterError, SignalError, did_you_mean
 from .graph import Model
-from .integrators import STATUS, dopri5, eval_inputs
+from .integrators import STATUS, Flags, dopri5, eval_inputs
+from .model_functions import ModelFunctions
 from .signals import Constant, Signal, SignalBank
 
 METHODS = ("auto", "dopri5", "radau", "bdf", "lsoda")
-_EXPLICIT_STEP_LIMIT = 3e6
-#: largest step, in sample intervals (median) of the tabulated inputs
-TABLE_STEPS = 10
-#: default absolute error floor: states start at exactly zero, where a purely relative error
-#: test would chase rounding noise; 1e-20 is far below any SI state magnitude of interest
-ATOL_FLOOR = 1e-20
 
 
 class SimulationError(BondGraphError, RuntimeError):
@@ -47,7 +47,7 @@ class Experiment:
     dt: float = 1e-3
     inputs: Mapping[str, Signal] = field(default_factory=dict)
     method: str = "auto"
-    rtol: float = 1e-6
+    rtol: float = field(default_factory=lambda: config.get("simulate.rtol"))
 
     def times(self, t_end: float | None = None, dt: float | None = None) -> np.ndarray:
         t_end = self.t_end if t_end is None else t_end
@@ -96,8 +96,8 @@ class Simulator:
 
     def __init__(self, model: Model | Equations):
         self.eqs = model if isinstance(model, Equations) else derive(model)
-        self.compiled: Compiled | Taped = compile_equations(self.eqs)
-        self._jac: Compiled | None = None
+        self.compiled: ModelFunctions = compile_equations(self.eqs)
+        self._jac: ModelFunctions | None = None
         self.state_names = [str(s) for s in self.eqs.state_symbols]
         self.output_names = list(self.eqs.outputs)
         self.input_names = [str(u) for u in self.eqs.inputs]
@@ -109,15 +109,11 @@ class Simulator:
         signals = set(self.eqs.inputs) | set(self.eqs.input_rates)
         outs = self._uses(self.eqs.outputs.values()) & signals
         opins = self._uses(st.expr for st in self.eqs.program if st.op is not None) & signals
-        self._flags = np.array([int(self.uses_input_rates), int(bool(outs)), int(bool(opins))], np.int64)
+        self._flags = Flags(self.uses_input_rates, bool(outs), bool(opins))
 
     def _uses(self, exprs) -> set:
         """Symbols the given expressions depend on through the program."""
-        need = set().union(set(), *(e.free_symbols for e in exprs))
-        for st in reversed(self.eqs.program):
-            if st.var in need:
-                need |= st.expr.free_symbols
-        return need
+        return self.eqs.needed(list(exprs))[1]
 
     # ---- setup -------------------------------------------------------------------------------
     def theta(self, params: Mapping | None = None) -> np.ndarray:
@@ -142,9 +138,8 @@ class Simulator:
                           kinks=self.uses_input_rates or bool(self.eqs.operators))
 
     def initial_memory(self, t0, x0, th, bank: SignalBank) -> np.ndarray:
+        """The operators' memory at rest at the initial state and inputs."""
         lay = self.compiled.layout
-        if isinstance(self.compiled, Taped):
-            return self.compiled.tape.copy()
         mem = np.zeros(max(lay.n_mem, 1))
         if not self.eqs.operators:
             return mem
@@ -155,17 +150,21 @@ class Simulator:
             for k, ob in enumerate(self.eqs.operators):
                 (a, b), (c, d) = lay.mem_slices[k], lay.prm_slices[k]
                 mem[a:b] = ob.operator.initial_memory(float(v[k]), th[c:d])
-            self.compiled.opin(t0, x0, u, du, th, mem, v)
+            self.compiled.opin(t0, x0, u, du, th, mem, self.compiled.aux, v)
         return mem
 
     # ---- running -----------------------------------------------------------------------------
     def run(self, t, inputs: Mapping[str, Signal] | None = None, params: Mapping | None = None,
-            x0=None, method: str = "auto", rtol: float = 1e-6, atol=ATOL_FLOOR, max_step: float = np.inf,
-            max_steps: int = 50_000_000, progress=None) -> SimResult:
+            x0=None, method: str = "auto", rtol: float | None = None, atol=None, max_step: float = np.inf,
+            max_steps: int | None = None, progress=None) -> SimResult:
         """Simulate and sample at times ``t`` (increasing array, or a scalar end time → 1001 samples).
 
         ``params`` maps parameter names to values; ``progress(fraction)`` is called between
-        chunks of long runs."""
+        chunks of long runs.  ``rtol``, ``atol`` and ``max_steps`` default to the settings
+        ``simulate.rtol``, ``simulate.atol_floor`` and ``simulate.max_steps``."""
+        rtol = config.get("simulate.rtol") if rtol is None else rtol
+        atol = config.get("simulate.atol_floor") if atol is None else atol
+        max_steps = config.get("simulate.max_steps") if max_steps is None else max_steps
         t = np.array(t, float)  # a private, writable, contiguous copy
         if t.ndim == 0:
             t = np.linspace(0.0, float(t), 1001)
@@ -177,38 +176,39 @@ class Simulator:
         x = self.initial_state(th) if x0 is None else np.asarray(x0, float).copy()
         bank = self.signal_bank(inputs)
         mem = self.initial_memory(t[0], x, th, bank)
+        aux = self.compiled.aux.copy()  # the tape's registers are written
         n = x.size
         atol_v = np.broadcast_to(np.asarray(atol, float), (n,)).copy()
         if method == "auto":
             method = self.choose_method(t, x, th, mem, bank)
-        max_step = min(max_step, TABLE_STEPS * bank.table_spacing())
+        max_step = min(max_step, config.get("simulate.table_steps") * bank.table_spacing())
         X = np.empty((t.size, n))
         Y = np.empty((t.size, len(self.output_names)))
-        stats = np.zeros(5, np.int64)
+        stats: Counter = Counter()
         n_chunks = 1 if progress is None else int(min(50, max(1, t.size // 20000)))
         bounds = np.linspace(0, t.size - 1, n_chunks + 1).round().astype(int)
         for a, b in zip(bounds[:-1], bounds[1:]):
             tc = t[a:b + 1]
             breaks = bank.breaks(tc[0], tc[-1])
-            Xc, Yc, st = X[a:b + 1], Y[a:b + 1], np.zeros(5, np.int64)
+            Xc, Yc = X[a:b + 1], Y[a:b + 1]
             if method == "dopri5":
-                c = self.compiled
-                status = dopri5(c.rhs, c.output, c.opin, c.commit, x, th, mem, len(self.eqs.operators),
-                                *bank.args(), np.ascontiguousarray(tc), breaks, float(rtol), atol_v, 0.0,
-                                float(max_step), int(max_steps), Xc, Yc, st, self._flags)
-                if status != 0:
-                    raise SimulationError(f"integration failed ({STATUS[int(status)]}) near t = "
-                                          f"{tc[max(int(st[4]) - 1, 0)]:.6g} s; check parameters or try --method radau")
+                st = dopri5(*self.compiled.integrator_functions, x, th, mem, aux, len(self.eqs.operators),
+                            *bank.args(), np.ascontiguousarray(tc), breaks, float(rtol), atol_v, 0.0,
+                            float(max_step), int(max_steps), Xc, Yc, self._flags)
+                if st.status != 0:
+                    raise SimulationError(f"integration failed ({STATUS[st.status]}) near t = "
+                                          f"{tc[max(st.written - 1, 0)]:.6g} s; check parameters or try --method radau")
+                stats.update(steps=st.steps, rejected=st.rejected, rhs_calls=st.rhs_calls,
+                             reversal_rejections=st.reversal_rejections)
             else:
-                self._run_scipy(method, tc, x, th, mem, bank, breaks, rtol, atol_v, max_step, Xc, Yc, st)
-            stats += st
+                stats += self._run_scipy(method, tc, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, Xc, Yc)
             x = np.ascontiguousarray(Xc[-1])
             if progress is not None:
                 progress(b / (t.size - 1))
         return SimResult(t, {n: Y[:, i] for i, n in enumerate(self.output_names)},
                          {n: X[:, i] for i, n in enumerate(self.state_names)},
-                         {"method": method, "steps": int(stats[0]), "rejected": int(stats[1]),
-                          "rhs_calls": int(stats[2]), "reversal_rejections": int(stats[3])}, bank)
+                         {"method": method, **{k: int(stats[k]) for k in
+                                               ("steps", "rejected", "rhs_calls", "reversal_rejections")}}, bank)
 
     def jacobian_at(self, t0, x, th, mem, bank) -> np.ndarray:
         """∂(dx/dt)/∂x from the compiled symbolic Jacobian."""
@@ -218,7 +218,7 @@ class Simulator:
         u, du = np.zeros(max(len(self.input_names), 1)), np.zeros(max(len(self.input_names), 1))
         eval_inputs(t0, *bank.args(), u, du)
         J = np.zeros(n * n)
-        self._jac.jac(t0, x, u, du, th, mem, J)
+        self._jac.jac(t0, x, u, du, th, mem, self._jac.aux, J)
         return J.reshape(n, n)
 
     def choose_method(self, t, x, th, mem, bank) -> str:
@@ -230,20 +230,23 @@ class Simulator:
         u, du = np.zeros(nu), np.zeros(nu)
         eval_inputs(t[0], *bank.args(), u, du)
         f0, f1 = np.zeros(n), np.zeros(n)
-        self.compiled.rhs(t[0], x, u, du, th, mem, f0)
+        aux = self.compiled.aux.copy()
+        self.compiled.rhs(t[0], x, u, du, th, mem, aux, f0)
         J = np.zeros((n, n))
         for j in range(n):
             xp = x.copy()
             dxj = 1e-7 * max(abs(x[j]), 1e-9)
             xp[j] += dxj
-            self.compiled.rhs(t[0], xp, u, du, th, mem, f1)
+            self.compiled.rhs(t[0], xp, u, du, th, mem, aux, f1)
             J[:, j] = (f1 - f0) / dxj
         lam = np.max(np.abs(np.linalg.eigvals(J))) if np.all(np.isfinite(J)) else 0.0
         steps = (t[-1] - t[0]) * lam / 3.3
-        return "radau" if steps > _EXPLICIT_STEP_LIMIT else "dopri5"
+        return "radau" if steps > config.get("simulate.explicit_step_limit") else "dopri5"
 
-    def _run_scipy(self, method, t, x, th, mem, bank, breaks, rtol, atol_v, max_step, X, Y, stats):
+    def _run_scipy(self, method, t, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, X, Y) -> Counter:
+        """scipy's stiff solvers; returns the step and right-hand-side counts."""
         c = self.compiled
+        stats: Counter = Counter()
         nu = max(len(self.input_names), 1)
         u, du = np.zeros(nu), np.zeros(nu)
         dx = np.zeros(x.size)
@@ -254,7 +257,7 @@ class Simulator:
 
         def f(tt, xx):
             eval_inputs(tt, *args, u, du)
-            c.rhs(tt, np.ascontiguousarray(xx), u, du, th, mem, dx)
+            c.rhs(tt, np.ascontiguousarray(xx), u, du, th, mem, aux, dx)
             return dx.copy()
 
         def jac(tt, xx):
@@ -267,7 +270,7 @@ class Simulator:
 
         def emit(tt, xx):
             eval_inputs(tt, *args, u, du)
-            c.output(tt, xx, u, du, th, mem, y)
+            c.output(tt, xx, u, du, th, mem, aux, y)
             return y[:len(self.output_names)]
 
         X[0], Y[0] = x, emit(t[0], x)
@@ -290,26 +293,28 @@ class Simulator:
                         tt = t_old + th_ * (s.t - t_old)
                         xx = np.ascontiguousarray(dense(tt))
                         eval_inputs(tt, *args, u, du)
-                        c.commit(tt, xx, u, du, th, mem, v)
-                stats[0] += 1
+                        c.commit(tt, xx, u, du, th, mem, aux, v)
+                stats["steps"] += 1
             x = np.ascontiguousarray(s.y)
-            stats[2] += s.nfev
+            stats["rhs_calls"] += s.nfev
+        return stats
 
     def _scale_atol(self, solver_cls, f, t, x, rtol, breaks):
         """atol_i = rtol·max|x_i| from a loose first pass (scipy's solvers weigh errors by
         atol + rtol·|x|, which chases rounding noise when a state crosses zero)."""
         peak = np.abs(x).copy()
+        floor = config.get("simulate.atol_floor")
         edges = [t[0], *breaks, t[-1]]
         xx = x.copy()
         for a, b in zip(edges[:-1], edges[1:]):
-            s = solver_cls(f, a, xx, b, rtol=1e-3, atol=ATOL_FLOOR)
+            s = solver_cls(f, a, xx, b, rtol=1e-3, atol=floor)
             while s.status == "running":
                 s.step()
                 if s.status == "failed":
                     break
                 peak = np.maximum(peak, np.abs(s.y))
             xx = s.y
-        return np.maximum(rtol * peak, ATOL_FLOOR)
+        return np.maximum(rtol * peak, floor)
 
 
 def simulate(model: Model | Equations, t, inputs: Mapping[str, Signal] | None = None, **kw) -> SimResult:

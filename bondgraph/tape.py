@@ -3,11 +3,10 @@
 Numba spends milliseconds per generated statement, so a model with thousands of statements
 (an N-layer stack, a long chain) would take minutes to compile.  For those, the program is
 translated into a *tape*: a flat list of register operations that one interpreter, compiled
-once and cached, executes.  The tape travels in the ``mem`` array the integrator already
-passes to every model function (such models have no memory operators), so the integrator
-and the function signature stay the same.
+once and cached, executes.  The tape is the model's ``aux`` array in the calling convention of
+:mod:`bondgraph.model_functions` (a private copy per run: the registers are written).
 
-Tape layout in ``mem`` (all float64):
+Tape layout in ``aux`` (all float64):
 ``[n_rhs_ops, rhs_offset, n_out_ops, out_offset, n_states, n_outputs, reg_offset, 0]``
 then the op rows ``(code, dst, a, b, c)``, then the registers.
 """
@@ -20,6 +19,7 @@ import sympy as sp
 from numba import njit
 
 from .equations import Equations
+from .model_functions import SIGNATURE
 
 HEADER = 8
 (CONST, LDX, LDU, LDDU, LDTH, ADD, MUL, DIV, NEG, POWC, POW, SIN, COS, EXP, LOG, SQRT, ABS, SIGN,
@@ -93,13 +93,8 @@ def build_tape(eqs: Equations) -> np.ndarray:
     sections = []
     for roots in ([eqs.rates[s] for s in eqs.state_symbols], list(eqs.outputs.values())):
         b = _Builder(eqs)
-        need = set().union(set(), *(r.free_symbols for r in roots))
-        for st in reversed(eqs.program):
-            if st.var in need:
-                need |= st.expr.free_symbols
-        for st in eqs.program:
-            if st.var in need:
-                b.reg[st.var] = b.expr(st.expr)
+        for st in eqs.needed(roots)[0]:
+            b.reg[st.var] = b.expr(st.expr)
         for i, r in enumerate(roots):
             b.store(i, r)
         sections.append((np.array(b.ops, float).reshape(-1, 5), b.n_regs))
@@ -115,76 +110,73 @@ def build_tape(eqs: Equations) -> np.ndarray:
 
 
 @njit(cache=True)
-def _run(n_ops, off, t, x, u, du, th, mem, out):
-    reg = int(mem[6])
+def _run(n_ops, off, x, u, du, th, tape, out):
+    reg = int(tape[6])
     for k in range(n_ops):
         base = off + 5 * k
-        code = int(mem[base])
-        dst = reg + int(mem[base + 1])
-        a = int(mem[base + 2])
-        b = int(mem[base + 3])
+        code = int(tape[base])
+        dst = reg + int(tape[base + 1])
+        a = int(tape[base + 2])
+        b = int(tape[base + 3])
         if code == CONST:
-            mem[dst] = mem[base + 4]
+            tape[dst] = tape[base + 4]
         elif code == LDX:
-            mem[dst] = x[a]
+            tape[dst] = x[a]
         elif code == LDU:
-            mem[dst] = u[a]
+            tape[dst] = u[a]
         elif code == LDDU:
-            mem[dst] = du[a]
+            tape[dst] = du[a]
         elif code == LDTH:
-            mem[dst] = th[a]
+            tape[dst] = th[a]
         elif code == ADD:
-            mem[dst] = mem[reg + a] + mem[reg + b]
+            tape[dst] = tape[reg + a] + tape[reg + b]
         elif code == MUL:
-            mem[dst] = mem[reg + a] * mem[reg + b]
+            tape[dst] = tape[reg + a] * tape[reg + b]
         elif code == DIV:
-            mem[dst] = mem[reg + a] / mem[reg + b]
+            tape[dst] = tape[reg + a] / tape[reg + b]
         elif code == NEG:
-            mem[dst] = -mem[reg + a]
+            tape[dst] = -tape[reg + a]
         elif code == POWC:
-            c = mem[base + 4]
-            v = mem[reg + a]
+            c = tape[base + 4]
+            v = tape[reg + a]
             if c == 2.0:
-                mem[dst] = v * v
+                tape[dst] = v * v
             else:
-                mem[dst] = v ** c
+                tape[dst] = v ** c
         elif code == POW:
-            mem[dst] = mem[reg + a] ** mem[reg + b]
+            tape[dst] = tape[reg + a] ** tape[reg + b]
         elif code == SIN:
-            mem[dst] = math.sin(mem[reg + a])
+            tape[dst] = math.sin(tape[reg + a])
         elif code == COS:
-            mem[dst] = math.cos(mem[reg + a])
+            tape[dst] = math.cos(tape[reg + a])
         elif code == EXP:
-            mem[dst] = math.exp(mem[reg + a])
+            tape[dst] = math.exp(tape[reg + a])
         elif code == LOG:
-            mem[dst] = math.log(mem[reg + a])
+            tape[dst] = math.log(tape[reg + a])
         elif code == SQRT:
-            mem[dst] = math.sqrt(mem[reg + a])
+            tape[dst] = math.sqrt(tape[reg + a])
         elif code == ABS:
-            mem[dst] = abs(mem[reg + a])
+            tape[dst] = abs(tape[reg + a])
         elif code == SIGN:
-            v = mem[reg + a]
-            mem[dst] = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+            v = tape[reg + a]
+            tape[dst] = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
         elif code == TANH:
-            mem[dst] = math.tanh(mem[reg + a])
+            tape[dst] = math.tanh(tape[reg + a])
         else:  # STORE: out[index] = register a
-            out[int(mem[base + 1])] = mem[reg + a]
+            out[int(tape[base + 1])] = tape[reg + a]
 
 
-_SIG = "void(float64, float64[::1], float64[::1], float64[::1], float64[::1], float64[::1], float64[::1])"
+@njit(SIGNATURE, cache=True)
+def rhs(t, x, u, du, th, mem, aux, out):
+    _run(int(aux[0]), int(aux[1]), x, u, du, th, aux, out)
 
 
-@njit(_SIG, cache=True)
-def rhs(t, x, u, du, th, mem, out):
-    _run(int(mem[0]), int(mem[1]), t, x, u, du, th, mem, out)
+@njit(SIGNATURE, cache=True)
+def output(t, x, u, du, th, mem, aux, out):
+    _run(int(aux[2]), int(aux[3]), x, u, du, th, aux, out)
 
 
-@njit(_SIG, cache=True)
-def output(t, x, u, du, th, mem, out):
-    _run(int(mem[2]), int(mem[3]), t, x, u, du, th, mem, out)
-
-
-@njit(_SIG, cache=True)
-def nothing(t, x, u, du, th, mem, out):
+@njit(SIGNATURE, cache=True)
+def nothing(t, x, u, du, th, mem, aux, out):
     """opin/commit of a model without memory operators."""
     return

@@ -30,8 +30,7 @@ from typing import Sequence
 
 import numpy as np
 
-from bondgraph import C, Component, I, J0, J1, R, Se
-from bondgraph.memory import MemoryOperator
+from bondgraph import C, Component, I, J0, J1, MemoryOperator, R, Se
 
 
 def kelvin_voigt_chain(name: str, k0, cells: Sequence[tuple] = (), doc: str = "") -> Component:

@@ -27,8 +27,7 @@ import numba
 import numpy as np
 from scipy.optimize import nnls
 
-from bondgraph.errors import ParameterError
-from bondgraph.memory import MemoryOperator
+from bondgraph import MemoryOperator, ParameterError
 
 
 def _vector(name: str, values, n: int | None = None, nonneg: bool = False) -> np.ndarray:
@@ -522,10 +521,10 @@ class MaxwellSlip(MemoryOperator):
 
 # --- identification -----------------------------------------------------------------------
 
-_commit_plays = numba.njit(_PlayBank.commit)
+_commit_plays = numba.njit(cache=True)(_PlayBank.commit)
 
 
-@numba.njit
+@numba.njit(cache=True)
 def _play_matrix(v, r, h):
     out = np.empty((v.size, r.size))
     for k in range(v.size):

@@ -33,7 +33,7 @@ from bondgraph.batch.jobs import memo_info  # noqa: E402
 from bondgraph.batch.table import Table  # noqa: E402
 from bondgraph.cli import main  # noqa: E402
 from bondgraph.data import read_csv, write_csv  # noqa: E402
-from bondgraph.diagnose import calibration_names, diagnose, load_candidates  # noqa: E402
+from bondgraph.diagnosis import diagnose  # noqa: E402
 from bondgraph.fitting import fit_parameters  # noqa: E402
 from bondgraph.linearize import linearize  # noqa: E402
 from bondgraph.modelfile import load_model  # noqa: E402
@@ -72,7 +72,7 @@ def direct(records):
     """The diagnosis of the effect-free record, called directly in this process."""
     lm = load_model(APA)
     data = read_csv(records[2], required=("t", "V", "x"))
-    return diagnose(lm.model, data, calibration_names(lm.module, lm.model), load_candidates(), workers=1).as_json()
+    return diagnose(lm.model, data, calibrate_first=getattr(lm.module, "CALIBRATE", None), workers=1).as_json()
 
 
 def check_diagnosis_rows(table, records, direct):
@@ -213,7 +213,7 @@ def test_readme_cluster_example_on_a_scheduler_and_workers_started_here(schedule
     i = argv.index(pattern)
     argv[i:i + 1] = files
     assert main(argv) == 0
-    assert f"batch: running on the Dask cluster at {scheduler} (2 workers" in capsys.readouterr().err
+    assert f"running on the Dask cluster at {scheduler} (2 workers" in capsys.readouterr().err
     out = next(argv[k + 1] for k, a in enumerate(argv) if a == "--out")
     with open(out, newline="") as fh:
         rows = [{k: _typed(k, v) for k, v in r.items()} for r in csv.DictReader(fh)]
@@ -300,7 +300,7 @@ def test_ctrl_c_cancels_the_jobs_and_shuts_the_local_cluster_down(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     lines = [ln for ln in err.replace("\r", "\n").splitlines() if ln.strip() and not ln.startswith("batch")]
-    assert lines == ["bondgraph: interrupted; no output file was written partially"]
+    assert lines == ["bondgraph: interrupted; no output file was changed"]
     assert not out.exists()
     _, alive = psutil.wait_procs(children, timeout=15)
     assert not alive

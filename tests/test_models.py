@@ -45,3 +45,15 @@ def test_every_command_runs(name, tmp_path, capsys):
 def test_apa_hysteresis_options_simulate(setting, tmp_path):
     assert main(["simulate", str(MODELS / "apa120ml.py"), "--set", setting, "--quiet",
                  "--out", str(tmp_path / "o.csv")]) == 0
+
+
+def test_readme_images_exist_and_are_small():
+    """Every image the README shows is committed in docs/img and stays under 100 kB."""
+    import re
+    from conftest import ROOT
+    shown = re.findall(r"!\[[^\]]*\]\((docs/img/[^)]+\.png)\)", (ROOT / "README.md").read_text())
+    assert len(shown) >= 6
+    for rel in shown:
+        path = ROOT / rel
+        assert path.exists(), rel
+        assert path.stat().st_size < 100_000, rel

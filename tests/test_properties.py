@@ -484,8 +484,8 @@ def _fd_jacobian(sim: bg.Simulator, th, x, u=None) -> np.ndarray:
         xp, xm = x.copy(), x.copy()
         xp[j] += h
         xm[j] -= h
-        sim.compiled.rhs(0.0, xp, u, du, th, mem, fp)
-        sim.compiled.rhs(0.0, xm, u, du, th, mem, fm)
+        sim.compiled.rhs(0.0, xp, u, du, th, mem, sim.compiled.aux, fp)
+        sim.compiled.rhs(0.0, xm, u, du, th, mem, sim.compiled.aux, fm)
         J[:, j] = (fp - fm) / (2 * h)
     return J
 
@@ -528,8 +528,8 @@ def test_symbolic_jacobian_matches_finite_differences(data):
     # B = d(rhs)/du and C = d(y)/dx from the compiled functions (input derivative held at 0)
     mem, du, h = np.zeros(max(sim.compiled.layout.n_mem, 1)), np.zeros(1), 1e-3
     fp, fm = np.zeros(x.size), np.zeros(x.size)
-    sim.compiled.rhs(0.0, x, np.array([h]), du, th, mem, fp)
-    sim.compiled.rhs(0.0, x, np.array([-h]), du, th, mem, fm)
+    sim.compiled.rhs(0.0, x, np.array([h]), du, th, mem, sim.compiled.aux, fp)
+    sim.compiled.rhs(0.0, x, np.array([-h]), du, th, mem, sim.compiled.aux, fm)
     B = (fp - fm) / (2 * h)
     assert np.allclose(lin.B.ravel(), B, rtol=1e-6, atol=1e-7 * max(1.0, np.max(np.abs(B))))
     Cfd = np.zeros(x.size)
@@ -538,8 +538,8 @@ def test_symbolic_jacobian_matches_finite_differences(data):
         xp, xm = x.copy(), x.copy()
         xp[j] += h
         xm[j] -= h
-        sim.compiled.output(0.0, xp, np.zeros(1), du, th, mem, yp)
-        sim.compiled.output(0.0, xm, np.zeros(1), du, th, mem, ym)
+        sim.compiled.output(0.0, xp, np.zeros(1), du, th, mem, sim.compiled.aux, yp)
+        sim.compiled.output(0.0, xm, np.zeros(1), du, th, mem, sim.compiled.aux, ym)
         Cfd[j] = (yp[0] - ym[0]) / (2 * h)
     assert np.allclose(lin.C.ravel(), Cfd, rtol=1e-6, atol=1e-7 * max(1.0, np.max(np.abs(Cfd))))
 

@@ -1,15 +1,17 @@
-"""Examples are tests: every command and the model file shown in README.md run, and the
-printed equations match what the README shows."""
+"""Examples are tests: every command and Python example of README.md runs (a shell block's
+commands in order, in a directory with the README's model file and data), and the numbers
+the README shows are the numbers they give."""
+import contextlib
+import io
 import re
 import shlex
 
-import pytest
-
 import numpy as np
+import pytest
 
 import bondgraph as bg
 from bondgraph.cli import main
-from bondgraph.data import write_csv
+from bondgraph.data import read_csv, write_csv
 from conftest import ROOT
 from truth import apa_data
 
@@ -18,6 +20,10 @@ README = (ROOT / "README.md").read_text()
 
 def blocks(lang):
     return re.findall(rf"```{lang}\n(.*?)```", README, re.S)
+
+
+def python_block(containing: str) -> str:
+    return next(b for b in blocks("python") if containing in b)
 
 
 def readme_commands():
@@ -33,6 +39,13 @@ def readme_commands():
     return out
 
 
+def shown_number(pattern: str) -> float:
+    """A number the README prints, found by a regular expression with one group."""
+    m = re.search(pattern, README.replace("\n", " "))
+    assert m, f"README shows {pattern}"
+    return float(m.group(1))
+
+
 def test_readme_starts_with_install_run_and_test_commands():
     first, second = blocks("sh")[:2]
     assert "pip install -e" in first and "bondgraph simulate" in first
@@ -41,17 +54,85 @@ def test_readme_starts_with_install_run_and_test_commands():
     assert second.strip() in ci.splitlines()
 
 
-@pytest.mark.parametrize("cmds", readme_commands(), ids=lambda c: c[0][:40])
-def test_readme_commands_run(cmds, tmp_path, monkeypatch, capsys):
-    data = apa_data("creep", duration=2.0, rate=2000.0)  # the README's data.csv: a creeping APA
-    write_csv(tmp_path / "data.csv", data.t, data.columns, data.metadata)
-    monkeypatch.chdir(tmp_path)
+def setup_dir(d):
+    """The reader's working directory: the README's model file as msd.py and its data.csv (a
+    creeping APA record)."""
+    (d / "msd.py").write_text(blocks("python")[0])
+    data = apa_data("creep", duration=2.0, rate=2000.0)
+    write_csv(d / "data.csv", data.t, data.columns, data.metadata)
+    return d
+
+
+def run_commands(cmds, d, monkeypatch) -> dict:
+    """Run README commands in ``d``; returns {command: (stdout, stderr)}."""
+    monkeypatch.chdir(d)
+    outputs = {}
     for cmd in cmds:
         argv = [str(ROOT / a) if a.startswith("models/") else a for a in shlex.split(cmd)[1:]]
-        assert main(argv) == 0, (cmd, capsys.readouterr().err)
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            rc = main(argv)
+        assert rc == 0, (cmd, err.getvalue())
         for a in argv:
-            if a.endswith((".csv", ".png", ".json")) and not a.startswith("-"):
-                assert (tmp_path / a).exists(), a
+            if a.endswith((".csv", ".png", ".json", ".py")) and not a.startswith("-") and "=" not in a:
+                assert (d / a).exists(), a
+        outputs[cmd] = (out.getvalue(), err.getvalue())
+    return outputs
+
+
+def block_with(text: str) -> list[str]:
+    return next(cmds for cmds in readme_commands() if any(text in c for c in cmds))
+
+
+#: blocks with a test of their own (they need an earlier block's output or show numbers)
+FIT_FILE, PLANT = "apa.csv --params", "--format python-control"
+
+
+@pytest.mark.parametrize("cmds", [c for c in readme_commands() if not any(FIT_FILE in x or PLANT in x for x in c)],
+                         ids=lambda c: c[0][:40])
+def test_readme_commands_run(cmds, tmp_path, monkeypatch):
+    run_commands(cmds, setup_dir(tmp_path), monkeypatch)
+
+
+def test_readme_fit_file_numbers(tmp_path, monkeypatch):
+    d = setup_dir(tmp_path)
+    ran = run_commands(readme_commands()[0] + block_with(FIT_FILE), d, monkeypatch)
+    fit_cmd = next(c for c in ran if FIT_FILE in c)
+    out = ran[fit_cmd][0]
+    offset = float(re.search(r"offset of x\s+(\S+)\s+m", out).group(1))
+    rms_fit, rms_val = map(float, re.search(r"rms error: fit (\S+) m, validation (\S+) m", out).groups())
+    assert offset == pytest.approx(shown_number(r"prints `offset of x\s+(\S+)\s+m`"), rel=2e-3)
+    assert rms_fit == pytest.approx(shown_number(r"rms error: fit (\S+) m,"), rel=2e-3)
+    assert rms_val == pytest.approx(shown_number(r"validation\s+(\S+) m`"), rel=2e-3)
+    apa, refit = read_csv(d / "apa.csv"), read_csv(d / "refit.csv")
+    np.testing.assert_array_equal(refit.t, apa.t)
+    miss = float(np.sqrt(np.mean((refit.columns["x"] - apa.columns["x"]) ** 2)))
+    assert miss == pytest.approx(shown_number(r"`apa.csv` by (\S+) m RMS"), rel=1e-2)
+    assert miss == pytest.approx(rms_val, rel=0.1), "re-simulating with the fit file reproduces the fit"
+    stroke = np.ptp(apa.columns["x"])
+    assert stroke * 1e6 == pytest.approx(shown_number(r"RMS of a (\d+) µm stroke"), abs=0.5)
+    without = float(np.sqrt(np.mean((refit.columns["x"] - offset - apa.columns["x"]) ** 2)))
+    assert without * 1e6 == pytest.approx(shown_number(r"without the offset it would miss by (\d+) µm"), abs=0.5)
+
+
+def test_readme_python_control_example(tmp_path, monkeypatch):
+    pytest.importorskip("control")
+    run_commands(block_with(PLANT), setup_dir(tmp_path), monkeypatch)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    namespace = {}
+    exec(python_block("from plant import model"), namespace)
+    import control
+    wn, zeta, _ = control.damp(namespace["model"], doprint=False)
+    assert wn == pytest.approx([10.0, 10.0]) and zeta == pytest.approx([0.1, 0.1])
+    assert control.dcgain(namespace["model"]) == pytest.approx(0.01)
+
+
+def test_readme_energy_example_prints_what_it_shows(capsys):
+    exec(python_block("energy drift"), {})
+    shown = re.search(r"energy drift.*?prints\n\n```\n(.*?)```", README, re.S).group(1)
+    assert capsys.readouterr().out == shown
+    drifts = [float(x) for x in re.findall(r"drift (\S+)", shown)]
+    assert abs(drifts[1]) < 1e-4 < abs(drifts[0]), "rtol 1e-8 keeps the drift within 1e-4, the default does not"
 
 
 def test_readme_model_file_prints_the_equations_shown(tmp_path, capsys):
@@ -65,7 +146,7 @@ def test_readme_model_file_prints_the_equations_shown(tmp_path, capsys):
 
 
 def test_readme_operator_example_makes_a_backlash_loop(tmp_path, monkeypatch):
-    (tmp_path / "backlash_example.py").write_text(blocks("python")[1])
+    (tmp_path / "backlash_example.py").write_text(python_block("class Backlash"))
     monkeypatch.syspath_prepend(str(tmp_path))
     from backlash_example import Backlash
     g = bg.Model("gap")

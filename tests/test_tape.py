@@ -4,27 +4,27 @@ import pytest
 import sympy as sp
 
 import bondgraph as bg
-from bondgraph import codegen
+from bondgraph import config
 from bondgraph.modelfile import load_model
 from conftest import MODELS
 
 
 @pytest.mark.parametrize("settings", [{"layers": 3}, {"layers": 3, "lumped": True}])
-def test_tape_equals_compiled(settings, monkeypatch):
+def test_tape_equals_compiled(settings):
     t = np.linspace(0, 2e-3, 101)
     u = {"V": bg.Sine(50.0, 2000.0, offset=50.0)}
     eqs = bg.derive(load_model(MODELS / "stack.py", settings).model)
-    monkeypatch.setattr(codegen, "TAPE_THRESHOLD", 10 ** 9)
-    compiled = bg.Simulator(eqs)
-    monkeypatch.setattr(codegen, "TAPE_THRESHOLD", 0)
-    taped = bg.Simulator(eqs)
-    assert isinstance(taped.compiled, codegen.Taped) and not isinstance(compiled.compiled, codegen.Taped)
+    with config.override({"codegen.tape_threshold": 10 ** 9}):
+        compiled = bg.Simulator(eqs)
+    with config.override({"codegen.tape_threshold": 0}):
+        taped = bg.Simulator(eqs)
+    assert taped.compiled.route == "tape" and compiled.compiled.route != "tape"
     a = compiled.run(t, u, rtol=1e-9)["x"]
     b = taped.run(t, u, rtol=1e-9)["x"]
     assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a))
 
 
-def test_tape_evaluates_nonlinear_functions(monkeypatch):
+def test_tape_evaluates_nonlinear_functions():
     g = bg.Model("nl")
     V = g.input("V")
     g.add(bg.Se("s", V), bg.J1("j"), bg.I("m", 1.0), bg.C("k", law=lambda q: q + q ** 3 + sp.sin(q)),
@@ -34,9 +34,9 @@ def test_tape_evaluates_nonlinear_functions(monkeypatch):
         g.bond("j", e)
     g.output("x", g.displacement("k"))
     t = np.linspace(0, 3, 301)
-    monkeypatch.setattr(codegen, "TAPE_THRESHOLD", 10 ** 9)
-    a = bg.simulate(g, t, {"V": bg.Sine(1.0, 0.5)}, rtol=1e-10)["x"]
-    monkeypatch.setattr(codegen, "TAPE_THRESHOLD", 0)
-    b = bg.simulate(g, t, {"V": bg.Sine(1.0, 0.5)}, rtol=1e-10)["x"]
+    with config.override({"codegen.tape_threshold": 10 ** 9}):
+        a = bg.simulate(g, t, {"V": bg.Sine(1.0, 0.5)}, rtol=1e-10)["x"]
+    with config.override({"codegen.tape_threshold": 0}):
+        b = bg.simulate(g, t, {"V": bg.Sine(1.0, 0.5)}, rtol=1e-10)["x"]
     assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a))
 

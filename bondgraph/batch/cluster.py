@@ -84,13 +84,15 @@ def connect(scheduler: Any = None, workers: int | None = None,
 
 
 def ignore_interrupts() -> None:
-    """Run on each worker of the embedded cluster: the terminal's SIGINT reaches the worker
-    processes too (one process group); they ignore it and are shut down by the client."""
-    import signal
+    """Run on each worker of the embedded cluster: the terminal's Ctrl-C reaches the worker
+    processes too (one process group); they ignore it and leave it to the client (which cancels
+    and closes, or, under the command line, :mod:`bondgraph.interrupt` ends them)."""
     import threading
 
+    from .. import interrupt
+
     if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        interrupt.worker_initializer()
 
 
 def _dashboard_address() -> str | None:

@@ -58,8 +58,9 @@ class Metric:
         """The value on a :class:`~bondgraph.simulate.SimResult` (and its ``LinearModel``)."""
         if self.linear:
             return mode_property(linear, self.kind, int(self.arg))
+        y = result.outputs.get(self.arg)  # outputs first: looking up an input samples every input
         try:
-            y = result[self.arg]
+            y = result[self.arg] if y is None else y
         except KeyError:
             known = [*result.outputs, *result.inputs, *result.states]
             raise UsageError(f"metric {self.text}: the model has no signal {self.arg!r}; "

@@ -8,7 +8,8 @@ row's ``error`` and the others go on.
 
 Common keyword arguments: ``sets`` (list of ``{parameter: value}``, one per parameter set;
 default: one empty set), ``params`` (values applied to every job, like ``--set``),
-``input``/``output`` (model input driven by the data, model output compared with it),
+``input``/``output`` (model input driven by the data, model output compared with it; default:
+the model's first declared input and output),
 ``data_input``/``data_output`` (the data's column names when they differ), ``scheduler``,
 ``workers`` (see :func:`~bondgraph.batch.cluster.connect`), ``progress(done, total)`` and
 ``say(line)`` callbacks.
@@ -27,26 +28,26 @@ from .jobs import Job, Options, describe, run_chunk
 from .metrics import parse_metrics
 from .table import Table
 
-Progress = Callable[[int, int], None]
+OnProgress = Callable[[int, int], None]  # progress(done, total)
 
 
 def diagnose(model, data: Sequence, *, sets: Sequence[Mapping] | None = None, params: Mapping | None = None,
-             input: str = "V", output: str = "x", data_input: str | None = None, data_output: str | None = None,
+             input: str | None = None, output: str | None = None, data_input: str | None = None, data_output: str | None = None,
              validation: float = 0.3, scheduler=None, workers: int | None = None,
-             progress: Progress | None = None, say=None) -> Table:
+             progress: OnProgress | None = None, say=None) -> Table:
     """Diagnose every data file (× parameter set): ``cause``, ``causes``, ``gain``,
     ``baseline_rms``, ``extended_rms`` and the best gain of each candidate cause (``gain:CAUSE``)."""
     lm = checked_model(model, params, sets)
-    _check_io(lm, input, output)
+    input, output = model_io(lm, input, output)
     opts = Options("diagnose", str(lm.path.resolve()), _items(params), input, output, data_input, data_output,
                    validation, settings=config.snapshot())
     return execute(opts, data_jobs(data, sets), scheduler, workers, progress, say, per_task=1)
 
 
 def fit(model, data: Sequence, names: Sequence[str], *, sets: Sequence[Mapping] | None = None,
-        params: Mapping | None = None, input: str = "V", output: str = "x", data_input: str | None = None,
+        params: Mapping | None = None, input: str | None = None, output: str | None = None, data_input: str | None = None,
         data_output: str | None = None, validation: float = 0.3, split: str = "blocks", loss: str = "linear",
-        starts: int = 1, scheduler=None, workers: int | None = None, progress: Progress | None = None,
+        starts: int = 1, scheduler=None, workers: int | None = None, progress: OnProgress | None = None,
         say=None) -> Table:
     """Fit ``names`` to every data file (× parameter set): ``fit:NAME``, ``sd:NAME`` (standard
     error), ``rms_fit``, ``rms_validation``, ``simulations``, ``converged``."""
@@ -54,7 +55,7 @@ def fit(model, data: Sequence, names: Sequence[str], *, sets: Sequence[Mapping] 
     if not names:
         raise UsageError("batch fit: give the parameters to fit, e.g. --params a,c,K")
     lm = checked_model(model, params, sets, names)
-    _check_io(lm, input, output)
+    input, output = model_io(lm, input, output)
     opts = Options("fit", str(lm.path.resolve()), _items(params), input, output, data_input, data_output,
                    validation, tuple(names), {"split": split, "loss": loss, "starts": starts},
                    settings=config.snapshot())
@@ -64,16 +65,15 @@ def fit(model, data: Sequence, names: Sequence[str], *, sets: Sequence[Mapping] 
 def simulate(model, data: Sequence = (), *, sets: Sequence[Mapping] | None = None, params: Mapping | None = None,
              metrics: Sequence[str] = (), inputs: Mapping | None = None, t_end: float | None = None,
              dt: float | None = None, method: str | None = None, rtol: float | None = None,
-             input: str = "V", output: str = "x", data_input: str | None = None, data_output: str | None = None,
-             scheduler=None, workers: int | None = None, progress: Progress | None = None, say=None,
+             input: str | None = None, output: str | None = None, data_input: str | None = None, data_output: str | None = None,
+             scheduler=None, workers: int | None = None, progress: OnProgress | None = None, say=None,
              per_task: int | None = None) -> Table:
     """Simulate every data file (its ``input`` column drives the model; ``rms`` of the model's
     ``output`` against the data's) or, without data, the model's experiment (``inputs``,
     ``t_end``, ``dt`` override it), for every parameter set; one column per metric
     (:mod:`bondgraph.batch.metrics`)."""
     lm = checked_model(model, params, sets)
-    if data:
-        _check_io(lm, input, None)
+    input, output = model_io(lm, input, output, required=bool(data))
     opts = simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol, input, output,
                               data_input, data_output)
     jobs = data_jobs(data, sets) if data else [Job(i, _items(s)) for i, s in enumerate(sets or [{}])]
@@ -95,14 +95,22 @@ def checked_model(model, params: Mapping | None, sets: Sequence[Mapping] | None 
     return lm
 
 
-def _check_io(lm, input: str | None, output: str | None) -> None:
-    if input is not None and input not in lm.model.inputs:
-        raise UsageError(f"model input: {did_you_mean(input, lm.model.inputs, 'input')}")
-    if output is not None and output not in lm.model.outputs:
-        raise UsageError(f"model output: {did_you_mean(output, lm.model.outputs, 'output')}")
+def model_io(lm, input: str | None, output: str | None, required: bool = True) -> tuple:
+    """(input, output) of the model: the names given (checked), else its first declared ones;
+    a model without inputs or outputs is an error when ``required``, else gives ``None``."""
+    names = []
+    for given, declared, what in ((input, lm.model.inputs, "input"), (output, lm.model.outputs, "output")):
+        if given is not None and given not in declared:
+            raise UsageError(f"model {what}: {did_you_mean(given, declared, what)}")
+        if given is None and declared:
+            given = next(iter(declared))
+        if given is None and required:
+            raise UsageError(f"model {lm.path} declares no {what}; a run on measured data needs one")
+        names.append(given)
+    return tuple(names)
 
 
-def simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol, input="V", output="x",
+def simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol, input=None, output=None,
                        data_input=None, data_output=None) -> Options:
     """Options of simulation jobs: the model's experiment with the given overrides, checked."""
     from ..simulate import METHODS
@@ -146,7 +154,7 @@ def _items(values: Mapping | None) -> tuple:
 
 
 def execute(opts: Options, jobs: Sequence[Job], scheduler=None, workers: int | None = None,
-            progress: Progress | None = None, say=None, per_task: int | None = None) -> Table:
+            progress: OnProgress | None = None, say=None, per_task: int | None = None) -> Table:
     """Run ``jobs`` on the cluster, ``per_task`` jobs per Dask task (default: sized to the
     number of jobs and workers); the table in job order."""
     rows: list[dict] = []

@@ -17,7 +17,7 @@ from typing import Mapping, Sequence
 
 from ..errors import UsageError
 from . import analysis
-from .runs import Progress, checked_model, execute, simulation_options
+from .runs import OnProgress, checked_model, execute, model_io, simulation_options
 from .sampling import Distribution, Grid, default_design, design_points, parse_spec
 from .jobs import Job
 from .table import Table
@@ -83,8 +83,8 @@ def sweep(model, space: Mapping[str, str | Distribution | Grid], *, metrics: Seq
           design: str | None = None, draws: int | None = None, seed: int | None = None,
           params: Mapping | None = None, inputs: Mapping | None = None, t_end: float | None = None,
           dt: float | None = None, method: str | None = None, rtol: float | None = None,
-          input: str = "V", output: str = "x", scheduler=None, workers: int | None = None,
-          progress: Progress | None = None, say=None, per_task: int | None = None) -> SweepResult:
+          input: str | None = None, output: str | None = None, scheduler=None, workers: int | None = None,
+          progress: OnProgress | None = None, say=None, per_task: int | None = None) -> SweepResult:
     """Simulate the model at every point of ``design`` over ``space`` (default: ``grid`` when
     every parameter has grid levels, else ``random`` with ``draws`` draws) and evaluate
     ``metrics`` on each run."""
@@ -95,7 +95,8 @@ def sweep(model, space: Mapping[str, str | Distribution | Grid], *, metrics: Seq
     lm = checked_model(model, params, [space])
     nominal = {n: _nominal(lm.model, n) for n in space}
     points = design_points(space, design, draws, seed, nominal)
-    opts = simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol, input, output)
+    opts = simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol,
+                              *model_io(lm, input, output, required=False))
     table = execute(opts, [Job(i, tuple(p.items())) for i, p in enumerate(points)], scheduler, workers,
                     progress, say, per_task)
     return SweepResult(table, space, design, [m.text for m in opts.metrics], seed, nominal)

@@ -55,7 +55,10 @@ def main(argv: list[str] | None = None) -> int:
     with interrupt.handle_signals():
         try:
             parser = build_parser()
-            args = parser.parse_args(argv)
+            try:
+                args = parser.parse_args(argv)
+            except SystemExit as exc:  # --help and --version: argparse printed what was asked
+                return exc.code or 0
             if not args.command:
                 raise UsageError(f"no command given; choose one of {', '.join(COMMANDS)} (see bondgraph --help)")
             _check_numbers(args)
@@ -76,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:  # only without signal handlers (not in the main thread)
             print("bondgraph: interrupted; no output file was changed", file=sys.stderr)
             return 130
-        except SystemExit as exc:  # a library called sys.exit: report it, do not obey it
+        except SystemExit as exc:  # the command (a library it calls) called sys.exit: report it, do not obey it
             print(f"bondgraph: internal error: unexpected exit (status {exc.code}) "
                   f"(run with --debug for the traceback)", file=sys.stderr)
             if debug:

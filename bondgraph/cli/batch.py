@@ -6,7 +6,7 @@ import json
 import sys
 
 from ..errors import UsageError
-from .registry import DATA_ARGS, MODEL_ARGS, arg, command, progress, write_text
+from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, arg, command, outputs, write_text
 
 ACTIONS = ("diagnose", "fit", "simulate", "sweep")
 _ONLY = {"--params": ("fit",), "--split": ("fit",), "--loss": ("fit",), "--starts": ("fit",),
@@ -53,7 +53,8 @@ _ONLY = {"--params": ("fit",), "--split": ("fit",), "--loss": ("fit",), "--start
              arg("--seed", type=int, help="(sweep) random seed (the same seed gives the same draws)"),
              arg("--summary", metavar="FILE.json", help="(sweep) write statistics and sensitivities as JSON"),
              arg("--json", action="store_true", help="(sweep) print statistics and sensitivities as JSON"),
-             arg("--plot", metavar="FILE.png", help="(sweep) histograms and tornado plots (needs matplotlib)"),
+             arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0],
+                 help="(sweep) histograms and tornado plots (needs matplotlib; .png, .pdf or .svg)"),
              arg("--quiet", action="store_true", help="no progress on stderr"),
          ])
 def run(args):
@@ -63,39 +64,55 @@ def run(args):
     cluster.require_dask()
     from .. import batch
     from ..parameters import parse_assignments, read_params_file
+    from ..progress import Progress
 
     params = dict(read_params_file(args.params_file)) if args.params_file else {}
     params.update(parse_assignments(args.set))
     column, signals = _inputs(args)
-    common = dict(params=params, scheduler=args.scheduler, workers=args.workers,
-                  progress=None if args.quiet else _progress(f"batch {args.action}"),
-                  say=None if args.quiet else (lambda s: print(f"batch: {s}", file=sys.stderr, flush=True)))
-    data_io = dict(input=args.model_input, output=args.model_output, data_input=column, data_output=args.output)
     sets = batch.read_sets(args.sets) if args.sets else None
+    bar = Progress(f"batch {args.action}", unit="jobs", mode="quiet" if args.quiet else "auto")
+
+    def report(done: int, total: int):
+        bar.total = total
+        bar.update(done)
+
+    common = dict(params=params, scheduler=args.scheduler, workers=args.workers, progress=report, say=bar.note)
+    data_io = dict(input=args.model_input, output=args.model_output, data_input=column, data_output=args.output)
     sim = dict(metrics=args.metric, inputs=signals, t_end=args.t_end, dt=args.dt, method=args.method, rtol=args.rtol)
-    if args.action == "sweep":
-        res = batch.sweep(args.model, batch.parse_space(args.vary), design=args.design, draws=args.draws,
-                          seed=args.seed, input=args.model_input, output=args.model_output, **sim, **common)
-        _finish(args, res.table)
-        if args.json:
-            print(json.dumps(res.as_json()))
+    with outputs(args, "out", "plot", "summary", inputs=[args.sets]) as out, bar:
+        if args.action == "sweep":
+            res = batch.sweep(args.model, batch.parse_space(args.vary), design=args.design, draws=args.draws,
+                              seed=args.seed, input=args.model_input, output=args.model_output, **sim, **common)
+            table = res.table
+        elif args.action == "diagnose":
+            table = batch.diagnose(args.model, args.data, sets=sets, validation=args.validation, **data_io, **common)
+        elif args.action == "fit":
+            names = [n.strip() for n in (args.params or "").split(",") if n.strip()]
+            table = batch.fit(args.model, args.data, names, sets=sets, validation=args.validation,
+                              split=args.split or "blocks", loss=args.loss or "linear", starts=args.starts or 1,
+                              **data_io, **common)
         else:
-            sys.stdout.write(res.text())
-        if args.summary:
-            write_text(args.summary, json.dumps(res.as_json(), indent=1) + "\n")
-        if args.plot:
-            res.plot(args.plot)
-        return
-    if args.action == "diagnose":
-        table = batch.diagnose(args.model, args.data, sets=sets, validation=args.validation, **data_io, **common)
-    elif args.action == "fit":
-        names = [n.strip() for n in (args.params or "").split(",") if n.strip()]
-        table = batch.fit(args.model, args.data, names, sets=sets, validation=args.validation,
-                          split=args.split or "blocks", loss=args.loss or "linear", starts=args.starts or 1,
-                          **data_io, **common)
-    else:
-        table = batch.simulate(args.model, args.data, sets=sets, **sim, **data_io, **common)
-    _finish(args, table)
+            table = batch.simulate(args.model, args.data, sets=sets, **sim, **data_io, **common)
+        bar.close(f"{len(table)} jobs, {len(table.failed)} failed")
+        if args.out:
+            with out.path(args.out) as tmp:
+                table.write(tmp)
+        if args.action != "sweep":
+            if not args.out:
+                write_text(None, table.csv_text())
+        else:
+            summary = json.dumps(res.as_json(), indent=None if args.json else 1)
+            sys.stdout.write(summary + "\n" if args.json else res.text())
+            if args.summary:
+                write_text(args.summary, summary + "\n", out)
+            if args.plot:
+                with out.path(args.plot) as tmp:
+                    res.plot(tmp)
+    failed = len(table.failed)
+    if failed or not args.quiet:
+        wrote = [p for p in (args.out, args.summary, args.plot) if p]
+        print(f"batch {args.action}: {len(table)} jobs, {failed} failed" + (" (see the error column)" if failed else "")
+              + (f"; wrote {', '.join(wrote)}" if wrote else ""), file=sys.stderr)
 
 
 def _check_options(args):
@@ -106,6 +123,8 @@ def _check_options(args):
             raise UsageError(f"batch {args.action}: {flag} applies to batch {' / '.join(_ONLY[flag])} only")
     if args.action in ("diagnose", "fit") and not args.data:
         raise UsageError(f"batch {args.action}: give the data files, e.g. bondgraph batch {args.action} MODEL a.csv b.csv")
+    if args.out and not args.out.lower().endswith((".csv", ".parquet")):
+        raise UsageError(f"--out {args.out}: the table is written as .csv or .parquet; name the file so")
     if args.action == "sweep" and args.data:
         raise UsageError("batch sweep: takes no data files (use batch simulate to run on data)")
 
@@ -135,22 +154,3 @@ def _inputs(args):
             name, _, spec = item.partition("=")
             signals[name.strip()] = parse_signal(spec, base_dir=str(Path(args.model).parent))
     return (columns[0] if columns else None), signals
-
-
-def _progress(label: str):
-    report = progress(label)
-    return lambda done, total: report(done / total)
-
-
-def _finish(args, table):
-    """Write the table (or print it when no --out) and say how many jobs failed."""
-    if args.out:
-        table.write(args.out)
-    elif args.action != "sweep":
-        write_text(None, table.csv_text())
-    failed = len(table.failed)
-    if not args.quiet or failed:
-        print(f"batch {args.action}: {len(table)} jobs, {failed} failed"
-              + (" (see the error column)" if failed else "") + (f"; wrote {args.out}" if args.out else ""),
-              file=sys.stderr)
-

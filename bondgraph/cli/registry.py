@@ -109,7 +109,8 @@ def outputs(args, *dests: str, inputs=()):
     installed for figures.  ``inputs``: further files the run reads."""
     from ..atomic import Outputs
 
-    out = Outputs([getattr(args, "model", None), getattr(args, "data", None),
+    data = getattr(args, "data", None)
+    out = Outputs([getattr(args, "model", None), *(data if isinstance(data, list) else [data]),
                    getattr(args, "params_file", None), *inputs])
     try:
         for dest in dests:

@@ -44,7 +44,7 @@ def run(args):
     from ..checks import check_start
     from ..data import write_csv
     from ..signals import parse_signal
-    from ..simulate import ATOL_FLOOR, Simulator
+    from ..simulate import Simulator
 
     csv_files = [m.group(1).strip() for m in map(_CSV_FILE.match, (i.partition("=")[2] for i in args.input)) if m]
     with outputs(args, "out", "plot", inputs=csv_files) as out:
@@ -69,7 +69,7 @@ def run(args):
         rtol = exp.rtol if args.rtol is None else args.rtol
         with progress("simulating", quiet=args.quiet) as bar:
             res = sim.run(t, inputs, method=args.method or exp.method, rtol=rtol,
-                          atol=ATOL_FLOOR if args.atol is None else args.atol, progress=bar)
+                          atol=args.atol, progress=bar)
         cols = res.columns(args.states)
         meta = {"model": str(args.model), "method": res.stats["method"], "rtol": str(rtol)}
         for name, sig in inputs.items():

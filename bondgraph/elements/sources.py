@@ -4,22 +4,32 @@ from __future__ import annotations
 from .base import FIXED, Element, sympify
 
 
-class Se(Element):
+class _Source(Element):
+    """A one-port with fixed causality: it sets the effort (``sets_effort``) or the flow."""
+
+    causal_class = FIXED
+    sets_effort = True
+
+    def __init__(self, name: str, value):
+        super().__init__(name)
+        attr = self.symbolic_attrs[0]
+        setattr(self, attr, sympify(value, f"{self.kind} '{name}' {attr}"))
+
+    def preferred_causality(self, port):
+        return self.sets_effort
+
+    def allows_causality(self, port, sets_effort):
+        return sets_effort == self.sets_effort
+
+
+class Se(_Source):
     """Effort source: e = effort."""
 
     kind = "Se"
     symbolic_attrs = ("effort",)
-    causal_class = FIXED
 
     def __init__(self, name: str, effort=0):
-        super().__init__(name)
-        self.effort = sympify(effort, f"Se '{name}' effort")
-
-    def preferred_causality(self, port):
-        return True
-
-    def allows_causality(self, port, sets_effort):
-        return sets_effort
+        super().__init__(name, effort)
 
     def equations(self, ports, eqs):
         ports["p"].set_effort(self.effort)
@@ -28,22 +38,15 @@ class Se(Element):
         return f"e = {self.effort}"
 
 
-class Sf(Element):
+class Sf(_Source):
     """Flow source: f_out = flow (flow delivered by the source along its bond)."""
 
     kind = "Sf"
     symbolic_attrs = ("flow",)
-    causal_class = FIXED
+    sets_effort = False
 
     def __init__(self, name: str, flow=0):
-        super().__init__(name)
-        self.flow = sympify(flow, f"Sf '{name}' flow")
-
-    def preferred_causality(self, port):
-        return False
-
-    def allows_causality(self, port, sets_effort):
-        return not sets_effort
+        super().__init__(name, flow)
 
     def equations(self, ports, eqs):
         ports["p"].set_flow_in(-self.flow)

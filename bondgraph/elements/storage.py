@@ -30,7 +30,8 @@ class _OnePortStorage(Element):
     _law_gives_effort: bool   # C: the law gives the effort; I: the flow
     _modulus: str             # "capacitance" or "inertia"
 
-    def _init_law(self, name, modulus, law_, energy, x0):
+    def __init__(self, name, modulus, law_, energy, x0):
+        super().__init__(name)
         given = [x is not None for x in (modulus, law_, energy)]
         if sum(given) != 1:
             raise ModelError(f"{self.kind} '{name}': give exactly one of {'a' if self.kind == 'C' else 'an'} "
@@ -45,6 +46,10 @@ class _OnePortStorage(Element):
             self.energy = law(energy, v, f"{self.kind} '{name}' energy")
             self.law, self.linear_modulus = sp.diff(self.energy, v), None
         setattr(self, f"{self._state}0", sympify(x0, f"{self.kind} '{name}' {self._state}0"))
+
+    @property
+    def symbolic_attrs(self) -> tuple[str, ...]:
+        return ("law", f"{self._state}0", "energy")
 
     def stored(self, value: sp.Expr) -> sp.Expr | None:
         """The stored quantity for a value of the port variable the law gives (law inverted)."""
@@ -76,6 +81,9 @@ class _OnePortStorage(Element):
             set_rate(eqs.derivative(f"{'f' if gives_effort else 'e'}_in_{self.name}", x, port.origin))
         eqs.quantity(self._state, port.key, x)
 
+    def describe(self):
+        return f"{'e' if self._law_gives_effort else 'f'} = {self.law.xreplace({self._var: sp.Symbol(self._state)})}"
+
 
 class C(_OnePortStorage):
     """Capacitor (spring, capacitance).  ``C(name, 1e-6)`` is linear e = q/C;
@@ -83,15 +91,10 @@ class C(_OnePortStorage):
     ``q0`` is the initial displacement."""
 
     kind = "C"
-    symbolic_attrs = ("law", "q0", "energy")
     _var, _value, _state, _law_gives_effort, _modulus = Q, E, "q", True, "capacitance"
 
     def __init__(self, name: str, C=None, *, law=None, energy=None, q0=0):
-        super().__init__(name)
-        self._init_law(name, C, law, energy, q0)
-
-    def describe(self):
-        return f"e = {self.law.xreplace({Q: sp.Symbol('q')})}"
+        super().__init__(name, C, law, energy, q0)
 
 
 class I(_OnePortStorage):
@@ -99,15 +102,10 @@ class I(_OnePortStorage):
     gives f(p); ``energy=lambda p: ...`` gives f = dT/dp.  ``p0`` is the initial momentum."""
 
     kind = "I"
-    symbolic_attrs = ("law", "p0", "energy")
     _var, _value, _state, _law_gives_effort, _modulus = P, F, "p", False, "inertia"
 
     def __init__(self, name: str, I=None, *, law=None, energy=None, p0=0):
-        super().__init__(name)
-        self._init_law(name, I, law, energy, p0)
-
-    def describe(self):
-        return f"f = {self.law.xreplace({P: sp.Symbol('p')})}"
+        super().__init__(name, I, law, energy, p0)
 
 
 class CField(Element):

@@ -1,0 +1,102 @@
+"""Examples are tests: the code in docs/ runs and does what the text says; the settings table
+covers the framework's settings; the repository explains itself."""
+from __future__ import annotations
+
+import re
+import types
+
+import numpy as np
+import pytest
+
+import bondgraph as bg
+from bondgraph import config
+from bondgraph.cli import main
+from bondgraph.data import Dataset
+from bondgraph.modelfile import load_model
+from conftest import ROOT
+
+DOCS = ROOT / "docs"
+
+
+def python_blocks(page: str) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", (DOCS / page).read_text(), re.S)
+
+
+def module_of(code: str, name: str) -> types.ModuleType:
+    mod = types.ModuleType(name)
+    exec(compile(code, f"docs/{name}.md", "exec"), mod.__dict__)
+    return mod
+
+
+def test_model_file_example_is_a_damped_oscillator(tmp_path, capsys):
+    (tmp_path / "oscillator.py").write_text(python_blocks("model-files.md")[0])
+    assert main(["equations", str(tmp_path / "oscillator.py")]) == 0
+    assert "spring" in capsys.readouterr().out
+    lm = load_model(tmp_path / "oscillator.py")
+    t = lm.experiment.times()
+    x = bg.simulate(lm.model, t, lm.experiment.inputs, rtol=1e-9)["x"]
+    m, k, c = 1.0, 100.0, 2.0  # step response of m x'' + c x' + k x = 1
+    wn, z = np.sqrt(k / m), c / (2 * np.sqrt(k * m))
+    wd = wn * np.sqrt(1 - z ** 2)
+    exact = (1 - np.exp(-z * wn * t) * (np.cos(wd * t) + z / np.sqrt(1 - z ** 2) * np.sin(wd * t))) / k
+    assert np.max(np.abs(x - exact)) < 1e-6 / k
+
+
+def test_element_kind_example_simulates_its_law():
+    mod = module_of(python_blocks("extending.md")[0], "extending_element")
+    g = bg.Model("m")
+    g.add(bg.Se("f", 0.0), bg.J1("v"), bg.I("m", 1.0, p0=2.0), mod.CubicDamper("d", g.parameter("c", 0.5)))
+    g.bond("f", "v")
+    g.bond("v", "m")
+    g.bond("v", "d")
+    g.output("v", g.flow("m"))
+    t = np.linspace(0, 1, 101)
+    res = bg.simulate(g, t, rtol=1e-10)
+    assert np.allclose(res["v"], 2.0 / np.sqrt(1 + 2 * 0.5 * 4.0 * t), rtol=1e-7)
+    assert g.elements["d"].describe() == "e = c·f³"
+
+
+def test_operator_example_lags_by_its_half_width():
+    mod = module_of(python_blocks("extending.md")[1], "extending_operator")
+    v = np.r_[np.linspace(0, 2, 50), np.linspace(2, -2, 100)]
+    y = mod.Backlash(0.5).run(v)
+    assert np.allclose(y[15:50], v[15:50] - 0.5) and np.allclose(y[-40:], v[-40:] + 0.5)
+    g = bg.Model("gap")
+    h = g.operator("gap", mod.Backlash(0.5), g.input("V"))
+    g.add(bg.Se("s", h), bg.J1("j"), bg.R("r", 1.0))
+    g.chain("s", "j", "r")
+    g.output("y", g.effort("r"))
+    assert "gap.r" in g.parameters
+
+
+def test_data_check_example_flags_micrometres():
+    mod = module_of(python_blocks("extending.md")[2], "extending_check")
+    assert mod.displacement_in_metres(Dataset([0.0, 1.0], {"x": [0.0, 12.0]}))
+    assert not mod.displacement_in_metres(Dataset([0.0, 1.0], {"x": [0.0, 12e-6]}))
+
+
+def test_settings_page_lists_the_framework_settings():
+    page = (DOCS / "settings.md").read_text()
+    for name in config.DEFAULTS:
+        if name.split(".")[0] in ("simulate", "causality", "codegen", "data"):
+            assert f"`{name}`" in page, name
+
+
+def test_docs_cite_the_papers_in_full_and_the_readme_links_them():
+    refs = (DOCS / "references.md").read_text()
+    for author, venue in (("Rodriguez-Fortun", "(2010) 303–314"), ("Ghafarirad", "doi:10.1080/13873954.2014.906472"),
+                          ("Shahabi", "doi:10.1016/j.crme.2019.10.007"), ("Wood", "Barcelona, 2005"),
+                          ("Hassani", "Mechanical Systems and Signal Processing")):
+        assert author in refs and venue in refs
+    for page in DOCS.glob("*.md"):
+        text = page.read_text()
+        assert not re.search(r"seed 00\d|CONTRACT\.md|REFERENCE\.md|\.\./shared", text), page.name
+        for link in re.findall(r"\]\(([\w-]+\.md)", text):
+            assert (DOCS / link).exists(), (page.name, link)
+    assert "docs/" in (ROOT / "README.md").read_text()
+
+
+@pytest.mark.parametrize("field", ["cause", "gain", "baseline_rms", "extended_rms", "candidates", "causes",
+                                   "steps", "natural_frequencies_rad_s", "rhp_zeros", "dc_gain"])
+def test_json_page_describes_the_fields(field):
+    assert f"`{field}`" in (DOCS / "json-outputs.md").read_text()
