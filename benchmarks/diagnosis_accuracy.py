@@ -5,6 +5,7 @@
     python benchmarks/diagnosis_accuracy.py --set bench --limit 20 --timeout 900
     python benchmarks/diagnosis_accuracy.py --seeds 2004,2010 --size bench
     python benchmarks/diagnosis_accuracy.py --set bench --resume  # continue an interrupted run
+    git archive REV | tar -x -C /tmp/old && python benchmarks/diagnosis_accuracy.py --engine /tmp/old
 
 Each record is drawn by ``truthgen.draw(seed, size)`` (the protocol is the package docstring of
 tests/truthgen: hand-written truth physics, randomized devices, mechanisms, drives and sensors,
@@ -107,6 +108,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", help="results JSON (default benchmarks/.data/diagnosis_accuracy_<set>.json)")
     ap.add_argument("--resume", action="store_true", help="keep the results already in --out and skip those seeds")
     ap.add_argument("--markdown", help="also write the report as markdown to this file")
+    ap.add_argument("--engine", help="diagnose with another source tree of the project (e.g. 'git archive REV' "
+                                     "unpacked): its bondgraph, library and models come first on PYTHONPATH")
     args = ap.parse_args(argv)
 
     seeds = [int(s) for s in args.seeds.split(",")] if args.seeds else list(SEEDS[args.set])
@@ -129,11 +132,15 @@ def main(argv=None) -> int:
         if seed in done:
             continue
         t0 = time.perf_counter()
-        rec = draw(seed, size)
+        try:
+            rec = draw(seed, size)
+        except RuntimeError as exc:          # the visibility rule refused the seed
+            print(f"[{k}/{len(seeds)}] seed {seed}: not generated ({exc})", file=sys.stderr, flush=True)
+            continue
         gen = time.perf_counter() - t0
         print(f"[{k}/{len(seeds)}] seed {seed} {rec.family} {rec.label} ({', '.join(rec.mechanisms) or '-'}), "
               f"{len(rec.t)} samples, generated in {gen:.1f} s ... ", end="", file=sys.stderr, flush=True)
-        r = diagnose_record(rec, timeout=timeout, workers=args.workers)
+        r = diagnose_record(rec, timeout=timeout, workers=args.workers, engine=args.engine)
         r["generate_s"] = round(gen, 1)
         r["size"] = size
         results.append(r)
@@ -141,11 +148,12 @@ def main(argv=None) -> int:
               + (f" [{r['error']}]" if r["error"] else ""), file=sys.stderr, flush=True)
         with open(out_path + ".tmp", "w") as f:
             json.dump({"set": args.set, "size": size, "timeout": timeout, "workers": args.workers,
-                       "started": started, "results": results}, f, indent=1)
+                       "engine": args.engine, "started": started, "results": results}, f, indent=1)
         os.replace(out_path + ".tmp", out_path)
     results.sort(key=lambda r: seeds.index(r["seed"]))
     report = (f"Diagnosis accuracy, {args.set if not args.seeds else 'seeds ' + args.seeds} ({size} records), "
-              f"{started}; timeout {timeout:g} s, diagnose --workers {args.workers}\n\n"
+              f"{started}; timeout {timeout:g} s, diagnose --workers {args.workers}"
+              + (f", engine {args.engine}" if args.engine else "") + "\n\n"
               + summary(results) + "\n\n" + confusion(results) + "\n\n" + table(results) + "\n")
     print(report)
     if args.markdown:

@@ -18,6 +18,7 @@ from bondgraph.data import read_csv
 from bondgraph.modelfile import load_model
 from bondgraph.simulate import simulate as bondgraph_simulate
 from truthgen import SEEDS, VISIBLE, design, draw
+from truthgen.generator import plan
 from truthgen import bimorph, drives, stack
 from truthgen.draws import factor
 from truthgen.families import FAMILIES, ROOT, Shape
@@ -68,6 +69,16 @@ def test_every_cause_of_every_family_has_mechanisms_and_revealing_drives():
                 assert len(MECHANISMS[fam.physics][cause]) >= 3, (fam.name, cause)
                 assert set(fam.reveal[cause]) <= set(drives.KINDS)
             assert fam.drive_kinds(causes, fam.shape("bench", causes, np.random.default_rng(0), {})), entry
+
+
+def test_dev_seeds_reach_every_mechanism_of_every_cause():
+    """Every mechanism a family's causes can use is drawn by some dev seed, at either size."""
+    wanted = {(f.physics, c, name) for f in FAMILIES.values() for entry in f.causes
+              for c in entry.split("+") if c != "none" for name in MECHANISMS[f.physics][c]}
+    for size in ("ci", "bench"):
+        seen = {(pl.family.physics, m.cause, m.name) for pl in (plan(s, size) for s in SEEDS["dev"])
+                for m in pl.mechanisms}
+        assert seen == wanted, sorted(wanted - seen)
 
 
 def test_factor_never_returns_the_nominal_value():

@@ -97,17 +97,20 @@ parameters within a factor 2.5 of the file's values (damping 12, natural frequen
 (:mod:`.visibility`).  Both must reach 3 (for a compound: each effect's size against the
 other alone, and its visible size alone).  Otherwise, in rounds: 1. double the strength of the
 weak effects (capped at the top of their realistic range); 2. once capped, halve the noise
-level (down to 0.1 % of the stroke); 3. then draw a new drive among the revealing kinds; at
-most 14 rounds, else the seed is refused.  Both sizes, the strengths and the rounds are stored
-in the record.
+level (down to 0.1 % of the stroke); 3. then draw a new drive among the revealing kinds.  After
+14 rounds a single effect's seed is refused; a compound gets up to 10 more rounds in which an
+effect that is visible alone but masked by its partner (e.g. friction that damps a softening
+resonance away) first halves its partner's strength (never raised again).  Both sizes, the
+strengths and the rounds used are stored in the record.  (No seed of the three sets is refused.)
 
 **Seed sets** (:data:`SEEDS`, disjoint, fixed before tuning): ``dev`` 0-199 (tune freely, any
 size); ``ci`` 1000-1013 (14 small records: 3 null, 1 compound, all four families);
 ``bench`` 2000-2071 (72 realistic records: 17 null, 9 compound).
 
-Timing: a ``ci`` record takes about 0.1-5 s to generate (a few compound ones up to ~25 s on
-a loaded 2-core machine), a ``bench`` record 1-60 s (the stack family's long records and the
-T215's 250 000 samples are the slow ones).
+Timing (a loaded 2-core machine): a ``ci`` record takes 0.1-5 s to generate, a few up to
+~30 s (plus ~5 s once per process to import bondgraph for the model files' values); a
+``bench`` record 1-60 s, median 16 s, a few that need many rounds of the visibility rule up to
+~10 min (compounds at 250 000 samples).
 """
 from .generator import ATTEMPTS, NOISE_FLOOR, VISIBLE, Record, design, draw
 from .runner import diagnose_record
@@ -118,7 +121,7 @@ SEEDS = {
     "bench": list(range(2000, 2072)),
 }
 
-#: causes a diagnosis may name; the truths use all but none of these names
+#: the causes of the truths (a diagnosis' ``electrical-rc`` is scored as ``electrical``)
 CAUSES = ("none", "hysteresis", "creep", "saturation", "softening", "nonlinear-damping",
           "higher-mode", "electrical")
 

@@ -18,8 +18,10 @@ from .visibility import linear_refit
 SIZES = ("ci", "bench")
 #: a hidden effect must leave at least this many noise RMS after the best plausible linear refit
 VISIBLE = 3.0
-#: rounds of the visibility rule before the record is declared impossible
+#: rounds of the visibility rule (steps 1-3) ...
 ATTEMPTS = 14
+#: ... and the further rounds that unmask a compound (step 4) before the seed is refused
+UNMASK_ATTEMPTS = 10
 #: the quietest sensor the visibility rule may fall back to (noise RMS / stroke)
 NOISE_FLOOR = 0.001
 #: the design: which family each seed goes to (seed mod 6) ...
@@ -132,20 +134,51 @@ def _rms(a):
     return float(np.sqrt(np.mean(np.square(a))))
 
 
-def draw(seed: int, size: str = "ci") -> Record:
-    """The truth record of ``seed`` at ``size`` (``ci``: small, ``bench``: realistic)."""
+@dataclass
+class Plan:
+    """What a seed decides before anything is simulated (see :func:`plan`)."""
+
+    family: object
+    causes: tuple
+    overrides: dict
+    nominal: dict
+    params: dict
+    shape: object
+    mechanisms: list
+    context: dict
+    streams: dict
+
+
+def plan(seed: int, size: str = "ci") -> Plan:
+    """The family, causes, model options, drawn parameters, record shape and mechanisms of a
+    seed: the part of :func:`draw` that needs no simulation (the random streams it leaves
+    are handed on to the rest of the draw)."""
     if size not in SIZES:
         raise ValueError(f"size must be one of {SIZES}, got {size!r}")
-    start = time.perf_counter()
     fam_name, causes = design(seed)
     fam = FAMILIES[fam_name]
-    streams = np.random.SeedSequence([int(seed), SIZES.index(size)]).spawn(7)
-    r_model, r_par, r_shape, r_drive, r_mech, r_noise, r_vis = (np.random.default_rng(s) for s in streams)
-
-    overrides = fam.model_args(r_model)
+    names = ("model", "params", "shape", "drive", "mechanisms", "noise", "visibility")
+    streams = dict(zip(names, (np.random.default_rng(s) for s in
+                               np.random.SeedSequence([int(seed), SIZES.index(size)]).spawn(len(names)))))
+    overrides = fam.model_args(streams["model"])
     nominal = fam.nominal(overrides)
-    p = fam.perturb(nominal, r_par)
-    shape = fam.shape(size, causes, r_shape, overrides)
+    p = fam.perturb(nominal, streams["params"])
+    shape = fam.shape(size, causes, streams["shape"], overrides)
+    ctx = {"p": p, "fs": shape.fs, "T": shape.T, **fam.context(p)}
+    mechs = []
+    for c in causes:
+        usable = [m_ for _, m_ in sorted(MECHANISMS[fam.physics][c].items()) if m_.applies(ctx)]
+        mechs.append(usable[int(streams["mechanisms"].integers(len(usable)))])
+    return Plan(fam, causes, overrides, nominal, p, shape, mechs, ctx, streams)
+
+
+def draw(seed: int, size: str = "ci") -> Record:
+    """The truth record of ``seed`` at ``size`` (``ci``: small, ``bench``: realistic)."""
+    start = time.perf_counter()
+    pl = plan(seed, size)
+    fam, causes, overrides, nominal, p, shape, mechs = (pl.family, pl.causes, pl.overrides, pl.nominal,
+                                                        pl.params, pl.shape, pl.mechanisms)
+    r_drive, r_mech, r_noise, r_vis = (pl.streams[k] for k in ("drive", "mechanisms", "noise", "visibility"))
     m = max(1, math.ceil(1.0 / (shape.fs * shape.h_max)))
     h = 1.0 / (shape.fs * m)
     n = int(round(shape.T * shape.fs))
@@ -164,11 +197,7 @@ def draw(seed: int, size: str = "ci") -> Record:
     spec, V, y0, ref = new_drive(r_drive)
     noise = measure.draw(r_noise)
     stroke = float(np.ptp(y0[::m]))
-    ctx = {"p": p, "fs": shape.fs, "T": shape.T, "h": h, "ref": ref, **fam.context(p)}
-    mechs = []
-    for c in causes:
-        usable = [m_ for _, m_ in sorted(MECHANISMS[fam.physics][c].items()) if m_.applies(ctx)]
-        mechs.append(usable[int(r_mech.integers(len(usable)))])
+    ctx = {**pl.context, "h": h, "ref": ref}
     shapes = [mech.shape(r_mech, ctx) for mech in mechs]
     strengths = [loguniform(r_mech, mech.lo, mech.hi) for mech in mechs]
 
@@ -190,7 +219,8 @@ def draw(seed: int, size: str = "ci") -> Record:
     drive_version = 0
     effect, visible, attempts = (), (), 0
     y = y0
-    for attempts in range(1, ATTEMPTS + 1 if mechs else 1):
+    lowered: set = set()
+    for attempts in range(1, ATTEMPTS + UNMASK_ATTEMPTS + 1 if mechs else 1):
         sigma = noise["level"] * stroke
         y = response(range(len(mechs)))[0]
         effect, visible = [], []
@@ -202,12 +232,19 @@ def draw(seed: int, size: str = "ci") -> Record:
         weak = [i for i in range(len(mechs)) if min(effect[i], visible[i]) < VISIBLE]
         if not weak:
             break
-        if attempts == ATTEMPTS:
+        if attempts == ATTEMPTS + (UNMASK_ATTEMPTS if len(mechs) > 1 else 0):
             raise RuntimeError(f"seed {seed} ({size}): the hidden {'+'.join(causes)} stays below "
-                               f"{VISIBLE} noise RMS after {ATTEMPTS} rounds of the visibility rule")
-        if any(strengths[i] < mechs[i].hi for i in weak):       # 1. a stronger effect
+                               f"{VISIBLE} noise RMS after {attempts} rounds of the visibility rule")
+        masked = [i for i in weak if visible[i] >= VISIBLE]     # visible alone, not beside its partner
+        partners = [j for j in range(len(mechs)) if j not in weak and strengths[j] > mechs[j].lo]
+        if attempts >= ATTEMPTS and masked and partners:        # 4. a weaker partner (compounds)
+            for j in partners:
+                strengths[j] = max(strengths[j] / 2, mechs[j].lo)
+                lowered.add(j)
+        elif any(strengths[i] < mechs[i].hi for i in weak if i not in lowered):   # 1. a stronger effect
             for i in weak:
-                strengths[i] = min(2 * strengths[i], mechs[i].hi)
+                if i not in lowered:
+                    strengths[i] = min(2 * strengths[i], mechs[i].hi)
         elif noise["level"] > NOISE_FLOOR:                      # 2. a quieter sensor
             noise["level"] = max(noise["level"] / 2, NOISE_FLOOR)
         else:                                                   # 3. a drive that reveals it

@@ -69,10 +69,13 @@ def _end_group(proc: subprocess.Popen) -> None:
 
 
 def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: float = 600.0,
-                    workers: int = 1, extra: list | None = None) -> dict:
+                    workers: int = 1, extra: list | None = None, engine: str | os.PathLike | None = None) -> dict:
     """Write ``record`` to CSV, run ``python -m bondgraph diagnose MODEL DATA --json`` on it and
     return the truth, the answer (cause, causes, gains), right/wrong, wall time and any error
-    (``timeout``, a non-zero exit with the last stderr line, unreadable JSON)."""
+    (``timeout``, a non-zero exit with the last stderr line, unreadable JSON).
+
+    ``engine``: another source tree of the project (e.g. an exported older commit) whose
+    ``bondgraph``, ``library`` and model files are used instead of the installed ones."""
     result = {"seed": record.seed, "family": record.family, "truth": record.label,
               "mechanisms": list(record.mechanisms), "samples": len(record.t),
               "visible_size": [round(v, 1) for v in record.visible_size],
@@ -80,7 +83,11 @@ def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: f
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         csv = Path(tmp) / f"truth_{record.seed}.csv"
         record.write_csv(csv)
-        cmd = [sys.executable, "-m", "bondgraph", "diagnose", str(ROOT / record.model), str(csv), "--json",
+        root = Path(engine) if engine else ROOT
+        env = dict(os.environ)
+        if engine:
+            env["PYTHONPATH"] = os.pathsep.join([str(root)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
+        cmd = [sys.executable, "-m", "bondgraph", "diagnose", str(root / record.model), str(csv), "--json",
                "--quiet", "--workers", str(workers)]
         for s in record.cli_sets:
             cmd += ["--set", s]
@@ -88,7 +95,7 @@ def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: f
         start = time.perf_counter()
         # its own process group, so that a timeout ends the diagnosis *and* its worker pool
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp,
-                                start_new_session=True)
+                                env=env, start_new_session=True)
         try:
             stdout, stderr = proc.communicate(timeout=timeout)
         except subprocess.TimeoutExpired:
