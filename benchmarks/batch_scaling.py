@@ -43,6 +43,7 @@ MODEL = os.path.join(ROOT, "models", "apa120ml.py")
 SPACE = {"K": "normal(10.77e6, 5%)", "c": "uniform(2500, 3500)", "M": "loguniform(0.14, 0.2)"}
 METRICS = ["peak(x)", "rms(x)"]
 SEED = 1
+IDLE_S = 5.0
 
 COMPILE = """
 import time
@@ -106,6 +107,11 @@ def on_cluster(n: int, draws: int) -> dict:
             out[f"{label}_builds_per_worker"] = sorted(after[w]["misses"] - before[w]["misses"] for w in after)
             out[f"{label}_failed"] = len(res.table.failed)
             out["peaks"] = res.table.column("peak(x)")
+        cpu_before, here, t1 = client.run(time.process_time), time.process_time(), time.perf_counter()
+        time.sleep(IDLE_S)  # what the idle cluster (event loops, heartbeats) costs per second
+        cpu_after = client.run(time.process_time)
+        out["idle_cpu_per_s"] = (sum(cpu_after[w] - cpu_before[w] for w in cpu_after)
+                                 + time.process_time() - here) / (time.perf_counter() - t1)
     return out
 
 
@@ -136,16 +142,19 @@ def main(argv=None) -> int:
           f"(+ {ref['build_s']:.2f} s model build); cold derive + compile {compile_s:.1f} s "
           f"(x {args.draws} = {compile_s * args.draws / 60:.0f} min without reuse)\n")
     print("| workers | cluster start (s) | cold sweep (s) | warm sweep (s) | speed-up | builds per worker | "
-          "overhead per job, CPU (ms) | one task per job (s) | overhead per job, one task each, CPU (ms) |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "overhead per job, CPU (ms) | of which idle loops (ms) | one task per job (s) | "
+          "overhead per job, one task each, CPU (ms) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in runs:
         over = (r["warm_cpu_s"] / args.draws - single_cpu) * 1e3
+        idle = r["idle_cpu_per_s"] * r["warm_s"] / args.draws * 1e3
         over1 = (r["per_task_1_cpu_s"] / args.draws - single_cpu) * 1e3
         print(f"| {r['workers']} | {r['startup_s']:.1f} | {r['cold_s']:.2f} | {r['warm_s']:.2f} | "
-              f"{first['warm_s'] / r['warm_s']:.2f} | {r['cold_builds_per_worker']} | {over:.2f} | "
+              f"{first['warm_s'] / r['warm_s']:.2f} | {r['cold_builds_per_worker']} | {over:.2f} | {idle:.2f} | "
               f"{r['per_task_1_s']:.2f} | {over1:.2f} |")
     print(f"\nspeed-up: warm sweep with {first['workers']} worker(s) / with N; overhead per job: CPU time of the "
-          f"workers and of the client/scheduler process per job, minus the serial loop's CPU per simulation")
+          f"workers and of the client/scheduler process per job, minus the serial loop's CPU per simulation; "
+          f"idle loops: the idle cluster's CPU per second times the sweep's wall time, per job")
     return 0
 
 

@@ -65,7 +65,8 @@ def table(results: list) -> str:
                            for c, g in zip(r["causes"], r["gains"] + [None] * len(r["causes"]))) or "none"
         lines.append(f"| {r['seed']} | {r['family']} | {r['truth']} ({', '.join(r['mechanisms']) or '-'}) | "
                      f"{', '.join(str(v) for v in r['visible_size']) or '-'} | {r['samples']} | "
-                     f"{r['cause']}: {chain} | {'yes' if r['right'] else 'no'} | {r['wall']} | {r['error'] or ''} |")
+                     f"{(r['cause'] + ': ' + chain) if r['cause'] else '-'} | {'yes' if r['right'] else 'no'} | "
+                     f"{r['wall']} | {r['error'] or ''} |")
     return "\n".join(lines)
 
 

@@ -44,14 +44,11 @@ import stat
 from typing import IO, Iterable, Iterator
 
 from .errors import BondGraphError, UsageError
-from .interrupt import COMMIT_LOCK, TEMPORARY, remove_temporary_files
+from .interrupt import COMMIT_LOCK, COMMITTED, TEMPORARY, remove_temporary_files
 
 __all__ = ["atomic_write", "Outputs", "remove_temporary_files", "COMMIT_LOCK"]
 
 _MODES = {"w", "wt", "wb"}
-
-_LIVE = TEMPORARY  # temporary files not yet moved into place (the interrupt handler removes them)
-
 
 def _create_temp(directory: str, base: str, suffix: str = "") -> tuple[int, str]:
     """Create a new, empty, exclusively-owned temp file next to the target.
@@ -67,7 +64,7 @@ def _create_temp(directory: str, base: str, suffix: str = "") -> tuple[int, str]
             fd = os.open(tmp, flags, 0o666)
         except FileExistsError:
             continue
-        _LIVE.add(tmp)
+        TEMPORARY.add(tmp)
         return fd, tmp
     raise FileExistsError(f"could not create a temporary file in {directory!r}")
 
@@ -135,18 +132,22 @@ def atomic_write(
                 f.flush()
                 os.fsync(f.fileno())
         if not still_open:  # the block closed the file itself: sync through a new descriptor
-            sync_fd = os.open(tmp, os.O_RDWR)
-            try:
-                os.fsync(sync_fd)
-            finally:
-                os.close(sync_fd)
+            _fsync_file(tmp)
         _replace(tmp, target)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
-        _LIVE.discard(tmp)
+        TEMPORARY.discard(tmp)
         raise
     _fsync_directory(directory)
+
+
+def _fsync_file(path: str) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def _replace(tmp: str, target: str) -> None:
@@ -156,7 +157,7 @@ def _replace(tmp: str, target: str) -> None:
     except OSError:
         pass  # no previous file (or not ours to inspect): keep umask-derived mode
     os.replace(tmp, target)
-    _LIVE.discard(tmp)
+    TEMPORARY.discard(tmp)
 
 
 class Outputs:
@@ -172,6 +173,7 @@ class Outputs:
         self._temps: dict[str, str] = {}     # target (real path) -> temporary file
         self._names: dict[str, str] = {}     # target (real path) -> option that named it
         self._written: set[str] = set()      # targets whose content was written
+        self._shown: dict[str, str] = {}     # target (real path) -> the name the user gave
 
     def add(self, path: str | os.PathLike | None, option: str = "--out",
             suffixes: Iterable[str] | None = None) -> str | None:
@@ -212,6 +214,7 @@ class Outputs:
         os.close(fd)
         self._temps[target] = tmp
         self._names[target] = option
+        self._shown[target] = name
         return name
 
     def _temp(self, path: str | os.PathLike) -> str:
@@ -250,13 +253,10 @@ class Outputs:
             for target, tmp in list(self._temps.items()):
                 if target not in self._written:
                     continue
-                fd = os.open(tmp, os.O_RDONLY)
-                try:
-                    os.fsync(fd)
-                finally:
-                    os.close(fd)
+                _fsync_file(tmp)
                 _replace(tmp, target)
                 _fsync_directory(os.path.dirname(target))
+                COMMITTED.append(self._shown[target])
                 del self._temps[target]
 
     def discard(self) -> None:
@@ -264,7 +264,7 @@ class Outputs:
         for tmp in self._temps.values():
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
-            _LIVE.discard(tmp)
+            TEMPORARY.discard(tmp)
         self._temps.clear()
 
     def __enter__(self) -> "Outputs":

@@ -49,6 +49,28 @@ DEFAULTS: dict[str, Default] = {
                                        "mean step (absorbs time stamps printed with few digits)"),
     "data.suspicious_time_span": Default(1e4, "a record with steps of 1 s or more spanning this many seconds "
                                               "draws a warning that 't' may be in ms or sample numbers"),
+    # diagnosis (bondgraph.diagnosis): what counts as evidence; see that package's docstring
+    "diagnosis.spread": Default(10.0, "linear parameters are calibrated within x/÷ this factor of the model's "
+                                      "values (and their declared bounds); the sensor gain is free"),
+    "diagnosis.identifiable": Default(1e-3, "a linear parameter is calibrated only if its pivot in the normalised "
+                                            "sensitivity matrix (pivoted QR) is at least this share of the largest"),
+    "diagnosis.fast_factor": Default(10.0, "modes faster than this many times the data's Nyquist frequency are "
+                                           "residualised (replaced by their static contribution)"),
+    "diagnosis.decimate_margin": Default(8.0, "records are decimated while the new Nyquist frequency stays this many "
+                                              "times above the drive's band and the slow modes"),
+    "diagnosis.min_z": Default(3.0, "a cause must lower the squared validation error by this many standard errors "
+                                    "(effective sample size from the residuals' autocorrelation)"),
+    "diagnosis.min_gain": Default(1.1, "a cause must lower the validation RMS by at least this factor"),
+    "diagnosis.min_gain_reference": Default(1.05, "a nonlinear or memory cause must beat the flexible linear "
+                                                  "reference by this factor (both with the reference's freedom)"),
+    "diagnosis.min_z_reference": Default(2.0, "... and by this many standard errors (a second-stage test, after "
+                                              "min_z against the calibrated model)"),
+    "diagnosis.linear_share": Default(0.7, "a linear structural cause must explain this share of what the flexible "
+                                           "linear reference explains over the calibrated model"),
+    "diagnosis.reference_poles": Default(6, "real poles of the flexible linear reference, spread over the record's "
+                                            "time scales"),
+    "diagnosis.max_chain": Default(3, "most causes named in one diagnosis (compound effects)"),
+    "diagnosis.max_fit_points": Default(20000, "samples of the fit part used by the optimisers (evenly thinned)"),
 }
 
 _values: dict[str, Any] = {k: d.value for k, d in DEFAULTS.items()}

@@ -2,16 +2,23 @@
 
 One input signal (the data column driving the model, linearly interpolated) and one output
 are compared at the data's time stamps.  The data is split into a *fit* part and a
-*validation* part: by default interleaved time blocks (every third of ten blocks is held
-out), so every regime of a composite experiment appears in both, while the simulation runs
-open loop over the whole record from rest.  An output offset (sensor zero) is always solved
-by linear least squares.
+*validation* part: by default interleaved time blocks (a share of thirty blocks, spread evenly,
+is held out), so every regime of a composite experiment appears in both, while the simulation
+runs open loop over the whole record from rest.  An output offset (sensor zero) is always
+solved by linear least squares.  The model's first declared input and output are used unless
+others are named.
 
 Parameters are fitted in a transformed space: positive parameters in log scale, the others
 scaled by a typical magnitude.  Groups of parameters the output depends on linearly (gains,
 operator weights) are solved exactly by bounded linear least squares (scipy ``lsq_linear``,
 non-negative where the bounds say so), alternating with ``scipy.optimize.least_squares`` for
-the nonlinear ones.  Uncertainties come from the Jacobian at the solution.
+the nonlinear ones.
+
+Uncertainties (``FitResult.stderr``) come from the Jacobian at the solution: the standard
+errors of the nonlinearly fitted parameters *conditional on everything else held fixed* (the
+parameters not fitted, and the exactly solved linear ones and offset at their solution),
+assuming white measurement noise; residuals that are correlated in time (model error) make
+them too small.  ``tests/test_identify.py`` checks their coverage on a linear model.
 """
 from __future__ import annotations
 
@@ -23,9 +30,9 @@ import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
 from .data import Dataset, uniform_step
-from .errors import ParameterError, UsageError, did_you_mean
+from .errors import DataError, ParameterError, UsageError, did_you_mean
 from .graph import Model
-from .lti import LTI
+from .lti import LTI, first_input, first_output
 from .signals import PiecewiseLinear
 from .simulate import SimulationError, Simulator
 
@@ -113,14 +120,16 @@ def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", bl
 class Identification:
     """A model, a data set and the machinery to simulate, score and fit it.
 
-    ``input``/``output`` name the model's input and output; ``data_input``/``data_output``
-    the data columns (default: the same names)."""
+    ``input``/``output`` name the model's input and output (default: its first declared
+    ones); ``data_input``/``data_output`` the data columns (default: the same names)."""
 
-    def __init__(self, model: Model | Simulator, data: Dataset, input: str = "V", output: str = "x",
+    def __init__(self, model: Model | Simulator, data: Dataset, input: str | None = None, output: str | None = None,
                  data_input: str | None = None, data_output: str | None = None,
                  validation: float = 0.3, split: str = "blocks", max_fit_points: int = 20000,
-                 rtol: float = 1e-6, method: str = "auto"):
+                 rtol: float = 1e-6, method: str = "auto", lti: LTI | None = None, cut: float | None = None):
         self.sim = model if isinstance(model, Simulator) else Simulator(model)
+        input = input if input is not None else first_input(self.sim.eqs)
+        output = output if output is not None else first_output(self.sim.eqs)
         if input not in self.sim.input_names:
             raise UsageError(f"model input: {did_you_mean(input, self.sim.input_names, 'input')}")
         if output not in self.sim.output_names:
@@ -131,6 +140,7 @@ class Identification:
         self.validation, self.split_mode = validation, split
         self.u = data.column(data_input or input)
         self.y = data.column(data_output or output)
+        check_varies(self.u, data_input or input, data.path)
         self.t = data.t
         self.signal = PiecewiseLinear(self.t, self.u, label=f"data:{data_input or input}")
         self.fit_mask, self.val_mask = split_masks(self.t, validation, split)
@@ -142,25 +152,31 @@ class Identification:
         self.nfev = 0
         self.max_fit_points = max_fit_points
         self.dt = uniform_step(self.t)
-        lti = LTI(self.sim.eqs, input, output) if self.dt is not None else None
-        self.lti = lti if lti is not None and lti.exact else None
+        if lti is None and self.dt is not None:
+            lti = LTI(self.sim.eqs, input, output)
+        #: the exact linear route (None when the model is not linear or the data not uniform)
+        self.lti = lti if lti is not None and lti.exact and self.dt is not None else None
+        #: modes faster than this (rad/s) are residualised on the linear route (None: keep all)
+        self.cut = cut
 
     def like(self, model: Model | Simulator, **kw) -> "Identification":
         """The same data, input/output mapping and split for another (e.g. extended) model."""
         args = dict(input=self.input, output=self.output, data_input=self.data_input,
                     data_output=self.data_output, validation=self.validation, split=self.split_mode,
-                    max_fit_points=self.max_fit_points, rtol=self.rtol, method=self.method)
+                    max_fit_points=self.max_fit_points, rtol=self.rtol, method=self.method, cut=self.cut)
         args.update(kw)
         return Identification(model, self.data, **args)
 
     # ---- simulation and scores ---------------------------------------------------------------
     def predict(self, values: Mapping[str, float] | None = None, inputs=None) -> np.ndarray:
         """Model output at every data time, without offset (exact LTI recursion when the model
-        is linear and the data uniformly sampled, else the compiled integrator)."""
+        is linear and the data uniformly sampled, with the modes faster than ``cut``
+        residualised, from rest; else the compiled integrator)."""
         self.nfev += 1
         if self.lti is not None and not inputs:
             th = self.sim.theta(values)
-            return self.lti.response(th, self.dt, self.u, self.sim.initial_state(th))[:, 0]
+            ss = self.lti.state_space(th, self.cut)
+            return ss.response(self.dt, self.u, None if ss.fast else self.sim.initial_state(th))[:, 0]
         res = self.sim.run(self.t, {self.input: self.signal, **(inputs or {})}, params=values,
                            rtol=self.rtol, method=self.method)
         return res.outputs[self.output]
@@ -231,11 +247,8 @@ class Identification:
             cols.append((self.predict(v) - base) / s.scale)
         A = np.column_stack(cols + [np.ones_like(base)])[self.fit_idx]
         rhs = (self.y - base)[self.fit_idx]
-        lo = np.array([s.lower for s in lin] + [-np.inf])
-        hi = np.array([s.upper for s in lin] + [np.inf])
-        norms = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
-        sol = lsq_linear(A / norms, rhs, bounds=(lo * norms, hi * norms), method="bvls")
-        return list(sol.x[:-1] / norms[:-1])
+        sol = bounded_lstsq(A, rhs, [s.lower for s in lin] + [-np.inf], [s.upper for s in lin] + [np.inf])
+        return list(sol[:-1])
 
     def _fit_once(self, non, lin, z0, fixed, loss, max_nfev, rounds, progress, want_stderr) -> FitResult:
         w = [s.start for s in lin]
@@ -243,7 +256,7 @@ class Identification:
         y_fit = self.y[self.fit_idx]
         scale_y = max(float(np.std(y_fit)), 1e-300)
         n0 = self.nfev
-        message = ""
+        message, success = "linear least squares", True
         for _ in range(rounds if (non and lin) else 1):
             if lin:
                 w = self._solve_linear(non, z, lin, fixed)
@@ -261,14 +274,13 @@ class Identification:
                 lb, ub = np.array([s.z_bounds() for s in non]).T
                 sol = least_squares(resid, np.clip(z, lb, ub), bounds=(lb, ub), loss=loss,
                                     max_nfev=max_nfev, x_scale=1.0, diff_step=1e-3)
-                z, message = sol.x, sol.message
+                z, message, success = sol.x, sol.message, bool(sol.success)
         vals = self._values(non, z, lin, w, fixed)
         pred = self.predict(vals)
         b, rf, rv = self.scores(pred)
         stderr = self._stderr(non, z, lin, w, fixed, pred, rf) if non and want_stderr else {}
         fitted = {s.name: vals[s.name] for s in non + lin}
-        return FitResult(fitted, stderr, b, rf, rv, self.nfev - n0, True, message or "linear least squares",
-                         pred + b)
+        return FitResult(fitted, stderr, b, rf, rv, self.nfev - n0, success, message, pred + b)
 
     def _stderr(self, non, z, lin, w, fixed, pred, rms) -> dict[str, float]:
         """Standard errors of the nonlinear parameters from a finite-difference Jacobian."""
@@ -295,6 +307,31 @@ class Identification:
             sd = math.sqrt(max(cov[i, i], 0.0))
             out[s.name] = s.from_z(z[i]) * sd if s.log else sd * s.scale
         return out
+
+
+def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
+    """min ||A·x − b|| with lower ≤ x ≤ upper (scipy's bounded-variable least squares on the
+    column-scaled problem; for tall A it works on the small triangular factor R of A,
+    ||Ax − b||² = ||Rx − Qᵀb||² + const)."""
+    norms = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
+    An = A / norms
+    lower = np.asarray(lower, float) * norms
+    upper = np.asarray(upper, float) * norms
+    if np.all(np.isinf(lower)) and np.all(np.isinf(upper)):
+        return np.linalg.lstsq(An, b, rcond=None)[0] / norms
+    if An.shape[0] > 4 * An.shape[1]:
+        Qm, Rm = np.linalg.qr(An)
+        An, b = Rm, Qm.T @ b
+    return lsq_linear(An, b, bounds=(lower, upper), method="bvls").x / norms
+
+
+def check_varies(u: np.ndarray, name: str, path: str | None = None) -> None:
+    """Refuse a constant drive: a model driven by it can only be compared with its own rest."""
+    scale = max(float(np.max(np.abs(u))), 1e-300)
+    if float(np.ptp(u)) <= 1e-9 * scale:
+        where = f"{path}: " if path else ""
+        raise DataError(f"{where}input column '{name}' is constant ({u[0]:g}): nothing to identify; "
+                        f"give a record in which the drive varies")
 
 
 def detect_linear(ident: Identification, names: Sequence[str], fixed: Mapping | None = None) -> list[str]:

@@ -11,7 +11,8 @@ minutes; the waiting main thread sees it within 0.1 s.  It then
 1. waits for a commit of output files that is under way (never half a set of outputs),
 2. removes every temporary file of the process (:func:`bondgraph.atomic.remove_temporary_files`),
 3. kills every child process (worker pools) and their children with SIGKILL,
-4. prints one line, ``bondgraph: interrupted ...``, and exits at once with status 130
+4. prints one line, ``bondgraph: interrupted; no output file was changed`` (or, once the
+   outputs are in place, ``...; after writing FILE``), and exits at once with status 130
    (SIGINT) or 143 (SIGTERM), skipping exit handlers that could wait for a worker.
 
 Worker processes forked by the command inherit the handler and leave silently on the
@@ -31,6 +32,8 @@ import threading
 TEMPORARY: set[str] = set()
 #: held while output files are moved into place, so an interrupt never leaves half a set
 COMMIT_LOCK = threading.Lock()
+#: output files already moved into place by this process (the interrupt message names them)
+COMMITTED: list[str] = []
 
 _STATUS = {signal.SIGINT: 130, signal.SIGTERM: 143}
 _NAMES = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated (SIGTERM)"}
@@ -53,7 +56,8 @@ def stop(signum: int) -> None:
     try:
         remove_temporary_files()
         kill_children()
-        msg = f"bondgraph: {_NAMES.get(signum, 'stopped')}; no output file was changed\n"
+        done = f"after writing {', '.join(COMMITTED)}" if COMMITTED else "no output file was changed"
+        msg = f"bondgraph: {_NAMES.get(signum, 'stopped')}; {done}\n"
         with contextlib.suppress(Exception):
             sys.stderr.flush()
         with contextlib.suppress(OSError):

@@ -144,9 +144,12 @@ def symbolic_matrices(eqs: Equations, input: str, output: str, op_gains: dict | 
     return A, B, C, D
 
 
-def linearize(eqs: Equations, input: str = "V", output: str = "x", params: dict | None = None,
+def linearize(eqs: Equations, input: str | None = None, output: str | None = None, params: dict | None = None,
               x_op: dict | None = None, u_op: dict | None = None) -> LinearModel:
-    """Linearise around the initial state (or ``x_op``) with inputs at zero (or ``u_op``)."""
+    """Linearise the response of ``output`` to ``input`` (default: the model's first declared
+    input and output) around the initial state (or ``x_op``) with inputs at zero (or ``u_op``)."""
+    input = input if input is not None else next(iter(eqs.model.inputs), "")
+    output = output if output is not None else next(iter(eqs.model.outputs), "")
     table = eqs.model.parameter_table()
     by_name = {str(k): float(v) for k, v in (params or {}).items()}
     values = {p: by_name.get(p.name, table[p]) for p in eqs.params}

@@ -1,19 +1,29 @@
-"""Exact simulation of linear time-invariant models on a uniform time grid.
+"""Exact simulation of linear time-invariant models on a uniform time grid, their frequency
+response, and time-scale separation (residualisation of modes the data cannot see).
 
 A model whose state equations are linear in its states and inputs is x' = A(θ)x + B(θ)u,
 y = C(θ)x + D(θ)u.  The matrices come from the symbolic Jacobians of the straight-line
 program (compiled to numeric functions of θ once); the response to an input that is linear
 between samples (exactly what a sampled data column is) follows from the first-order-hold
-discretisation (``scipy.signal.cont2discrete``, method ``foh``) and a compiled recursion, with
-no integration error and a cost of a few n² flops per sample.  Identification uses it for the
-nominal model and for every extension that acts on the input or adds a parallel branch.
+discretisation (the block-exponential construction of ``scipy.signal.cont2discrete``, method
+``foh``) and a compiled recursion, with no integration error and a cost of a few n² flops per
+sample.
+
+**Residualisation** (:func:`residualise`): the modes faster than a cut-off frequency are
+separated from the slow ones by an ordered real Schur form and a Sylvester equation (block
+diagonalisation), and replaced by their quasi-static (DC) contribution, D_r = D − C_f·A_f⁻¹·B_f.
+The slow poles are kept exactly and the static gain is exact: the singular-perturbation
+approximation of the fast subsystem, which is what data sampled far below those modes can
+see of them.  With every mode fast the model reduces to its static gain.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import sympy as sp
 from numba import njit
-from scipy.linalg import expm
+from scipy.linalg import expm, schur, solve_sylvester
 
 from .equations import Equations
 from .errors import UsageError, did_you_mean
@@ -44,16 +54,62 @@ def recursion(Ad, Bd, Cd, Dd, x0, U, Y):
                 x[i] = xn[i]
 
 
-class LTI:
-    """The (A, B, C, D) of one input → one output of a model, as numeric functions of θ."""
+@dataclass(frozen=True)
+class StateSpace:
+    """Numeric single-input single-output (A, B, C, D); ``fast`` modes were residualised."""
 
-    def __init__(self, eqs: Equations, input: str = "V", output: str = "x"):
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    fast: int = 0
+
+    @property
+    def n(self) -> int:
+        return self.A.shape[0]
+
+    def poles(self) -> np.ndarray:
+        return np.linalg.eigvals(self.A) if self.n else np.zeros(0, complex)
+
+    def frequency_response(self, omega) -> np.ndarray:
+        return frequency_response(self.A, self.B, self.C, self.D, omega)
+
+    def response(self, dt: float, U: np.ndarray, x0: np.ndarray | None = None) -> np.ndarray:
+        """Output for each column of ``U`` (inputs sampled every ``dt`` s, linear in between),
+        from the state ``x0`` (default rest)."""
+        U = np.asarray(U, float)
+        U = np.ascontiguousarray(U.reshape(-1, 1) if U.ndim == 1 else U)
+        if self.n == 0:
+            return self.D[0, 0] * U
+        Phi, Gam, G1 = foh(self.A, self.B, dt)
+        x0 = np.zeros(self.n) if x0 is None else np.asarray(x0, float)
+        Y = np.empty_like(U)
+        Cd = np.ascontiguousarray(self.C)
+        Dd = self.D + self.C @ G1
+        for j in range(U.shape[1]):
+            col = np.ascontiguousarray(U[:, j:j + 1])
+            out = np.empty_like(col)
+            # the discrete state is ξ = x − Γ1·u (as in scipy.signal.cont2discrete, method 'foh')
+            recursion(Phi, Gam, Cd, Dd, x0 - G1[:, 0] * col[0, 0], col, out)
+            Y[:, j] = out[:, 0]
+        return Y
+
+
+class LTI:
+    """The (A, B, C, D) of one input → one output of a model, as numeric functions of θ.
+
+    ``input``/``output`` default to the model's first declared input and output."""
+
+    def __init__(self, eqs: Equations, input: str | None = None, output: str | None = None):
         names = [str(u) for u in eqs.inputs]
+        input = input if input is not None else first_input(eqs)
+        output = output if output is not None else first_output(eqs)
         if input not in names:
             raise UsageError(did_you_mean(input, names, "input"))
         if output not in eqs.outputs:
             raise UsageError(did_you_mean(output, list(eqs.outputs), "output"))
         self.eqs = eqs
+        self.input, self.output = input, output
         u = eqs.inputs[names.index(input)]
         xs = eqs.state_symbols
         rates = [eqs.rates[s] for s in xs]
@@ -65,6 +121,9 @@ class LTI:
         others = [s for s in eqs.inputs if s != u]
         zero = {s: 0 for s in list(moving - set(xs) - {u}) + others}
         mats = [M.xreplace(zero) for M in mats]
+        used = set().union(*(e.free_symbols for M in mats for e in M))
+        #: names of the parameters the linear dynamics depend on, in the order of ``eqs.params``
+        self.parameters = [p.name for p in eqs.params if p in used]
         self._fn = sp.lambdify([eqs.params], mats, modules="numpy", cse=True)
         self.n = len(xs)
 
@@ -86,26 +145,63 @@ class LTI:
                       zip(self._fn(np.asarray(th, float)), [(self.n, self.n), (self.n, 1), (1, self.n), (1, 1)]))
         return A, B, C, D
 
-    def response(self, th: np.ndarray, dt: float, U: np.ndarray, x0: np.ndarray | None = None) -> np.ndarray:
-        """Output for each column of ``U`` (inputs sampled every ``dt`` s, linear in between),
-        from the state ``x0`` (default rest)."""
-        U = np.asarray(U, float)
-        U = np.ascontiguousarray(U.reshape(-1, 1) if U.ndim == 1 else U)
+    def state_space(self, th: np.ndarray, cut: float | None = None) -> StateSpace:
+        """The numeric model at θ; modes faster than ``cut`` (rad/s) residualised."""
         A, B, C, D = self.matrices(th)
-        if self.n == 0:
-            return D[0, 0] * U
-        Phi, Gam, G1 = foh(A, B, dt)
-        x0 = np.zeros(self.n) if x0 is None else np.asarray(x0, float)
-        Y = np.empty_like(U)
-        Cd = np.ascontiguousarray(C)
-        Dd = D + C @ G1
-        for j in range(U.shape[1]):
-            col = np.ascontiguousarray(U[:, j:j + 1])
-            out = np.empty_like(col)
-            # the discrete state is ξ = x − Γ1·u (as in scipy.signal.cont2discrete, method 'foh')
-            recursion(Phi, Gam, Cd, Dd, x0 - G1[:, 0] * col[0, 0], col, out)
-            Y[:, j] = out[:, 0]
-        return Y
+        return residualise(A, B, C, D, cut) if cut is not None else StateSpace(A, B, C, D)
+
+    def response(self, th: np.ndarray, dt: float, U: np.ndarray, x0: np.ndarray | None = None) -> np.ndarray:
+        """Output of the full model for each column of ``U`` (see :meth:`StateSpace.response`)."""
+        return self.state_space(th).response(dt, U, x0)
+
+
+def first_input(eqs: Equations) -> str:
+    """The model's first declared input (what identification drives unless told otherwise)."""
+    declared = list(eqs.model.inputs)
+    if not declared:
+        raise UsageError(f"{eqs.model.name} declares no input")
+    return declared[0]
+
+
+def first_output(eqs: Equations) -> str:
+    """The model's first declared output."""
+    if not eqs.outputs:
+        raise UsageError(f"{eqs.model.name} declares no output")
+    return next(iter(eqs.outputs))
+
+
+def frequency_response(A, B, C, D, omega) -> np.ndarray:
+    """H(jω) = C (jωI − A)⁻¹ B + D of a single-input single-output model at ``omega`` (rad/s)."""
+    omega = np.atleast_1d(np.asarray(omega, float))
+    n = A.shape[0]
+    if n == 0:
+        return np.full(omega.size, complex(D[0, 0]))
+    M = 1j * omega[:, None, None] * np.eye(n)[None] - A[None]
+    X = np.linalg.solve(M, np.broadcast_to(B.astype(complex), (omega.size, n, B.shape[1])))
+    return (C[None] @ X)[:, 0, 0] + D[0, 0]
+
+
+def residualise(A, B, C, D, cut: float) -> StateSpace:
+    """Keep the modes with |λ| ≤ ``cut`` (rad/s) exactly; replace the others by their static
+    contribution (see the module docstring).  The ordered real Schur form A = Z·T·Zᵀ puts the
+    slow eigenvalues first; X solving T11·X − X·T22 = −T12 decouples the two blocks."""
+    n = A.shape[0]
+    if n == 0:
+        return StateSpace(A, B, C, D)
+    lam = np.linalg.eigvals(A)
+    if np.all(np.abs(lam) <= cut):
+        return StateSpace(A, B, C, D)
+    T, Z, k = schur(A, output="real", sort=lambda re, im: np.hypot(re, im) <= cut)
+    Bt, Ct = Z.T @ B, C @ Z
+    if k == 0:
+        return StateSpace(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
+                          D - Ct @ np.linalg.solve(T, Bt), fast=n)
+    T11, T12, T22 = T[:k, :k], T[:k, k:], T[k:, k:]
+    X = solve_sylvester(T11, -T22, -T12)
+    B1, B2 = Bt[:k] - X @ Bt[k:], Bt[k:]
+    C1, C2 = Ct[:, :k], Ct[:, :k] @ X + Ct[:, k:]
+    return StateSpace(np.ascontiguousarray(T11), np.ascontiguousarray(B1), np.ascontiguousarray(C1),
+                      D - C2 @ np.linalg.solve(T22, B2), fast=n - k)
 
 
 def foh(A: np.ndarray, B: np.ndarray, dt: float):

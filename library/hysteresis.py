@@ -521,10 +521,10 @@ class MaxwellSlip(MemoryOperator):
 
 # --- identification -----------------------------------------------------------------------
 
-_commit_plays = numba.njit(_PlayBank.commit)
+_commit_plays = numba.njit(cache=True)(_PlayBank.commit)
 
 
-@numba.njit
+@numba.njit(cache=True)
 def _play_matrix(v, r, h):
     out = np.empty((v.size, r.size))
     for k in range(v.size):

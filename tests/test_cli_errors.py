@@ -203,6 +203,7 @@ FILES.update({
     "data_header_only.csv": "t,V,x\n",
     "data_empty.csv": "",
     "data_no_x.csv": "t,V,y\n0,0,0\n0.001,1,0\n0.002,1,0\n",
+    "ref.csv": "t,x\n0,0\n0.01,1e-6\n0.02,2e-6\n",
 })
 BINARY = b"\xff\xfe\x00\x01garbage\x00"
 
@@ -448,6 +449,23 @@ CASES = [
                  id="linearize-json-and-python-control"),
     pytest.param(["linearize", "good.py", "--format", "matlab"], ["'matlab'", "python-control"],
                  id="linearize-unknown-format"),
+    # ---- compensate and batch ----------------------------------------------------------------------------
+    pytest.param(["compensate", "good.py", "ref.csv", "--plot", "no/dir/c.png"], ["--plot no/dir/c.png", "does not exist"],
+                 id="compensate-plot-missing-directory"),
+    pytest.param(["compensate", "good.py", "ref.csv", "--out", "ref.csv"], ["--out ref.csv", "overwrite the input"],
+                 id="compensate-out-overwrites-the-reference"),
+    pytest.param(["compensate", "good.py", "missing.csv"], ["missing.csv", "no such file"],
+                 id="compensate-reference-missing"),
+    pytest.param(["compensate", "good.py", "data_no_x.csv"], ["data_no_x.csv", "'x'"],
+                 id="compensate-reference-without-output-column"),
+    pytest.param(["compensate", "good.py", "ref.csv", "--iterations", "0"], ["--iterations", "at least 1"],
+                 id="compensate-iterations-zero"),
+    pytest.param(["compensate", "good.py", "ref.csv", "--tol", "2"], ["--tol", "between 0 and 1"],
+                 id="compensate-tol-above-one"),
+    pytest.param(["batch", "fit", "good.py", "--params", "k"], ["batch fit", "data files"], id="batch-fit-without-data"),
+    pytest.param(["batch", "sweep", "good.py", "data.csv"], ["batch sweep", "no data files"],
+                 id="batch-sweep-with-data"),
+    pytest.param(["batch", "frobnicate", "good.py"], ["'frobnicate'", "diagnose"], id="batch-unknown-action"),
     # ---- options after the subcommand -----------------------------------------------------------------
     pytest.param(["params", "good.py", "--set", "kk=2", "--no-debug"], ["--no-debug"], id="unknown-option-near-debug"),
     pytest.param(["equations", "--format", "latex"], ["MODEL", "required"], id="equations-without-model"),

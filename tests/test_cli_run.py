@@ -11,6 +11,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -101,6 +102,10 @@ def test_fit_file_reproduces_the_fit_offset_included(work, capsys):
     assert fit["params"]["k"] == pytest.approx(TRUE["k"], rel=1e-3)
     assert fit["offset"] == pytest.approx(OFFSET, rel=0.05) and fit["offset_unit"] == "m"
     assert fit["settings"] == {"validation": 0.3, "split": "blocks", "loss": "linear", "starts": 1}
+    from conftest import ROOT
+    docs = (ROOT / "docs" / "json-outputs.md").read_text().split("## Fit files")[1].split("\n## ")[0]
+    documented = {k for row in docs.splitlines() if row.startswith("| `") for k in re.findall(r"`(\w+)`", row.split("|")[1])}
+    assert documented == set(fit), "docs/json-outputs.md lists every field of the fit file"
 
     # re-simulate with the fit file and the measured drive: the RMS is the fit's
     rc, out, err = run(["simulate", "osc.py", "--params-file", "fitted.json", "--input", "V=csv(file=data.csv, column=V)",
@@ -154,6 +159,22 @@ def test_csv_input_spans_the_data_not_the_experiment(work, capsys):
     np.testing.assert_allclose(t, np.arange(201) * 0.01, atol=1e-12)
     rc, out, err = run(["simulate", "osc.py", "--input", "V=csv(file=data.csv, column=V)", "--t-end", "4.5"], capsys)
     assert rc == 2 and "beyond the end of the input data" in err and "3.999 s" in err
+
+
+def test_unused_text_column_is_left_out_not_refused(work, capsys):
+    lines = (work / "data.csv").read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    rows = [ln for ln in lines if not ln.startswith("#")]
+    noted = [rows[0] + ",note,stamp"] + [f"{r},{'pause' if k % 500 == 0 else ''},2026-11-23T10:00:{k % 60:02d}"
+                                         for k, r in enumerate(rows[1:])]
+    (work / "noted.csv").write_text("\n".join(head + noted) + "\n")
+    rc, out, err = run(["fit", "osc.py", "noted.csv", "--params", "k", "--quiet"], capsys)
+    assert rc == 0, err
+    rc, out, err = run(["simulate", "osc.py", "--input", "V=csv(file=noted.csv, column=V)", "--quiet", "--t-end", "0.1"],
+                       capsys)
+    assert rc == 0, err
+    rc, out, err = run(["fit", "osc.py", "noted.csv", "--params", "k", "--output", "note"], capsys)
+    assert rc == 2 and "non-numeric cell" in err and "'note'" in err     # a needed text column is still refused
 
 
 # ---- items 4 and 5: nothing replaced unless the whole run succeeded ---------------------------------------
@@ -400,8 +421,8 @@ def test_sigterm_while_writing_removes_the_temporary_file(work):
     deadline = time.monotonic() + 60
     tmp = None
     while time.monotonic() < deadline and proc.poll() is None:
-        tmp = next((p for p in os.listdir(work) if p.startswith(".big.csv.") and (work / p).exists()
-                    and (work / p).stat().st_size > 0), None)
+        tmp = next((p for p in os.listdir(work) if ".big.csv." in p and p.endswith(".tmp") and (work / p).exists()
+                    and (work / p).stat().st_size > 0), None)   # the CSV writer's file, being filled
         if tmp:
             break
         time.sleep(0.005)
@@ -464,3 +485,70 @@ def _ppid(pid: int) -> int:
             return int(fh.read().rsplit(")", 1)[1].split()[1])
     except (OSError, ValueError, IndexError):
         return -1
+
+
+# ---- bondgraph.atomic.Outputs: the machinery behind items 4-6 ----------------------------------------------
+def test_outputs_commit_together_or_not_at_all(tmp_path):
+    from bondgraph.atomic import Outputs
+    from bondgraph.errors import UsageError
+    from bondgraph.interrupt import TEMPORARY
+
+    (tmp_path / "a.csv").write_text("old a\n")
+    os.chmod(tmp_path / "a.csv", 0o640)
+    with pytest.raises(RuntimeError):
+        with Outputs() as out:
+            out.add(tmp_path / "a.csv")
+            out.add(tmp_path / "b.png", "--plot", suffixes=(".png",))
+            with out.open(tmp_path / "a.csv") as fh:
+                fh.write("new a\n")
+            raise RuntimeError("the plot failed")
+    assert sorted(os.listdir(tmp_path)) == ["a.csv"] and (tmp_path / "a.csv").read_text() == "old a\n"
+    with Outputs() as out:
+        out.add(tmp_path / "a.csv")
+        out.add(tmp_path / "never.csv")            # reserved but not written: not created
+        with out.path(tmp_path / "a.csv") as tmp:
+            assert tmp.endswith(".csv") and os.path.basename(tmp).startswith(".a.csv.")
+            with open(tmp, "w") as fh:
+                fh.write("new a\n")
+    assert sorted(os.listdir(tmp_path)) == ["a.csv"] and (tmp_path / "a.csv").read_text() == "new a\n"
+    assert os.stat(tmp_path / "a.csv").st_mode & 0o777 == 0o640, "the file keeps its permissions"
+    assert not [t for t in TEMPORARY if str(tmp_path) in t]
+    out = Outputs(inputs=[tmp_path / "a.csv"])
+    for path, needle in ((tmp_path / "a.csv", "would overwrite the input"), (tmp_path, "is a directory"),
+                         (tmp_path / "no" / "x.csv", "does not exist")):
+        with pytest.raises(UsageError, match=needle):
+            out.add(path)
+    out.add(tmp_path / "x.csv", "--out")
+    with pytest.raises(UsageError, match="already the output of --out"):
+        out.add(tmp_path / "x.csv", "--bode")
+    out.discard()
+    assert sorted(os.listdir(tmp_path)) == ["a.csv"]
+
+
+AFTER_COMMIT = textwrap.dedent("""\
+    import sys, time
+    from bondgraph.cli import registry
+
+    @registry.command("slow-end", "writes its output, then takes its time", [registry.arg("--out")])
+    def run(args):
+        with registry.outputs(args, "out") as out:
+            with out.open(args.out) as fh:
+                fh.write("done\\n")
+        print("committed", flush=True)
+        time.sleep(60)
+
+    from bondgraph.__main__ import run as entry
+    sys.argv = ["bondgraph", "slow-end", "--out", "result.txt"]
+    entry()
+    """)
+
+
+def test_an_interrupt_after_the_outputs_are_in_place_says_so(tmp_path):
+    (tmp_path / "after.py").write_text(AFTER_COMMIT)
+    proc = subprocess.Popen([sys.executable, "after.py"], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "committed"
+    proc.send_signal(signal.SIGINT)
+    err = proc.communicate(timeout=30)[1]
+    assert proc.returncode == 130 and err == "bondgraph: interrupted; after writing result.txt\n"
+    assert (tmp_path / "result.txt").read_text() == "done\n"

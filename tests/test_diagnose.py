@@ -1,85 +1,76 @@
-"""Diagnosis: hide one effect in synthetic data and require the diagnosis to name it.
+"""Diagnosis: the command-line contract, bad data, the real P-885 record, the candidate
+contract and the decision's statistics.
 
-Each truth device (tests/truth.py) differs from the nominal model file in its linear
-parameters by 10-30 % and in one hidden effect built independently of the extension the
-diagnosis uses; white sensor noise is added.  The diagnosis must name the cause with a
-validation gain of at least 2, or ``none`` when nothing is hidden.
+The real record (tests/data/p885_bursts.csv, see tests/data/README.md) is a piezo stack driven
+by 1 Hz sine bursts with amplitude ramps and holds, sampled at 200 Hz; the model file's stack
+has 20 layers whose modes lie near 500 kHz, so the diagnosis must take the static route
+(every state residualised).  What a piezo engineer expects in it is rate-independent
+hysteresis first; nothing else about it is known, so only the cause named first and the shape
+of the chain are asserted.
+
+The third-party candidate below is defined here, uses only the public contract
+(:mod:`bondgraph.diagnosis`) and is registered without installing it (passed explicitly, and
+through a monkeypatched entry-point loader).  Its truth, a first-order lag driven through a
+squared drive, is a test model of this file, not one of the piezo candidates.
 """
 import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import bondgraph as bg
 from bondgraph.cli import main
-from bondgraph.data import write_csv
-from bondgraph.diagnose import calibration_names, decide, diagnose, load_candidates, CandidateResult, MIN_GAIN
+from bondgraph.data import Dataset, read_csv
+from bondgraph.diagnosis import Candidate, Extension, diagnose
+from bondgraph.diagnosis.decision import compare, judge, Comparison
 from bondgraph.modelfile import load_model
 from conftest import MODELS
-from truth import apa_data, t226_data
 
-APA = dict(duration=3.0, rate=2000.0)
-BIMORPH = dict(duration=1.0, rate=10000.0)
-
-CASES = [
-    ("apa120ml", "none"),
-    ("apa120ml", "hysteresis"),
-    ("apa120ml", "creep"),
-    ("apa120ml", "saturation"),
-    ("apa120ml", "electrical-rc"),
-    ("apa120ml", "higher-mode"),
-    ("bimorph_t226", "softening"),
-    ("bimorph_t226", "nonlinear-damping"),
-    ("bimorph_t226", "higher-mode"),
-]
+DATA = Path(__file__).parent / "data"
+P885 = DATA / "p885_bursts.csv"
 
 
-def run(model: str, effect: str):
-    data = apa_data(effect, **APA) if model == "apa120ml" else t226_data(effect, **BIMORPH)
-    lm = load_model(MODELS / f"{model}.py")
-    return diagnose(lm.model, data, calibration_names(lm.module, lm.model), load_candidates(), workers=1)
+@pytest.fixture(scope="module")
+def p885_json(tmp_path_factory):
+    """The CLI's JSON report and plot for the real record (run once for the tests below)."""
+    png = tmp_path_factory.mktemp("diag") / "p885.png"
+    proc = subprocess.run([sys.executable, "-m", "bondgraph", "diagnose", str(MODELS / "stack.py"), str(P885),
+                           "--json", "--quiet", "--plot", str(png)], capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout), png
 
 
-@pytest.mark.parametrize("model,effect", CASES, ids=[f"{m}-{e}" for m, e in CASES])
-def test_diagnosis_names_the_hidden_effect(model, effect):
-    rep = run(model, effect)
-    summary = {c.cause + "/" + c.label[:20]: round(c.gain, 2) for c in rep.candidates}
-    assert rep.cause == effect, summary
-    if effect == "none":
-        assert rep.gain == 1.0
-    else:
-        assert rep.gain >= 2.0, summary
-        # the extended graph, integrated, agrees with the fast route that scored it
-        assert rep.extended_rms_integrated == pytest.approx(rep.extended_rms, rel=0.05)
-        assert "State equations" in rep.equations
+def test_real_record_names_hysteresis_first(p885_json):
+    out, _ = p885_json
+    assert out["cause"] == "hysteresis"
+    assert out["causes"][0] == "hysteresis" and len(out["causes"]) >= 2  # a compound effect: a chain
+    assert any("static route" in n for n in out["notes"])  # the 500 kHz layer modes were residualised
+    first = out["steps"][0]
+    named = [c for c in first["candidates"] if c["passed"] and c["cause"] == "hysteresis"]
+    assert named and named[0]["gain_reference"] > 1.05  # beyond what any linear lag explains
 
 
-def test_decision_rule():
-    def res(cause, gain, bic, k=5):
-        return CandidateResult(cause, cause, gain=gain, delta_bic=bic, n_params=k)
-
-    assert decide([res("creep", 1.1, 50), res("hysteresis", 1.15, 80)]) is None  # below MIN_GAIN
-    assert decide([res("creep", 3.0, 5.0)]) is None  # not enough evidence for its parameters
-    win = decide([res("creep", 3.0, 900), res("hysteresis", 2.95, 1200)])  # tie: BIC decides
-    assert win.cause == "hysteresis"
-    assert decide([res("creep", 3.0, 900), res("hysteresis", 2.0, 1200)]).cause == "creep"
-    assert MIN_GAIN > 1.0
-
-
-def test_cli_diagnose_json_contract(tmp_path, capsys):
-    data = apa_data("creep", duration=2.0, rate=2000.0)
-    path = tmp_path / "apa.csv"
-    write_csv(path, data.t, data.columns, data.metadata)
-    png = tmp_path / "diag.png"
-    assert main(["diagnose", str(MODELS / "apa120ml.py"), str(path), "--json", "--quiet", "--workers", "1",
-                 "--plot", str(png)]) == 0
+def test_cli_json_contract(p885_json):
+    out, png = p885_json
     assert png.stat().st_size > 10_000
-    out = json.loads(capsys.readouterr().out)
-    assert out["cause"] == "creep"
+    assert out["cause"] == out["causes"][0]
     assert out["gain"] == pytest.approx(out["baseline_rms"] / out["extended_rms"])
-    assert out["gain"] >= 2
+    assert [s["cause"] for s in out["steps"]] == out["causes"]
+    gains = [s["gain"] for s in out["steps"]]
+    assert math.prod(gains) == pytest.approx(out["gain"], rel=1e-6)
+    assert all({"cause", "gain", "rms"} <= set(s) for s in out["steps"])
     assert {c["cause"] for c in out["candidates"]} >= {"hysteresis", "creep", "saturation", "softening",
-                                                        "higher-mode", "nonlinear-damping", "electrical-rc"}
-    assert all("gain" in c for c in out["candidates"])
+                                                       "higher-mode", "nonlinear-damping", "electrical-rc"}
+    assert all("gain" in c and "passed" in c for c in out["candidates"])
+    assert "at_bounds" in out["calibration"] and "held" in out["calibration"]
+    assert out["why"]
 
 
 @pytest.mark.parametrize("problem,line", [("nan", 5), ("text", 6), ("time", 7)])
@@ -104,3 +95,168 @@ def test_cli_diagnose_missing_column(tmp_path, capsys):
     assert main(["diagnose", str(MODELS / "apa120ml.py"), str(path)]) == 2
     err = capsys.readouterr().err
     assert "x" in err and "--output" in err
+
+
+@pytest.mark.parametrize("command", ["diagnose", "fit"])
+def test_constant_input_is_refused_in_one_line(tmp_path, capsys, command):
+    t = np.arange(400) / 1000
+    path = tmp_path / "flat.csv"
+    path.write_text("t,V,x\n" + "".join(f"{a},2.0,{1e-6 * math.sin(a)}\n" for a in t))
+    extra = ["--params", "a"] if command == "fit" else []
+    assert main([command, str(MODELS / "apa120ml.py"), str(path)] + extra) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "constant" in err[0] and "'V'" in err[0]
+
+
+# ---- a third-party candidate, public contract only -------------------------------------------
+def lag_model(tau=0.02):
+    """A first-order lag y' = (u − y)/τ as a bond graph: Se(u) → 1 → R(τ), C(1) (y = q of C)."""
+    g = bg.Model("lag", "first-order lag")
+    u = g.input("u", "V")
+    g.add(bg.Se("src", u), bg.J1("j"), bg.R("R", g.parameter("tau", tau, "s")), bg.C("C", 1.0))
+    g.chain("src", "j", "C")
+    g.bond("j", "R")
+    g.output("y", "C.q", "V")
+    return g
+
+
+def lag_record(square=0.0, seed=3, n=3000, fs=500.0):
+    """The lag (τ 25 ms, not the model's 20 ms) driven by a sum of sines of random phases
+    (0.5–8 Hz) through u + square·u², with white noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / fs
+    u = sum(np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi)) for f in (0.5, 1.3, 3.1, 7.9)) / 2
+    v = u + square * u ** 2
+    truth = bg.simulate(lag_model(0.025), t, {"u": bg.PiecewiseLinear(t, v)}, rtol=1e-9)
+    y = truth["y"] + rng.normal(0, 0.002, n)
+    return Dataset(t, {"u": u, "y": y})
+
+
+class SquareLaw(Candidate):
+    """A quadratic static term on the drive, u_eff = d + a·d²."""
+
+    cause = "square-law"
+    label = "quadratic drive term"
+
+    def applies(self, view):
+        return True if view.drive is not None else "needs the drive"
+
+    def fit(self, view):
+        d = np.asarray(view.drive)
+        fit = view.fit_drive([d ** 2], [-np.inf], [np.inf])
+        model = view.rewrite()
+        a = model.parameter("sq.a", float(fit.coef[0]), "1/V", "quadratic drive coefficient")
+        expr = view.drive_expr + a * view.drive_expr ** 2
+        view.with_drive(model, expr)
+        return Extension(model, {**fit.values, "sq.a": float(fit.coef[0])}, ["sq.a"], fit.prediction, fit.drive,
+                         expr, fit.at_bounds, fit.success, fit.message)
+
+
+def test_third_party_candidate_named_through_public_contract():
+    rep = diagnose(lag_model(), lag_record(square=0.4), candidates=[SquareLaw()], workers=1)
+    assert rep.causes == ["square-law"]
+    assert rep.steps[0].candidates[0].params["sq.a"] == pytest.approx(0.4, rel=0.1)
+    assert rep.calibration["params"]["tau"] == pytest.approx(0.025, rel=0.05)  # every linear parameter calibrated
+    # the extended bond graph, integrated, agrees with the exact linear route that scored it
+    assert rep.extended_rms_integrated == pytest.approx(rep.extended_rms, rel=0.05)
+    assert "sq.a" in rep.equations
+
+
+def test_third_party_candidate_silent_on_effect_free_data(monkeypatch):
+    import bondgraph.diagnosis.engine as engine
+    monkeypatch.setattr(engine, "load_candidates", lambda: [SquareLaw()])
+    rep = diagnose(lag_model(), lag_record(square=0.0), workers=2)
+    assert rep.causes == [] and rep.cause == "none"
+    assert rep.steps[0].why.startswith("none")
+
+
+def test_first_declared_input_and_output_by_default():
+    rep = diagnose(lag_model(), lag_record(square=0.4), candidates=[SquareLaw()], workers=1)
+    assert (rep.data["input"], rep.data["output"]) == ("u", "y")
+
+
+# ---- the statistics of the decision -----------------------------------------------------------
+def test_comparison_is_significant_only_for_a_real_improvement():
+    rng = np.random.default_rng(0)
+    n = 6000
+    blocks = [slice(k * 600 + 100, k * 600 + 300) for k in range(10)]
+    noise = rng.normal(0, 0.1, n)
+    t = np.arange(n)
+    systematic = 0.5 * np.sin(2 * np.pi * t / 50)  # a periodic model error
+    same = compare(noise + systematic, noise + systematic, blocks)
+    assert same.z == 0.0 and same.gain == pytest.approx(1.0)
+    other = compare(noise + systematic, rng.normal(0, 0.1, n) + systematic, blocks)  # fresh noise: no gain
+    assert abs(other.z) < 3
+    better = compare(noise + systematic, noise, blocks)
+    assert better.z > 3 and better.gain > 3
+    # a periodic error: its samples are worth about a few per period, not one each
+    assert better.n_eff < sum(s.stop - s.start for s in blocks) / 10
+
+
+def test_rules_refuse_bound_stuck_and_linear_lookalikes():
+    good = Comparison(3.0, 8.0, 40)
+    assert judge("nonlinear", good, Comparison(2.0, 6.0, 40), None, [], "").passed
+    stuck = judge("nonlinear", good, Comparison(2.0, 6.0, 40), None, ["x.k"], "")
+    assert not stuck.passed and "bound" in stuck.reason
+    lookalike = judge("nonlinear", good, Comparison(1.0, 0.1, 40), None, [], "")
+    assert not lookalike.passed and "linear reference" in lookalike.reason
+    assert not judge("linear", good, None, 0.3, [], "").passed
+    assert not judge("linear", good, None, 0.95, [], "frequency beyond Nyquist").passed
+    assert judge("linear", good, None, 0.95, [], "").passed
+
+
+# ---- Ctrl-C -------------------------------------------------------------------------------------
+def _children(pid):
+    out = []
+    for p in Path("/proc").iterdir():
+        if p.name.isdigit():
+            try:
+                if int((p / "stat").read_text().split(") ")[1].split()[1]) == pid:
+                    out.append(int(p.name))
+            except (OSError, IndexError, ValueError):
+                pass
+    return out
+
+
+@pytest.mark.skipif(not Path("/proc").exists(), reason="needs /proc to find worker processes")
+def test_ctrl_c_stops_diagnosis_and_workers(tmp_path):
+    path = tmp_path / "long.csv"
+    d = read_csv(P885)
+    reps = 6  # a long record, so that the workers are busy when the signal comes
+    t = np.arange(len(d) * reps) / 200.0
+    rows = "".join(f"{a:.4f},{b:.6g},{c:.6g}\n" for a, b, c in zip(t, np.tile(d.column("V"), reps),
+                                                                   np.tile(d.column("x"), reps)))
+    path.write_text("t,V,x\n" + rows)
+    proc = subprocess.Popen([sys.executable, "-m", "bondgraph", "diagnose", str(MODELS / "stack.py"), str(path),
+                             "--workers", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 300
+    kids = []
+    while time.time() < deadline and len(kids) < 2:
+        time.sleep(0.5)
+        kids = _children(proc.pid)
+        assert proc.poll() is None, proc.stderr.read()
+    assert len(kids) >= 2, "the workers never started"
+    time.sleep(1.0)
+    sent = time.time()
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=30)
+    finally:
+        proc.kill()
+    took = time.time() - sent
+    err = proc.stderr.read()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert took < 5.0  # 2 s on a quiet machine; the shared test machine is loaded
+    gone_by = time.time() + 10.0  # killed workers vanish once reaped; a loaded machine takes a moment
+    while time.time() < gone_by and [k for k in kids if _alive(k)]:
+        time.sleep(0.2)
+    assert not [k for k in kids if _alive(k)], "orphan workers"
+
+
+def _alive(pid: int) -> bool:
+    """A process exists and is not a zombie waiting to be reaped."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] != "Z"
+    except OSError:
+        return False

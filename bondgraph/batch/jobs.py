@@ -117,10 +117,10 @@ def _diagnose(job: Job, opts: Options) -> dict:
 def diagnosis_row(loaded, data, opts: Options) -> dict:
     """The diagnosis of one record (the one call of the diagnosis API in batch runs): cause,
     causes, gain, RMS before and after, and the best gain of each candidate cause."""
-    from ..diagnose import calibration_names, diagnose, load_candidates
+    from ..diagnosis import diagnose
 
-    report = diagnose(loaded.model, data, calibration_names(loaded.module, loaded.model), load_candidates(),
-                      opts.input, opts.output, validation=opts.validation, workers=1,
+    report = diagnose(loaded.model, data, calibrate_first=getattr(loaded.module, "CALIBRATE", None),
+                      input=opts.input, output=opts.output, validation=opts.validation, workers=1,
                       source=str(loaded.path)).as_json()
     causes = report.get("causes", [report["cause"]] if report["cause"] != "none" else [])
     row = {"cause": report["cause"],

@@ -28,13 +28,13 @@ from .jobs import Job, Options, describe, run_chunk
 from .metrics import parse_metrics
 from .table import Table
 
-Progress = Callable[[int, int], None]
+OnProgress = Callable[[int, int], None]  # progress(done, total)
 
 
 def diagnose(model, data: Sequence, *, sets: Sequence[Mapping] | None = None, params: Mapping | None = None,
              input: str | None = None, output: str | None = None, data_input: str | None = None, data_output: str | None = None,
              validation: float = 0.3, scheduler=None, workers: int | None = None,
-             progress: Progress | None = None, say=None) -> Table:
+             progress: OnProgress | None = None, say=None) -> Table:
     """Diagnose every data file (× parameter set): ``cause``, ``causes``, ``gain``,
     ``baseline_rms``, ``extended_rms`` and the best gain of each candidate cause (``gain:CAUSE``)."""
     lm = checked_model(model, params, sets)
@@ -47,7 +47,7 @@ def diagnose(model, data: Sequence, *, sets: Sequence[Mapping] | None = None, pa
 def fit(model, data: Sequence, names: Sequence[str], *, sets: Sequence[Mapping] | None = None,
         params: Mapping | None = None, input: str | None = None, output: str | None = None, data_input: str | None = None,
         data_output: str | None = None, validation: float = 0.3, split: str = "blocks", loss: str = "linear",
-        starts: int = 1, scheduler=None, workers: int | None = None, progress: Progress | None = None,
+        starts: int = 1, scheduler=None, workers: int | None = None, progress: OnProgress | None = None,
         say=None) -> Table:
     """Fit ``names`` to every data file (× parameter set): ``fit:NAME``, ``sd:NAME`` (standard
     error), ``rms_fit``, ``rms_validation``, ``simulations``, ``converged``."""
@@ -66,7 +66,7 @@ def simulate(model, data: Sequence = (), *, sets: Sequence[Mapping] | None = Non
              metrics: Sequence[str] = (), inputs: Mapping | None = None, t_end: float | None = None,
              dt: float | None = None, method: str | None = None, rtol: float | None = None,
              input: str | None = None, output: str | None = None, data_input: str | None = None, data_output: str | None = None,
-             scheduler=None, workers: int | None = None, progress: Progress | None = None, say=None,
+             scheduler=None, workers: int | None = None, progress: OnProgress | None = None, say=None,
              per_task: int | None = None) -> Table:
     """Simulate every data file (its ``input`` column drives the model; ``rms`` of the model's
     ``output`` against the data's) or, without data, the model's experiment (``inputs``,
@@ -154,7 +154,7 @@ def _items(values: Mapping | None) -> tuple:
 
 
 def execute(opts: Options, jobs: Sequence[Job], scheduler=None, workers: int | None = None,
-            progress: Progress | None = None, say=None, per_task: int | None = None) -> Table:
+            progress: OnProgress | None = None, say=None, per_task: int | None = None) -> Table:
     """Run ``jobs`` on the cluster, ``per_task`` jobs per Dask task (default: sized to the
     number of jobs and workers); the table in job order."""
     rows: list[dict] = []

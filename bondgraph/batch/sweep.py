@@ -17,7 +17,7 @@ from typing import Mapping, Sequence
 
 from ..errors import UsageError
 from . import analysis
-from .runs import Progress, checked_model, execute, model_io, simulation_options
+from .runs import OnProgress, checked_model, execute, model_io, simulation_options
 from .sampling import Distribution, Grid, default_design, design_points, parse_spec
 from .jobs import Job
 from .table import Table
@@ -84,7 +84,7 @@ def sweep(model, space: Mapping[str, str | Distribution | Grid], *, metrics: Seq
           params: Mapping | None = None, inputs: Mapping | None = None, t_end: float | None = None,
           dt: float | None = None, method: str | None = None, rtol: float | None = None,
           input: str | None = None, output: str | None = None, scheduler=None, workers: int | None = None,
-          progress: Progress | None = None, say=None, per_task: int | None = None) -> SweepResult:
+          progress: OnProgress | None = None, say=None, per_task: int | None = None) -> SweepResult:
     """Simulate the model at every point of ``design`` over ``space`` (default: ``grid`` when
     every parameter has grid levels, else ``random`` with ``draws`` draws) and evaluate
     ``metrics`` on each run."""

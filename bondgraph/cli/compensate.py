@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import UsageError
-from .registry import MODEL_ARGS, arg, command, counter, load
+from .registry import MODEL_ARGS, PLOT_SUFFIXES, arg, command, counter, load, outputs
 
 
 @command("compensate", "feedforward drive that makes the model's output follow a desired trajectory "
@@ -15,8 +15,8 @@ from .registry import MODEL_ARGS, arg, command, counter, load
          MODEL_ARGS + [
              arg("reference", metavar="REFERENCE", help="desired trajectory (CSV with t and the output column)"),
              arg("--column", metavar="COL", help="reference column (default: the model output name)"),
-             arg("--model-input", default="V", help="model input to compute (default V)"),
-             arg("--model-output", default="x", help="model output to follow (default x)"),
+             arg("--model-input", metavar="NAME", help="model input to compute (default: the model's first input)"),
+             arg("--model-output", metavar="NAME", help="model output to follow (default: the model's first output)"),
              arg("--input", metavar="NAME=SIGNAL", action="append", default=[],
                  help="drive another model input during the run, as for simulate (default 0)"),
              arg("--iterations", type=int, default=10,
@@ -25,7 +25,7 @@ from .registry import MODEL_ARGS, arg, command, counter, load
                  help="stop when the largest error is below this fraction of the reference's range"),
              arg("--out", metavar="FILE.csv", help="write t, the compensated drive, the reference, the "
                  "predicted output, the linear-inverse drive and its predicted output (default: stdout)"),
-             arg("--plot", metavar="FILE.png", help="plot reference, predicted outputs and drives"),
+             arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="plot reference, predicted outputs and drives"),
              arg("--json", action="store_true", help="print the summary as JSON on stdout"),
              arg("--quiet", action="store_true", help="no progress or summary on stderr"),
          ])
@@ -38,33 +38,36 @@ def run(args):
         raise UsageError(f"--iterations must be at least 1, got {args.iterations}")
     if not 0.0 < args.tol < 1.0:
         raise UsageError(f"--tol must be between 0 and 1, got {args.tol}")
-    lm = load(args)
-    col = args.column or args.model_output
-    ref = read_csv(args.reference, required=("t", col))
-    others = {}
-    for item in args.input:
-        name, sep, spec = item.partition("=")
-        if not sep:
-            raise UsageError(f"bad --input {item!r}: expected NAME=SIGNAL, e.g. F=0")
-        others[name.strip()] = parse_signal(spec, base_dir=str(Path(args.model).parent))
-    res = feedforward(lm.model, ref.t, ref.columns[col], input=args.model_input, output=args.model_output,
-                      inputs=others, iterations=args.iterations, tol=args.tol,
-                      progress=None if args.quiet else counter("compensating"))
-    u, y = args.model_input, args.model_output
-    columns = {u: res.drive, f"{y}_ref": res.reference, f"{y}_pred": res.predicted,
-               f"{u}_linear": res.linear_drive, f"{y}_pred_linear": res.linear_predicted}
-    summary = res.summary()
-    meta = {"model": str(args.model), "reference": str(args.reference), "method": summary["method"],
-            "max_error": repr(summary["max_error"]),
-            "max_error_uncompensated": repr(summary["max_error_uncompensated"])}
-    if args.out:
-        write_csv(args.out, res.t, columns, meta)
-    elif not args.json:
-        print("t," + ",".join(columns))
-        for k in range(res.t.size):
-            print(",".join(repr(float(v)) for v in [res.t[k], *(c[k] for c in columns.values())]))
-    if args.plot:
-        _plot(res, args.plot, u, y, lm.model.name)
+    with outputs(args, "out", "plot", inputs=[args.reference]) as out:  # checked before the work
+        lm = load(args)
+        col = args.column or args.model_output
+        ref = read_csv(args.reference, required=("t", col))
+        others = {}
+        for item in args.input:
+            name, sep, spec = item.partition("=")
+            if not sep:
+                raise UsageError(f"bad --input {item!r}: expected NAME=SIGNAL, e.g. F=0")
+            others[name.strip()] = parse_signal(spec, base_dir=str(Path(args.model).parent))
+        res = feedforward(lm.model, ref.t, ref.columns[col], input=args.model_input, output=args.model_output,
+                          inputs=others, iterations=args.iterations, tol=args.tol,
+                          progress=None if args.quiet else counter("compensating"))
+        u, y = args.model_input, args.model_output
+        columns = {u: res.drive, f"{y}_ref": res.reference, f"{y}_pred": res.predicted,
+                   f"{u}_linear": res.linear_drive, f"{y}_pred_linear": res.linear_predicted}
+        summary = res.summary()
+        meta = {"model": str(args.model), "reference": str(args.reference), "method": summary["method"],
+                "max_error": repr(summary["max_error"]),
+                "max_error_uncompensated": repr(summary["max_error_uncompensated"])}
+        if args.out:
+            with out.path(args.out) as tmp:
+                write_csv(tmp, res.t, columns, meta)
+        elif not args.json:
+            print("t," + ",".join(columns))
+            for k in range(res.t.size):
+                print(",".join(repr(float(v)) for v in [res.t[k], *(c[k] for c in columns.values())]))
+        if args.plot:
+            with out.path(args.plot) as tmp:
+                _plot(res, tmp, u, y, lm.model.name)
     if args.json:
         print(json.dumps(summary, indent=1))
     if not args.quiet:

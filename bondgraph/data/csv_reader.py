@@ -205,6 +205,39 @@ def _cell_error(src, lineno, line, names) -> DataError | None:
     return None
 
 
+def _text_columns(body: str, ncol: int, droppable: set[int]) -> list[int]:
+    """The columns among ``droppable`` that hold no number at all (text only, e.g. a note or a
+    time stamp string): a data file may carry such columns where the run does not need them.
+    Empty when any row has the wrong number of cells (that row's own error comes first)."""
+    if not droppable:
+        return []
+    has_number = dict.fromkeys(droppable, False)
+    for line in body.split("\n"):
+        s = line.strip()
+        if not s or s[0] == "#":
+            continue
+        cells = line.split(",")
+        if len(cells) != ncol:
+            return []
+        for j in droppable:
+            if not has_number[j] and NUMBER.fullmatch(cells[j]):
+                has_number[j] = True
+    return sorted(j for j, numeric in has_number.items() if not numeric)
+
+
+def _drop_columns(body: str, drop: list[int]) -> str:
+    """``body`` without the cells of columns ``drop`` (comments and blank lines unchanged)."""
+    out = []
+    for line in body.split("\n"):
+        s = line.strip()
+        if not s or s[0] == "#":
+            out.append(line)
+            continue
+        cells = line.split(",")
+        out.append(",".join(c for j, c in enumerate(cells) if j not in drop))
+    return "\n".join(out)
+
+
 def _slow_parse(src, body, first_lineno, names, metadata):
     """Walk the data block line by line: skip blanks, collect comment metadata, and either
     parse the rows or raise the first bad line's exact error."""
@@ -254,6 +287,9 @@ def read_csv(
         when ``Vin`` is mapped to ``V``) is dropped in favour of the mapped one.
     check_units:
         Run :func:`check_units` (``DataWarning`` for suspicious units).
+
+    A column that holds no number at all (a note, a time stamp string) and that is neither
+    ``t`` nor required is left out of the :class:`Dataset` instead of being refused.
 
     Raises :class:`~bondgraph.errors.DataError` with a one-line ``FILE:LINE: problem; fix``
     message for: a missing, unreadable or non-UTF-8 file; an empty file or one without a
@@ -311,6 +347,17 @@ def read_csv(
         if a is not None and a.shape == (nrows, ncol):
             data = a
     if data is None:
+        # a text column the caller does not need (not t, not required) is left out, not refused
+        needed = set(["t", *required]) | set((rename or {}).values())
+        droppable = {j for j, name in zip(keep, names) if name not in needed}
+        drop = _text_columns(body, ncol, droppable)
+        if drop:
+            body = _drop_columns(body, drop)
+            kept = [(name, j) for name, j in zip(names, keep) if j not in drop]
+            names = [name for name, _ in kept]
+            keep = [j - sum(d < j for d in drop) for _, j in kept]
+            file_names = [n for j, n in enumerate(file_names) if j not in drop]
+            ncol = len(file_names)
         data, row_lines = _slow_parse(src, body, header_line + 1, file_names, metadata)
 
     def line_of(i: int) -> int:

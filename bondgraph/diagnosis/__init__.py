@@ -1,0 +1,39 @@
+"""Diagnosis: what does the model miss in measured data, and which element fixes it?
+
+    from bondgraph.diagnosis import diagnose
+    report = diagnose(model, dataset)          # candidates from the installed entry points
+    report.causes, report.gain, report.as_json()
+
+The engine, in order:
+
+1. **Prepare** (:mod:`.context`): resample irregular time stamps; find the drive's band;
+   when every mode of the (linear) model is far above the data's Nyquist frequency, replace
+   it by its quasi-static contribution (time-scale separation, :func:`bondgraph.lti.residualise`;
+   with none left, the static route); decimate while the band and the modes the data resolve
+   stay well below the new Nyquist frequency; estimate the noise floor where the drive has no
+   power; split into fit and validation blocks.
+2. **Calibrate** (:mod:`.calibration`): the null is the best *linear* explanation: every
+   identifiable linear parameter, the sensor gain and offset.
+3. **Try every candidate** (:mod:`.candidate`, run in a :mod:`.pool` of workers): each
+   extends the current model through a read-only :class:`View` and returns an
+   :class:`Extension`.
+4. **Decide** (:mod:`.decision`): paired comparisons of validation errors with the
+   residuals' autocorrelation, against the calibrated model and against a flexible linear
+   reference, with the thresholds of ``bondgraph.config`` (section ``diagnosis``).
+5. **Chain** (:mod:`.engine`): the named cause extends the model; the others are tried
+   again on it until none passes (compound effects: e.g. hysteresis, then creep).
+6. **Report** (:mod:`.report`): every step, every candidate's verdict, why ``none``.
+
+Candidates are found through the entry point group ``bondgraph.diagnosis`` (``library``
+provides the piezoelectric ones) or passed as ``candidates=``; they use only this package's
+public names (:class:`Candidate`, :class:`Extension`, :class:`View`, :mod:`.filters`,
+:mod:`.rewrite`) and the framework's public API.
+"""
+from . import filters, rewrite
+from .candidate import LINEAR, NONLINEAR, Candidate, Extension
+from .engine import diagnose, load_candidates
+from .report import CandidateResult, Report, Step
+from .view import DriveFit, View
+
+__all__ = ["diagnose", "load_candidates", "Candidate", "Extension", "View", "DriveFit", "Report", "Step",
+           "CandidateResult", "LINEAR", "NONLINEAR", "filters", "rewrite"]

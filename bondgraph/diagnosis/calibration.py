@@ -1,0 +1,218 @@
+"""The null: the best linear explanation of the data before any effect is named.
+
+1. **Which parameters.** Every parameter the model's linear dynamics depend on is a
+   candidate.  Their normalised sensitivities (output change per relative change, on the fit
+   part, with the output's own direction and the offset projected out, since the sensor gain
+   and offset are solved exactly) are selected greedily, as a pivoted QR does: a parameter is
+   calibrated if what it does to the output is not already done by those kept before it (the
+   model file's ``CALIBRATE`` patterns first, then by size); the others are held at the
+   model's values and reported with the reason.
+2. **Bounds.** Within ×/÷ ``diagnosis.spread`` of the model's values and the parameter's
+   declared bounds; the sensor gain and offset are free.
+3. **Fit.** On the empirical frequency response first (multi-start, coherence-weighted,
+   gain removed: free of the local minima lightly damped modes give a time-domain fit), then
+   on the time series by variable projection (gain and offset solved at every step).
+"""
+from __future__ import annotations
+
+import fnmatch
+import math
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+from scipy import signal
+from scipy.optimize import least_squares
+
+from .. import config
+from .context import SENSOR_GAIN, Context, State
+from .projection import Param, projected_fit
+
+
+@dataclass
+class Calibration:
+    """Outcome of the linear calibration."""
+
+    values: dict[str, float]
+    nominal: dict[str, float]
+    free: list[str]
+    held: dict[str, str]
+    bounds: dict[str, tuple[float, float]]
+    at_bounds: list[str]
+    gain: float
+    offset: float
+    rms_fit: float
+    rms_validation: float
+    success: bool
+    message: str
+    route: str
+    notes: list[str] = field(default_factory=list)
+
+    def as_json(self) -> dict:
+        return {"params": {k: self.values[k] for k in self.free}, "held": self.held,
+                "nominal": {k: self.nominal[k] for k in self.free}, "bounds": self.bounds,
+                "at_bounds": self.at_bounds, "sensor_gain": self.gain, "offset": self.offset,
+                "rms_fit": self.rms_fit, "rms_validation": self.rms_validation, "success": self.success,
+                "message": self.message, "route": self.route}
+
+
+def patterns(names: Sequence[str], pats: Sequence[str] | None) -> list[str]:
+    """The names matching any of the glob patterns, in pattern order."""
+    out: list[str] = []
+    for pat in pats or ():
+        out += [n for n in names if fnmatch.fnmatchcase(n, pat) and n not in out]
+    return out
+
+
+def linear_parameters(ctx: Context) -> list[str]:
+    """Parameters of the working model's linear dynamics (nonzero, not the sensor gain)."""
+    from ..lti import LTI
+    lti = ctx.lti or LTI(ctx.eqs, ctx.input, ctx.output)
+    return [n for n in lti.parameters if n != SENSOR_GAIN and ctx.ident.current(n) != 0.0]
+
+
+def param_bounds(ctx: Context, name: str, value: float) -> tuple[float, float]:
+    """|value| bounds: ×/÷ spread, within the declared bounds."""
+    spread = config.get("diagnosis.spread")
+    lo, hi = abs(value) / spread, abs(value) * spread
+    decl = ctx.model.all_parameters().get(name)
+    if decl is not None and decl.bounds is not None and value > 0:
+        lo, hi = max(lo, decl.bounds[0]), min(hi, decl.bounds[1])
+    return lo, max(hi, lo * (1 + 1e-9))
+
+
+def sensitivities(ctx: Context, names: Sequence[str], values: dict, raw: np.ndarray, rel: float = 0.01):
+    """Output change per relative change of each parameter, on the fit part, with the
+    directions of the output itself and of a constant (sensor gain, offset) projected out."""
+    idx = ctx.ident.fit_idx
+    cols = []
+    for n in names:
+        v = dict(values)
+        v[n] = values[n] * math.exp(rel)
+        cols.append((ctx.ident.predict(v) - raw)[idx] / rel)
+    S = np.column_stack(cols) if cols else np.zeros((idx.size, 0))
+    Q, _ = np.linalg.qr(np.column_stack([raw[idx], np.ones(idx.size)]))
+    return S - Q @ (Q.T @ S)
+
+
+def select(S: np.ndarray, names: Sequence[str], priority: Sequence[str], tol: float, scale: float):
+    """Greedy pivoted selection of identifiable columns (see the module docstring).
+    Returns (kept names, {held name: reason})."""
+    norms = np.linalg.norm(S, axis=0)
+    ref = float(norms.max()) if norms.size else 0.0
+    order = sorted(range(len(names)), key=lambda j: (names[j] not in priority, -norms[j]))
+    kept, held, basis = [], {}, []
+    for j in order:
+        r = S[:, j].copy()
+        for b in basis:
+            r -= b * (b @ r)
+        nr = float(np.linalg.norm(r))
+        if norms[j] <= 1e-6 * scale:
+            held[names[j]] = "no visible effect on the output in these data"
+        elif nr < tol * ref or nr < 1e-6 * scale:
+            corr = [names[k] for k in kept if abs(S[:, k] @ S[:, j]) > 0.5 * norms[k] * norms[j]]
+            held[names[j]] = ("its effect is a pure output scale (the sensor gain)" if not corr else
+                              f"not separable from {', '.join(corr)} and the sensor gain")
+        else:
+            kept.append(j)
+            basis.append(r / nr)
+    return [names[k] for k in kept], held
+
+
+def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
+    """(ω rad/s, H, coherence) of output/input from Welch estimates (detrended segments)."""
+    n = len(u)
+    nper = int(2 ** min(15, max(8, math.floor(math.log2(max(n, 256) / 8)))))
+    f, Puu = signal.welch(u, fs, nperseg=nper, detrend="linear")
+    _, Puy = signal.csd(u, y, fs, nperseg=nper, detrend="linear")
+    _, coh = signal.coherence(u, y, fs, nperseg=nper, detrend="linear")
+    keep = (f > 0) & (Puu > 1e-8 * Puu.max()) & (coh > 0.5)
+    return 2 * np.pi * f[keep], (Puy / np.maximum(Puu, 1e-300))[keep], coh[keep]
+
+
+def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, starts: int = 12):
+    """Multi-start fit of the free parameters to the empirical frequency response, the gain
+    removed (the mean log-magnitude difference); returns the best z or None."""
+    w, H, coh = empirical_frf(ctx.u, ctx.y, ctx.fs)
+    if w.size < 2 * len(specs) + 2:
+        return None
+    H = sign * H
+    wt = np.sqrt(coh)
+
+    def fres(z):
+        vals = dict(values)
+        vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
+        Hm = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w)
+        d = np.log(Hm + 1e-300) - np.log(H + 1e-300)
+        re = d.real - np.sum(wt ** 2 * d.real) / np.sum(wt ** 2)
+        im = np.angle(np.exp(1j * d.imag))
+        return np.concatenate([wt * re, wt * im])
+
+    lb, ub = np.array([s.z_bounds() for s in specs]).T
+    rng = np.random.default_rng(1)
+    z_nom = np.array([s.to_z(s.start) for s in specs])
+    best = None
+    for k in range(starts):
+        z0 = z_nom if k == 0 else np.clip(z_nom + rng.normal(0, 0.5, z_nom.size), lb, ub)
+        try:
+            sol = least_squares(fres, z0, bounds=(lb, ub), max_nfev=60)
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        if best is None or sol.cost < best.cost:
+            best = sol
+    return None if best is None else best.x
+
+
+def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None) -> tuple[State, Calibration]:
+    """Calibrate every identifiable linear parameter (see the module docstring)."""
+    say = say or (lambda s: None)
+    names = linear_parameters(ctx)
+    nominal = {n: ctx.ident.current(n) for n in names}
+    raw0 = ctx.ident.predict(nominal)
+    idx = ctx.ident.fit_idx
+    scale = float(np.linalg.norm(ctx.y[idx] - ctx.y[idx].mean())) or 1.0
+    S = sensitivities(ctx, names, nominal, raw0)
+    free, held = select(S, names, patterns(names, priority), config.get("diagnosis.identifiable"), scale)
+    bounds = {n: param_bounds(ctx, n, nominal[n]) for n in free}
+    specs = [Param(n, nominal[n], *bounds[n]) for n in free]
+    say(f"calibrating {', '.join(free) or 'the sensor gain and offset only'}"
+        + (f" (held: {', '.join(held)})" if held else ""))
+    sign = 1.0 if float(np.dot(raw0[idx] - raw0[idx].mean(), ctx.y[idx] - ctx.y[idx].mean())) >= 0 else -1.0
+    route = "time series"
+    z_frf = None
+    if specs and ctx.lti is not None:
+        z_frf = _frf_starts(ctx, specs, nominal, sign)
+        if z_frf is not None:
+            route = "frequency response, then time series"
+
+    def columns(z):
+        vals = dict(nominal)
+        vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
+        return np.column_stack([ctx.ident.predict(vals), np.ones(len(ctx.y))])
+
+    lb, ub = (np.array([s.z_bounds() for s in specs]).T if specs else (np.zeros(0), np.zeros(0)))
+    z0 = np.array([s.to_z(s.start) for s in specs])
+    sol = projected_fit(columns, ctx.y, idx, z0 if z_frf is None else z_frf, lb, ub, [-np.inf] * 2, [np.inf] * 2,
+                        max_nfev=40, starts=[] if z_frf is None else [z0])
+    values = dict(nominal)
+    values.update({s.name: s.from_z(zi) for s, zi in zip(specs, sol.z)})
+    raw = sol.columns[:, 0]
+    gain, offset, rf, rv = score(ctx, raw)
+    cal = Calibration(values, nominal, free, held, {k: tuple(v) for k, v in bounds.items()},
+                      [specs[i].name for i in sol.at_bounds], gain, offset, rf, rv, sol.success, sol.message, route)
+    state = State(ctx.model, values, raw, gain, offset, ctx.u if ctx.lti is not None else None,
+                  ctx.model.inputs[ctx.input].symbol if ctx.lti is not None else None, [], ctx.lti is not None)
+    return state, cal
+
+
+def score(ctx: Context, raw: np.ndarray) -> tuple[float, float, float, float]:
+    """(sensor gain, offset, RMS on the fit part, RMS on the validation part) of a raw prediction."""
+    idx = ctx.ident.fit_idx
+    A = np.column_stack([raw[idx], np.ones(idx.size)])
+    (g, b), *_ = np.linalg.lstsq(A, ctx.y[idx], rcond=None)
+    r = ctx.y - g * raw - b
+    return float(g), float(b), rms(r[ctx.ident.fit_mask]), rms(r[ctx.ident.val_mask])
+
+
+def rms(r: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(r ** 2))) if r.size else float("nan")

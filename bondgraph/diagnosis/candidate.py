@@ -1,0 +1,79 @@
+"""The contract between the diagnosis engine and a candidate cause.
+
+A candidate is a pure object: :meth:`Candidate.fit` receives a read-only
+:class:`~bondgraph.diagnosis.view.View` (data, split, current model and its prediction) and
+returns an :class:`Extension` (the rewritten model, the fitted values, and, when it computed
+it on the way, its prediction).  It changes nothing else; the engine scores, compares and
+decides.  Candidates are found through the entry point group ``bondgraph.diagnosis`` (each
+entry a callable returning a list of candidates) or passed explicitly.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+
+from ..graph import Model
+
+#: kinds of cause: a nonlinear or memory effect must beat the flexible linear reference; a
+#: linear structural one must beat the full linear recalibration and be physically plausible
+NONLINEAR, LINEAR = "nonlinear", "linear"
+
+
+@dataclass
+class Extension:
+    """What a candidate's fit returns.
+
+    ``model``: the current model extended with the candidate's element(s), a new object;
+    ``values``: every value the fit chose (the new parameters and the recalibrated linear
+    ones), by name; ``new``: the names of the new parameters; ``prediction``: the extended
+    model's output on every sample with sensor gain 1 and no offset, if the candidate
+    computed it (else the engine simulates ``model``); ``drive``/``drive_expr``: the signal
+    and expression the linear core now sees, for drive-side extensions (so that a further
+    cause can act on it); ``at_bounds``: parameters that ended on a search bound;
+    ``success``/``message``: from the optimiser."""
+
+    model: Model
+    values: dict[str, float]
+    new: list[str]
+    prediction: np.ndarray | None = None
+    drive: np.ndarray | None = None
+    drive_expr: sp.Expr | None = None
+    at_bounds: list[str] = field(default_factory=list)
+    success: bool = True
+    message: str = ""
+
+
+class Candidate(ABC):
+    """One possible missing effect: how to fit it and how to extend the model."""
+
+    #: the cause it stands for (e.g. "hysteresis"); several candidates may share one
+    cause: str = ""
+    #: a short description of the extension
+    label: str = ""
+    #: NONLINEAR or LINEAR (see the module constants)
+    kind: str = NONLINEAR
+    #: relative cost; costly candidates start first so parallel workers finish together
+    cost: int = 1
+
+    def applies(self, view) -> bool | str:
+        """True, or a short reason why the candidate does not apply to this model and data."""
+        return True
+
+    def evidence(self, view) -> dict[str, float]:
+        """Numbers from the current residual that speak for this cause (shown, not decisive)."""
+        return {}
+
+    @abstractmethod
+    def fit(self, view) -> Extension:
+        """Fit the extension to the data seen through ``view``."""
+
+    def implausible(self, view, ext: Extension) -> str:
+        """Why the fitted extension is not physically plausible ('' if it is); checked for
+        linear structural causes, which could otherwise absorb any linear mismatch."""
+        return ""
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.cause}: {self.label})"

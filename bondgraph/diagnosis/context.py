@@ -1,0 +1,189 @@
+"""What stays fixed through one diagnosis: the prepared data, the split, the working model
+(the nominal model with a sensor gain on its output), its linear route and time-scale cut,
+the drive's band and the noise floor; and the :class:`State` a chain step starts from."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+from scipy import signal
+
+from .. import config
+from ..data import Dataset
+from ..equations import derive
+from ..graph import Model
+from ..data import uniform_step
+from ..identify import Identification, check_varies
+from ..lti import LTI, first_input, first_output
+from ..simulate import Simulator
+
+SENSOR_GAIN = "sensor.gain"
+
+
+@dataclass
+class State:
+    """The model a chain step starts from: its structure, values and prediction.
+
+    ``raw`` is its output with sensor gain 1 and no offset; the prediction is
+    ``gain·raw + offset``.  ``drive``/``drive_expr`` is what the linear core sees (None once a
+    structural extension made the model more than a drive transform of its linear core)."""
+
+    model: Model
+    values: dict[str, float]
+    raw: np.ndarray
+    gain: float
+    offset: float
+    drive: np.ndarray | None
+    drive_expr: sp.Expr | None
+    causes: list[str] = field(default_factory=list)
+    linear: bool = True
+
+    @property
+    def prediction(self) -> np.ndarray:
+        return self.gain * self.raw + self.offset
+
+
+class Context:
+    """Data, split, working model and linear route of one diagnosis (see the module doc)."""
+
+    def __init__(self, model: Model, data: Dataset, input: str | None = None, output: str | None = None,
+                 data_input: str | None = None, data_output: str | None = None, validation: float = 0.3,
+                 say=None):
+        say = say or (lambda s: None)
+        self.notes: list[str] = []
+        self.nominal_model = model
+        eqs0 = derive(model)
+        self.input = input if input is not None else first_input(eqs0)
+        self.output = output if output is not None else first_output(eqs0)
+        self.data_input, self.data_output = data_input or self.input, data_output or self.output
+        if uniform_step(data.t) is None:  # the exact linear route needs a uniform grid
+            dt = float(np.median(np.diff(data.t)))
+            data = data.resample(dt)
+            self.notes.append(f"data not uniformly sampled: resampled at the median step {dt:.4g} s")
+        self.source_rate = 1.0 / float(np.median(np.diff(data.t)))
+        self.source_samples = len(data)
+        self.model = with_sensor_gain(model, self.output)
+        self.eqs = derive(self.model)
+        lti = LTI(self.eqs, self.input, self.output)
+        self.exact = lti.exact
+        u = data.column(self.data_input)
+        y = data.column(self.data_output)
+        check_varies(u, self.data_input, data.path)
+        fs = self.source_rate
+        self.band_hz = drive_band(u, fs)
+        self.main_hz = drive_peak(u, fs)
+        noise_density = noise_psd(y, u, fs, self.band_hz)
+        th0 = _theta(self.eqs)
+        self.cut = None
+        self.slow_hz: list[float] = []
+        if lti.exact:
+            data, fs = self._decimate(lti, th0, data, fs)
+            self.cut = config.get("diagnosis.fast_factor") * math.pi * fs
+            ss = lti.state_space(th0, self.cut)
+            self.slow_hz = sorted({round(abs(p) / (2 * math.pi), 6) for p in ss.poles()})
+            self.n_states, self.n_fast = lti.n, ss.fast
+            if ss.fast:
+                fastest_kept = max(self.slow_hz, default=0.0)
+                what = (f"the model reduces to its static gain (the static route): every one of its {lti.n} "
+                        f"states is faster than the data resolve" if ss.n == 0 else
+                        f"{ss.fast} of {lti.n} states residualised (quasi-static), {ss.n} kept exactly "
+                        f"(slowest removed mode above {self.cut / (2 * math.pi):.4g} Hz, fastest kept "
+                        f"{fastest_kept:.4g} Hz)")
+                self.notes.append(f"time-scale separation: data at {fs:.4g} Hz (Nyquist {fs / 2:.4g} Hz); {what}")
+        else:
+            self.n_states, self.n_fast = lti.n, 0
+            self.notes.append("the model is not linear in its states: calibration and candidates use the "
+                              "compiled integrator")
+        self.data = data
+        self.fs = fs
+        #: white-noise equivalent of the measurement noise in the (decimated) record
+        self.noise_psd = noise_density
+        self.noise = math.sqrt(noise_density * fs / 2) if noise_density is not None else None
+        say(f"{len(data)} samples at {fs:.6g} Hz, drive band {self.band_hz:.4g} Hz"
+            + (f", {self.n_fast} fast states residualised" if self.n_fast else ""))
+        self.ident = Identification(Simulator(self.eqs), data, self.input, self.output, self.data_input,
+                                    self.data_output, validation, max_fit_points=config.get("diagnosis.max_fit_points"),
+                                    lti=lti if lti.exact else None, cut=self.cut)
+        self.validation = validation
+        self.u, self.y, self.t = self.ident.u, self.ident.y, self.ident.t
+        self.dt = self.ident.dt
+        self.lti = self.ident.lti
+        self.blocks = _blocks(self.ident.val_mask)
+        #: parameter names of the working model (the linear core of every chain state)
+        self.core_parameters = frozenset(p.name for p in self.eqs.params)
+
+    def _decimate(self, lti: LTI, th0, data: Dataset, fs: float):
+        """Decimate while the new Nyquist frequency stays ``decimate_margin`` times above the
+        drive's band and every mode the data can resolve."""
+        ss = lti.state_space(th0, config.get("diagnosis.fast_factor") * math.pi * fs)
+        modes = [abs(p) / (2 * math.pi) for p in ss.poles()]
+        f_max = max([self.band_hz] + modes)
+        q = int(fs / (2 * config.get("diagnosis.decimate_margin") * max(f_max, 1e-300)))
+        q = min(q, len(data) // 2000)
+        if q < 2:
+            return data, fs
+        out = data.decimate(q)
+        self.notes.append(f"decimated by {q} ({fs:.6g} → {fs / q:.6g} Hz): the drive's band ends near "
+                          f"{self.band_hz:.4g} Hz" + (f" and the fastest mode the data resolve is at {max(modes):.4g} Hz"
+                                                      if modes else ""))
+        return out, fs / q
+
+    @property
+    def span(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+
+def _theta(eqs) -> np.ndarray:
+    from ..codegen import parameter_vector
+    return parameter_vector(eqs)
+
+
+def with_sensor_gain(model: Model, output: str) -> Model:
+    """A copy of ``model`` whose output ``output`` is multiplied by a parameter ``sensor.gain``
+    (1 by default): the sensor's scale, solved exactly by the diagnosis."""
+    m = model.copy()
+    g = m.parameter(SENSOR_GAIN, 1.0, "", "sensor gain (solved exactly by the diagnosis)")
+    out = m.outputs[output]
+    out.expr = g * out.expr
+    return m
+
+
+def drive_band(u: np.ndarray, fs: float, share: float = 1e-4) -> float:
+    """Frequency (Hz) below which all but ``share`` of the drive's (detrended) power lies."""
+    n = len(u)
+    nper = int(min(n, 2 ** max(8, min(16, int(math.log2(max(n, 256) / 4))))))
+    f, P = signal.welch(u, fs, nperseg=nper, detrend="linear")
+    c = np.cumsum(P[1:])
+    if c.size == 0 or c[-1] <= 0:
+        return fs / 2
+    k = int(np.searchsorted(c, (1 - share) * c[-1]))
+    return float(f[1:][min(k, c.size - 1)])
+
+
+def drive_peak(u: np.ndarray, fs: float) -> float:
+    """Frequency (Hz) where the drive's (detrended) power spectrum peaks."""
+    n = len(u)
+    nper = int(min(n, 2 ** max(8, min(16, int(math.log2(max(n, 256) / 4))))))
+    f, P = signal.welch(u, fs, nperseg=nper, detrend="linear")
+    return float(f[1 + int(np.argmax(P[1:]))]) if f.size > 1 else 0.0
+
+
+def noise_psd(y: np.ndarray, u: np.ndarray, fs: float, band: float) -> float | None:
+    """One-sided noise density of ``y`` (units²/Hz) in the frequencies the drive does not
+    reach (above 5× its band, where only noise is left), or None if there is no such band."""
+    n = len(y)
+    nper = int(min(n, 2 ** max(8, min(14, int(math.log2(max(n, 256) / 8))))))
+    f, Pyy = signal.welch(y, fs, nperseg=nper, detrend="linear")
+    _, Puu = signal.welch(u, fs, nperseg=nper, detrend="linear")
+    quiet = (f > 5 * band) & (f < 0.9 * fs / 2) & (Puu < 1e-6 * Puu.max())
+    if np.count_nonzero(quiet) < 4:
+        return None
+    return float(np.median(Pyy[quiet]))
+
+
+def _blocks(mask: np.ndarray) -> list[slice]:
+    """Contiguous runs of ``mask`` as slices."""
+    d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return [slice(a, b) for a, b in zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0])]

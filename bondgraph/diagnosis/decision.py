@@ -1,0 +1,146 @@
+"""Evidence from the data: the flexible linear reference, paired comparisons of validation
+errors with the residuals' autocorrelation taken into account, and the decision rules.
+
+**Comparison.** Two predictions a and b are compared on the validation blocks through their
+mean squared errors A and B: the statistic is log(A/B) (twice the log of the gain) over its
+standard error, z.  Model errors are correlated in time, so n samples are worth far fewer
+independent ones: the standard error comes from batches, each spanning four times the lag at
+which the autocorrelation of e_a² − e_b² (about each block's mean) first falls to zero (a
+whole period of a periodic error), never straddling two blocks; by the delta method,
+se² = var_k(A_k/A − B_k/B)/K over the K batches' mean squared errors A_k, B_k.  K is the
+effective sample size.  The ratio form weighs each regime by its error, as the RMS does, yet
+is not dominated by the spread of error levels between regimes (sines, holds, a chirp).
+
+**Flexible linear reference.** The current model plus the linear core driven by first-order
+lags of its drive, G·(c0 + Σ c_k/(1 + sτ_k)), the lags τ_k spread from two samples to a third
+of the record: a rational correction of modest order on the input side, fitted by linear least
+squares.  What it gains over the calibrated model bounds what a linear mismatch explains.
+
+**Rules** (thresholds in :mod:`bondgraph.config`, section ``diagnosis``): a candidate passes
+when it lowers the validation error significantly (``min_z``) and by a useful factor
+(``min_gain``), its optimiser did not leave a new parameter on a search bound, and
+
+* a nonlinear or memory cause, given the reference's freedom too, beats the reference by
+  ``min_gain_reference`` with z ≥ ``min_z_reference`` (a second-stage test: that it explains
+  something is established against the calibrated model; this asks that it is not linear);
+* a linear structural cause explains at least ``linear_share`` of what the reference
+  explains, and its fitted values are physically plausible (the candidate says).
+
+Of the passing candidates, the one that explains most when the reference's freedom is
+allowed too (its gain over the reference) is named, then the one with the larger own gain: a
+linear cause gains little over the reference, so an effect beyond any linear one is named
+first and the linear remainder is left to the next step of the chain.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import config
+from .filters import lowpass
+
+
+@dataclass
+class Comparison:
+    """b against a on the validation part: RMS ratio a/b, significance z, effective samples."""
+
+    gain: float
+    z: float
+    n_eff: float
+
+
+def batch_length(d: np.ndarray, blocks: list[slice], offsets: list[int]) -> int:
+    """Four times the first zero crossing of d's autocorrelation (about each block's mean)."""
+    longest = max(s.stop - s.start for s in blocks)
+    acf = np.zeros(longest)
+    for s, o in zip(blocks, offsets):
+        seg = d[o:o + (s.stop - s.start)]
+        seg = seg - seg.mean()
+        m = seg.size
+        f = np.fft.rfft(seg, 2 * m)
+        acf[:m] += np.fft.irfft(f * np.conj(f))[:m]
+    if acf[0] <= 0:
+        return 1
+    below = np.nonzero(acf[1:] <= 0)[0]
+    first = int(below[0]) + 1 if below.size else longest
+    return max(1, min(4 * first, longest))
+
+
+def compare(ea: np.ndarray, eb: np.ndarray, blocks: list[slice]) -> Comparison:
+    """Compare residual series ``eb`` with ``ea`` (both over every sample) on ``blocks``."""
+    idx = np.concatenate([np.arange(s.start, s.stop) for s in blocks])
+    offsets = list(np.cumsum([0] + [s.stop - s.start for s in blocks])[:-1])
+    a2, b2 = ea[idx] ** 2, eb[idx] ** 2
+    gain = math.sqrt(float(a2.mean()) / max(float(b2.mean()), 1e-300))
+    L = batch_length(a2 - b2, blocks, offsets)
+    A_k, B_k = [], []
+    for s, o in zip(blocks, offsets):
+        m = s.stop - s.start
+        cuts = [(o + k * L, o + (k + 1) * L) for k in range(m // L)] or ([(o, o + m)] if m >= L // 2 else [])
+        A_k += [float(a2[lo:hi].mean()) for lo, hi in cuts]
+        B_k += [float(b2[lo:hi].mean()) for lo, hi in cuts]
+    A_k, B_k = np.asarray(A_k), np.asarray(B_k)
+    K = A_k.size
+    A, B = float(A_k.mean()) if K else 0.0, float(B_k.mean()) if K else 0.0
+    if K < 2 or A <= 0 or B <= 0:
+        return Comparison(gain, 0.0, float(K))
+    stat = math.log(A / B)
+    se = float(np.std(A_k / A - B_k / B, ddof=1)) / math.sqrt(K)
+    z = stat / se if se > 0 else (math.inf if stat > 0 else -math.inf if stat < 0 else 0.0)
+    return Comparison(gain, z, float(K))
+
+
+def reference_taus(dt: float, span: float) -> np.ndarray:
+    n = int(config.get("diagnosis.reference_poles"))
+    return np.geomspace(2 * dt, max(span / 3, 4 * dt), n)
+
+
+def regress(columns: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Least-squares fit of ``columns`` (and a constant) to ``y`` on ``idx``; the fitted series."""
+    A = np.column_stack([columns, np.ones(len(y))])
+    norms = np.maximum(np.linalg.norm(A[idx], axis=0), 1e-300)
+    coef, *_ = np.linalg.lstsq(A[idx] / norms, y[idx], rcond=1e-7)
+    return A @ (coef / norms)
+
+
+@dataclass
+class Verdict:
+    """Why a candidate passed or not."""
+
+    passed: bool
+    reason: str
+
+
+def judge(kind: str, base: Comparison, versus_reference: Comparison | None, share: float | None,
+          at_bounds: list[str], implausible: str) -> Verdict:
+    """Apply the rules of the module docstring to one candidate."""
+    min_z, min_gain = config.get("diagnosis.min_z"), config.get("diagnosis.min_gain")
+    if at_bounds:
+        return Verdict(False, f"{', '.join(at_bounds)} on a search bound")
+    if base.gain < min_gain:
+        return Verdict(False, f"gain {base.gain:.3g} < {min_gain:g}")
+    if base.z < min_z:
+        return Verdict(False, f"not significant (z = {base.z:.2g} < {min_z:g}, {base.n_eff:.0f} effective samples)")
+    if kind == "nonlinear":
+        ref_gain, ref_z = config.get("diagnosis.min_gain_reference"), config.get("diagnosis.min_z_reference")
+        vr = versus_reference
+        if vr.gain < ref_gain or vr.z < ref_z:
+            return Verdict(False, f"does not beat the linear reference (gain {vr.gain:.3g}, z = {vr.z:.2g})")
+    else:
+        need = config.get("diagnosis.linear_share")
+        if share is not None and share < need:
+            return Verdict(False, f"explains {share:.0%} of the linear mismatch (< {need:.0%})")
+        if implausible:
+            return Verdict(False, f"implausible: {implausible}")
+    return Verdict(True, "passes")
+
+
+def reference_prediction(view_respond, drive: np.ndarray, raw: np.ndarray, y: np.ndarray, idx: np.ndarray,
+                         dt: float, span: float) -> tuple[np.ndarray, np.ndarray]:
+    """(reference columns, the reference's prediction): ``raw`` plus the linear core driven by
+    lags of ``drive``, fitted on ``idx``."""
+    lags = [lowpass(drive, tau, dt) for tau in reference_taus(dt, span)]
+    cols = view_respond(lags)
+    return cols, regress(np.column_stack([raw, cols]), y, idx)

@@ -1,0 +1,226 @@
+"""The diagnosis as a chain: calibrate, try every candidate, name the best that passes,
+extend the model with it and try the others again on the extended model, until none passes."""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from .. import config
+from ..data import Dataset
+from ..errors import BondGraphError, UsageError
+from ..graph import Model
+from ..simulate import SimulationError
+from .calibration import calibrate, rms, score
+from .candidate import LINEAR, Candidate, Extension
+from .context import SENSOR_GAIN, Context, State
+from .decision import compare, judge, reference_prediction, regress
+from .pool import Pool
+from .report import CandidateResult, Report, Step
+from .view import View
+
+
+@dataclass
+class Outcome:
+    """A candidate's result with what the parent needs to decide and to extend."""
+
+    result: CandidateResult
+    extension: Extension | None = None
+    raw: np.ndarray | None = None
+
+
+def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate) -> Outcome:
+    """Fit one candidate on the chain state (in a worker or in the calling process)."""
+    started = time.time()
+    res = CandidateResult(cand.cause, cand.label, cand.kind)
+    view = View(ctx, state, calibrated)
+    try:
+        ok = cand.applies(view)
+        if ok is not True:
+            res.skipped = ok if isinstance(ok, str) and ok else "does not apply to this model"
+            return Outcome(res)
+        res.evidence = {k: float(v) for k, v in cand.evidence(view).items()}
+        ext = cand.fit(view)
+        raw = ext.prediction if ext.prediction is not None else view.simulate(ext.model, ext.values)
+        res.params = {k: float(ext.values[k]) for k in ext.new}
+        res.n_params = len(ext.new)
+        res.at_bounds = list(ext.at_bounds)
+        res.success, res.message = ext.success, ext.message
+        if cand.kind == LINEAR:
+            res.verdict = cand.implausible(view, ext)
+        ext.prediction = None
+        return Outcome(res, ext, np.asarray(raw, float))
+    except (BondGraphError, SimulationError, np.linalg.LinAlgError, ValueError, FloatingPointError,
+            ZeroDivisionError) as exc:
+        res.error = f"{type(exc).__name__}: {exc}"
+        return Outcome(res)
+    finally:
+        res.seconds = time.time() - started
+
+
+def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome]) -> tuple[Step, Outcome | None]:
+    """Score every outcome against the state and the flexible linear reference; pick the winner."""
+    idx, y = ctx.ident.fit_idx, ctx.y
+    drive = state.drive if state.drive is not None else ctx.u
+    ref_cols, ref_pred = reference_prediction(view.respond, drive, state.raw, y, idx, ctx.dt, ctx.span)
+    e_state = y - state.prediction
+    e_ref = y - ref_pred
+    val = ctx.ident.val_mask
+    rms_state, rms_ref = rms(e_state[val]), rms(e_ref[val])
+    for oc in outcomes:
+        r = oc.result
+        if oc.raw is None:
+            continue
+        g, b, r.rms_fit, r.rms_validation = score(ctx, oc.raw)
+        e = y - (g * oc.raw + b)
+        base = compare(e_state, e, ctx.blocks)
+        r.gain, r.z, r.n_eff = base.gain, base.z, base.n_eff
+        e_both = y - regress(np.column_stack([oc.raw, ref_cols]), y, idx)
+        vr = compare(e_ref, e_both, ctx.blocks)
+        r.gain_reference, r.z_reference = vr.gain, vr.z
+        explained_ref = rms_state ** 2 - rms_ref ** 2
+        r.share = (rms_state ** 2 - r.rms_validation ** 2) / explained_ref if explained_ref > 0 else None
+        implausible = r.verdict
+        v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], implausible)
+        r.passed, r.verdict = v.passed, v.reason
+        if not r.success and r.passed:
+            r.verdict += " (optimiser not converged)"
+    passing = [oc for oc in outcomes if oc.result.passed]
+    # rank by what is explained when every linear correction is allowed too: a linear cause
+    # gains little over the reference, an effect beyond any linear one gains more
+    winner = max(passing, key=lambda oc: (round(oc.result.gain_reference, 2), oc.result.gain)) if passing else None
+    why = _why(winner, outcomes, rms_state, rms_ref, ctx.noise)
+    step = Step(winner.result.cause if winner else "none", winner.result.gain if winner else 1.0, rms_state,
+                winner.result.rms_validation if winner else rms_state, rms_ref,
+                [oc.result for oc in outcomes], why)
+    return step, winner
+
+
+def _why(winner, outcomes, rms_state, rms_ref, noise) -> str:
+    if winner is not None:
+        r = winner.result
+        extra = (f", {r.gain_reference:.3g}× over the flexible linear reference" if r.kind != LINEAR
+                 else f", {r.share:.0%} of what a linear correction explains" if r.share is not None else "")
+        return (f"named: validation RMS {r.gain:.3g}× lower (z = {r.z:.1f}, {r.n_eff:.0f} effective samples)"
+                f"{extra}")
+    parts = []
+    if noise:
+        parts.append(f"the residual is {rms_state / noise:.2g}× the noise floor")
+    parts.append(f"a flexible linear correction gains {rms_state / max(rms_ref, 1e-300):.3g}×")
+    tried = [oc.result for oc in outcomes if oc.raw is not None]
+    if tried:
+        best = max(tried, key=lambda r: r.gain)
+        parts.append(f"the best candidate ({best.cause}, gain {best.gain:.3g}) {best.verdict}")
+    else:
+        parts.append("no candidate could be fitted")
+    return "none: " + "; ".join(parts)
+
+
+def advance(ctx: Context, state: State, oc: Outcome) -> State:
+    """The chain state after naming ``oc``'s cause."""
+    ext = oc.extension
+    g, b, _, _ = score(ctx, oc.raw)
+    return State(ext.model, dict(ext.values), oc.raw, g, b, ext.drive, ext.drive_expr,
+                 state.causes + [oc.result.cause], state.linear and ext.drive is not None)
+
+
+def load_candidates() -> list[Candidate]:
+    """Candidates from the ``bondgraph.diagnosis`` entry points (each a callable returning a list)."""
+    from importlib.metadata import entry_points
+    out: list[Candidate] = []
+    for ep in entry_points(group="bondgraph.diagnosis"):
+        out += list(ep.load()())
+    if not out:
+        raise UsageError("no diagnosis candidates are installed (entry point group 'bondgraph.diagnosis'); "
+                         "reinstall with pip install -e .")
+    return out
+
+
+def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | None = None,
+             calibrate_first: Sequence[str] | None = None, input: str | None = None, output: str | None = None,
+             data_input: str | None = None, data_output: str | None = None, validation: float = 0.3,
+             workers: int = 2, chain: bool = True, progress=None, source: str = "",
+             equations: bool = True) -> Report:
+    """Diagnose what ``model`` misses in ``data`` (see the package docstring).
+
+    ``candidates``: the causes to try (default: the installed entry points);
+    ``calibrate_first``: parameter names or glob patterns preferred when linear parameters
+    cannot be told apart (e.g. the model file's ``CALIBRATE``); ``input``/``output``: the
+    model's (default: its first declared); ``data_input``/``data_output``: the data columns
+    (default: the same names); ``workers``: parallel processes; ``chain``: keep naming
+    causes on the extended model until none passes; ``progress``: a
+    :class:`bondgraph.progress.Progress` (one count per candidate fitted, notes for the
+    stages) or any callable taking a line of text."""
+    started = time.time()
+    say = getattr(progress, "note", None) or progress or (lambda s: None)
+    tick = getattr(progress, "advance", None)
+    cands = list(candidates) if candidates is not None else load_candidates()
+    ctx = Context(model, data, input, output, data_input, data_output, validation, say)
+    state, cal = calibrate(ctx, calibrate_first, say)
+    say(f"calibrated in {time.time() - started:.1f} s: validation RMS {cal.rms_validation:.4g}")
+    steps: list[Step] = []
+    baseline = state
+    with Pool(ctx, cal.free, cands, workers) as pool:
+        for k in range(int(config.get("diagnosis.max_chain")) if chain else 1):
+            pending = [i for i, c in enumerate(cands) if c.cause not in state.causes]
+            if not pending:
+                break
+            outcomes = {}
+            for n, (i, oc) in enumerate(pool.run(state, pending), 1):
+                outcomes[i] = oc
+                if tick is not None:
+                    tick(status=_line(k + 1, n, len(pending), oc.result))
+                else:
+                    say(_line(k + 1, n, len(pending), oc.result))
+            ordered = [outcomes[i] for i in pending]
+            step, winner = assess(ctx, state, View(ctx, state, cal.free), ordered)
+            steps.append(step)
+            say(f"step {k + 1}: {step.why}")
+            if winner is None:
+                break
+            state = advance(ctx, state, winner)
+    causes = [s.cause for s in steps if s.cause != "none"]
+    final_rms = rms((ctx.y - state.prediction)[ctx.ident.val_mask])
+    report = Report(causes, cal.rms_validation / max(final_rms, 1e-300) if causes else 1.0, cal.rms_validation,
+                    final_rms if causes else cal.rms_validation, steps, cal.as_json(),
+                    {"file": data.path or "", "model": source, "samples": len(ctx.t), "rate_hz": ctx.fs,
+                     "source_samples": ctx.source_samples, "source_rate_hz": ctx.source_rate,
+                     "validation_share": validation, "input": ctx.input, "output": ctx.output,
+                     "drive_band_hz": ctx.band_hz},
+                    list(ctx.notes), noise=ctx.noise)
+    report.predictions = {"t": ctx.t, "u": ctx.u, "y": ctx.y, "baseline": baseline.prediction}
+    if causes:
+        ext_model = state.model.copy()
+        ext_model.values.update({k: v for k, v in state.values.items() if k in ext_model.all_parameters()})
+        ext_model.values[SENSOR_GAIN] = state.gain
+        report.extended_model, report.extended_values = ext_model, dict(state.values)
+        report.predictions["extended"] = state.prediction
+        if equations:
+            from ..equations import derive
+            from ..printing import render
+            report.equations = render(derive(ext_model), "text")
+        if not ctx.n_fast and len(ctx.t) <= 200_000:
+            report.extended_rms_integrated = _integrated(ctx, ext_model, state)
+    report.seconds = time.time() - started
+    return report
+
+
+def _integrated(ctx: Context, model: Model, state: State) -> float | None:
+    """Validation RMS of the extended bond graph integrated by the compiled solver (second route)."""
+    try:
+        ident = ctx.ident.like(model, rtol=1e-7)
+        ident.lti = None
+        known = {p.name for p in ident.sim.eqs.params}
+        raw = ident.predict({k: v for k, v in state.values.items() if k in known and k != SENSOR_GAIN})
+    except (BondGraphError, SimulationError):
+        return None
+    return score(ctx, raw)[3]
+
+
+def _line(step: int, k: int, n: int, r: CandidateResult) -> str:
+    state = (f"not tried ({r.skipped})" if r.skipped else f"failed ({r.error[:70]})" if r.error
+             else f"fitted ({r.n_params} new parameters)")
+    return f"step {step} [{k}/{n}] {r.cause} ({r.label}): {state}, {r.seconds:.1f} s"

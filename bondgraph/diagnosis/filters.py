@@ -1,0 +1,27 @@
+"""Exact responses of small linear filters to sampled signals (linear between samples):
+the bases that drive-side candidates and the flexible linear reference are built from."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import signal
+
+from ..lti import StateSpace
+
+
+def lowpass(u: np.ndarray, tau: float, dt: float) -> np.ndarray:
+    """First-order lag 1/(τs + 1) of ``u`` (sampled every ``dt`` s, linear in between),
+    starting in equilibrium with u[0]."""
+    a = math.exp(-dt / tau)
+    b1 = 1.0 - tau / dt * (1.0 - a)
+    b0 = tau / dt * (1.0 - a) - a
+    zi = signal.lfiltic([b1, b0], [1.0, -a], [u[0]], [u[0]])
+    return signal.lfilter([b1, b0], [1.0, -a], u, zi=zi)[0]
+
+
+def resonator(u: np.ndarray, dt: float, omega: float, zeta: float) -> np.ndarray:
+    """Displacement q of q̈ + 2ζω·q̇ + ω²·q = u, from rest (units of u·s²)."""
+    ss = StateSpace(np.array([[0.0, 1.0], [-omega ** 2, -2 * zeta * omega]]), np.array([[0.0], [1.0]]),
+                    np.array([[1.0, 0.0]]), np.zeros((1, 1)))
+    return ss.response(dt, u)[:, 0]

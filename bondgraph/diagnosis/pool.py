@@ -1,0 +1,97 @@
+"""Candidates in parallel worker processes.
+
+Each worker is started (``fork``) with the diagnosis context, the candidates and a snapshot
+of the settings as its arguments (the initializer's job: nothing is shared through module
+globals); tasks carry only the chain state and a candidate index.  Workers ignore SIGINT: on
+Ctrl-C (or any error) the parent kills them and waits for them, so none outlives the
+diagnosis and the interruption takes effect at once.  Without ``fork`` (or with one worker)
+the candidates run in the calling process.
+"""
+from __future__ import annotations
+
+import multiprocessing as mp
+import queue
+import signal
+import threading
+from typing import Iterator, Sequence
+
+from .. import config
+
+
+def _worker(ctx, calibrated, candidates, settings, tasks, results) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    config.restore(settings)
+    from .engine import run_candidate
+    while True:
+        task = tasks.get()
+        if task is None:
+            return
+        index, state = task
+        results.put((index, run_candidate(ctx, state, calibrated, candidates[index])))
+
+
+class Pool:
+    """Runs candidates on a chain state, in ``workers`` processes when that helps."""
+
+    def __init__(self, ctx, calibrated: Sequence[str], candidates: Sequence, workers: int):
+        self.ctx, self.calibrated, self.candidates = ctx, list(calibrated), list(candidates)
+        self._procs: list = []
+        if workers > 1 and len(candidates) > 1 and "fork" in mp.get_all_start_methods():
+            mpc = mp.get_context("fork")
+            self._tasks, self._results = mpc.Queue(), mpc.Queue()
+            settings = config.snapshot()
+            for _ in range(min(workers, len(candidates))):
+                p = mpc.Process(target=_worker, args=(ctx, self.calibrated, self.candidates, settings,
+                                                      self._tasks, self._results), daemon=True)
+                p.start()
+                self._procs.append(p)
+
+    def run(self, state, indices: Sequence[int]) -> Iterator[tuple[int, object]]:
+        """(index, outcome) for every candidate index, as they finish (costly ones start first)."""
+        from .engine import run_candidate
+        order = sorted(indices, key=lambda i: -getattr(self.candidates[i], "cost", 1))
+        if not self._procs:
+            for i in order:
+                yield i, run_candidate(self.ctx, state, self.calibrated, self.candidates[i])
+            return
+        for i in order:
+            self._tasks.put((i, state))
+        for _ in order:
+            while True:
+                try:
+                    yield self._results.get(timeout=0.2)
+                    break
+                except queue.Empty:
+                    dead = [p for p in self._procs if not p.is_alive()]
+                    if dead:
+                        raise RuntimeError(f"a diagnosis worker died (exit code {dead[0].exitcode})")
+
+    def close(self, kill: bool = False) -> None:
+        procs, self._procs = self._procs, []
+        if not procs:
+            return
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN) if _main_thread() else None
+        try:
+            if not kill:
+                for _ in procs:
+                    self._tasks.put(None)
+            for p in procs:
+                if kill:
+                    p.kill()
+                p.join(timeout=None if not kill else 5)
+            for q in (self._tasks, self._results):
+                q.cancel_join_thread()
+                q.close()
+        finally:
+            if old is not None:
+                signal.signal(signal.SIGINT, old)
+
+    def __enter__(self) -> "Pool":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self.close(kill=exc_type is not None)
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()

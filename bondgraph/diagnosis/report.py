@@ -1,0 +1,158 @@
+"""The diagnosis report: candidates and verdicts of every chain step, the named causes, and
+how the data were treated (readable text and JSON)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from .. import config
+
+
+@dataclass
+class CandidateResult:
+    """One candidate's outcome in one chain step (RMS in output units, on the validation part)."""
+
+    cause: str
+    label: str
+    kind: str = "nonlinear"
+    gain: float = 0.0
+    rms_fit: float = math.inf
+    rms_validation: float = math.inf
+    z: float = 0.0
+    n_eff: float = 0.0
+    gain_reference: float | None = None
+    z_reference: float | None = None
+    share: float | None = None
+    n_params: int = 0
+    params: dict = field(default_factory=dict)
+    evidence: dict = field(default_factory=dict)
+    at_bounds: list = field(default_factory=list)
+    success: bool = True
+    message: str = ""
+    skipped: str = ""
+    error: str = ""
+    verdict: str = ""
+    passed: bool = False
+    seconds: float = 0.0
+
+    def as_json(self) -> dict:
+        out = {"cause": self.cause, "label": self.label, "kind": self.kind, "gain": self.gain,
+               "rms_fit": self.rms_fit, "rms_validation": self.rms_validation, "z": self.z, "n_eff": self.n_eff,
+               "gain_reference": self.gain_reference, "z_reference": self.z_reference, "share": self.share,
+               "n_params": self.n_params, "params": self.params, "evidence": self.evidence,
+               "at_bounds": self.at_bounds, "success": self.success, "message": self.message,
+               "passed": self.passed, "verdict": self.verdict, "seconds": round(self.seconds, 2)}
+        if self.skipped:
+            out["skipped"] = self.skipped
+        if self.error:
+            out["error"] = self.error
+        return out
+
+
+@dataclass
+class Step:
+    """One link of the chain: what was tried on the model so far and what (if anything) won."""
+
+    cause: str
+    gain: float
+    rms_before: float
+    rms: float
+    reference_rms: float
+    candidates: list[CandidateResult]
+    why: str
+
+    def as_json(self) -> dict:
+        return {"cause": self.cause, "gain": self.gain, "rms": self.rms, "rms_before": self.rms_before,
+                "reference_rms": self.reference_rms, "why": self.why,
+                "candidates": [c.as_json() for c in self.candidates]}
+
+
+@dataclass
+class Report:
+    causes: list[str]
+    gain: float
+    baseline_rms: float
+    extended_rms: float
+    steps: list[Step]
+    calibration: dict
+    data: dict
+    notes: list[str] = field(default_factory=list)
+    equations: str = ""
+    extended_model: object = None
+    extended_values: dict = field(default_factory=dict)
+    #: the extended model's validation RMS from the compiled integrator (a second route), if run
+    extended_rms_integrated: float | None = None
+    predictions: dict = field(default_factory=dict)
+    noise: float | None = None
+    seconds: float = 0.0
+
+    @property
+    def cause(self) -> str:
+        return self.causes[0] if self.causes else "none"
+
+    @property
+    def candidates(self) -> list[CandidateResult]:
+        return self.steps[0].candidates if self.steps else []
+
+    def as_json(self) -> dict:
+        steps = [s for s in self.steps if s.cause != "none"]
+        return {"cause": self.cause, "causes": list(self.causes), "gain": self.gain,
+                "baseline_rms": self.baseline_rms, "extended_rms": self.extended_rms,
+                "candidates": [c.as_json() for c in self.candidates],
+                "steps": [s.as_json() for s in steps],
+                "why": self.steps[-1].why if self.steps else "",
+                "noise_rms": self.noise,
+                "extended_rms_integrated": self.extended_rms_integrated,
+                "calibration": self.calibration, "data": self.data, "notes": self.notes,
+                "criterion": {k.split(".", 1)[1]: config.get(k) for k in
+                              ("diagnosis.min_z", "diagnosis.min_gain", "diagnosis.min_gain_reference",
+                               "diagnosis.min_z_reference",
+                               "diagnosis.linear_share", "diagnosis.spread")},
+                "seconds": round(self.seconds, 1), "equations": self.equations}
+
+    def text(self) -> str:
+        d, cal = self.data, self.calibration
+        lines = [f"Diagnosis of {d.get('model', '')} against {d.get('file', '')}",
+                 f"  {d['samples']} samples at {d['rate_hz']:.6g} Hz"
+                 + (f" (from {d['source_samples']} at {d['source_rate_hz']:.6g} Hz)"
+                    if d.get("source_samples") != d["samples"] else "")
+                 + f", validation {d['validation_share']:.0%} in interleaved blocks"]
+        lines += [f"  note: {n}" for n in self.notes]
+        free = ", ".join(f"{k} = {v:.5g}" + (" (AT BOUND)" if k in cal["at_bounds"] else "")
+                         for k, v in cal["params"].items())
+        lines.append(f"  calibrated ({cal['route']}): {free or 'no model parameter'}; sensor gain "
+                     f"{cal['sensor_gain']:.5g}, offset {cal['offset']:.4g}")
+        for k, why in cal["held"].items():
+            lines.append(f"  held at the model's value: {k} ({why})")
+        if cal["at_bounds"]:
+            lines.append(f"  WARNING: {', '.join(cal['at_bounds'])} ended on the search bound "
+                         f"(×/÷{config.get('diagnosis.spread'):g} of the model's value): the device is "
+                         f"further from the model file than calibration allows")
+        if not cal["success"]:
+            lines.append(f"  WARNING: calibration did not converge ({cal['message']})")
+        noise = f", noise floor {self.noise:.3g}" if self.noise else ""
+        lines.append(f"  calibrated model validation RMS: {self.baseline_rms:.4g}{noise}")
+        for k, s in enumerate(self.steps, 1):
+            lines += ["", f"Step {k}: on the model " + (" + ".join(["calibrated"] + self.causes[:k - 1]))
+                      + f" (validation RMS {s.rms_before:.4g}; flexible linear reference {s.reference_rms:.4g})",
+                      f"  {'cause':<18} {'gain':>7} {'val. RMS':>10} {'z':>6} {'vs ref':>7}  verdict / extension"]
+            for c in sorted(s.candidates, key=lambda c: (bool(c.skipped or c.error), -c.gain)):
+                if c.skipped:
+                    lines.append(f"  {c.cause:<18} {'':>7} {'':>10} {'':>6} {'':>7}  not tried: {c.skipped} ({c.label})")
+                    continue
+                if c.error:
+                    lines.append(f"  {c.cause:<18} {'':>7} {'':>10} {'':>6} {'':>7}  FAILED: {c.error} ({c.label})")
+                    continue
+                vr = f"{c.gain_reference:.3g}" if c.gain_reference is not None else "-"
+                flag = "" if c.success else " [optimiser: not converged]"
+                lines.append(f"  {c.cause:<18} {c.gain:>7.3g} {c.rms_validation:>10.4g} {c.z:>6.1f} {vr:>7}  "
+                             f"{'NAMED' if c.passed and c.cause == s.cause else c.verdict}; {c.label}{flag}")
+            lines.append(f"  → {s.cause}: {s.why}")
+        causes = " → ".join(self.causes) if self.causes else "none"
+        lines += ["", f"Causes: {causes}" + (f" (gain {self.gain:.3g}, validation RMS {self.baseline_rms:.4g} → "
+                                            f"{self.extended_rms:.4g})" if self.causes else "")]
+        if self.extended_rms_integrated is not None:
+            lines.append(f"  extended model integrated: validation RMS {self.extended_rms_integrated:.4g}")
+        if self.equations:
+            lines += ["", "Equations of the extended model:", self.equations]
+        return "\n".join(lines) + "\n"

@@ -1,0 +1,85 @@
+"""Public helpers for rewriting a model's elements (what diagnosis candidates use instead of
+the framework's internals): read an element's constitutive law as a function, change it,
+evaluate its small-signal slope, add a term to an output."""
+from __future__ import annotations
+
+from typing import Callable, Mapping
+
+import sympy as sp
+
+from ..elements import C, E, F, I, P, Q, R
+from ..errors import ModelError
+from ..graph import Model
+
+_VAR = {C: Q, I: P}
+
+
+def _variable(model: Model, element: str):
+    el = model.elements.get(element)
+    if isinstance(el, (C, I)):
+        return el, _VAR[type(el)]
+    if isinstance(el, R) and el.form == "resistance":
+        return el, F
+    if isinstance(el, R):
+        return el, E
+    raise ModelError(f"{model.name}: '{element}' is not a C, I or R element with a law")
+
+
+def law(model: Model, element: str) -> Callable[[sp.Expr], sp.Expr]:
+    """The element's law as a function of its own variable: C e(q), I f(p), R e(f) (or f(e)
+    for a conductance law)."""
+    el, var = _variable(model, element)
+    expr = el.law
+    return lambda x: expr.xreplace({var: x})
+
+
+def slope(model: Model, element: str, values: Mapping[str, float] | None = None) -> float:
+    """d law / d variable at 0, with the model's parameter values (``values`` overriding)."""
+    el, var = _variable(model, element)
+    table = {s: v for s, v in model.parameter_table().items()}
+    by_name = {str(s): s for s in table}
+    for k, v in (values or {}).items():
+        if k in by_name:
+            table[by_name[k]] = v
+    return float(sp.diff(el.law, var).xreplace({var: 0}).xreplace(table))
+
+
+def modify_law(model: Model, element: str, new: Callable[[sp.Expr, sp.Expr], sp.Expr]) -> None:
+    """Replace the element's law by ``new(x, old(x))`` (same kind, name, ports and role)."""
+    el, var = _variable(model, element)
+    old = law(model, element)
+    if isinstance(el, C):
+        model.replace(C(element, law=lambda q: new(q, old(q)), q0=el.q0))
+    elif isinstance(el, I):
+        model.replace(I(element, law=lambda p: new(p, old(p)), p0=el.p0))
+    elif el.form == "resistance":
+        model.replace(R(element, law=lambda f: new(f, old(f))))
+    else:
+        model.replace(R(element, conductance_law=lambda e: new(e, old(e))))
+
+
+def neighbours(model: Model, element: str) -> list[str]:
+    """Elements bonded to the junction(s) the element is bonded to (the element excluded)."""
+    out = []
+    for b in model.bonds_of(element):
+        j = b.tail[0] if b.head[0] == element else b.head[0]
+        for b2 in model.bonds_of(j):
+            other = b2.tail[0] if b2.head[0] == j else b2.head[0]
+            if other != element and other not in out:
+                out.append(other)
+    return out
+
+
+def junction_of(model: Model, element: str) -> str:
+    """The element (usually a junction) at the other end of a one-port element's bond."""
+    bonds = model.bonds_of(element)
+    if len(bonds) != 1:
+        raise ModelError(f"{model.name}: '{element}' is not a one-port element with one bond")
+    b = bonds[0]
+    return b.tail[0] if b.head[0] == element else b.head[0]
+
+
+def add_to_output(model: Model, output: str, term) -> None:
+    """output ← output + term (e.g. the displacement of an added mode)."""
+    out = model.outputs[output]
+    out.expr = out.expr + sp.sympify(term)

@@ -1,0 +1,291 @@
+"""The read-only view a candidate gets of the data, the split and the current model, and the
+fitting services it may use (all exact linear where the model allows)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+import sympy as sp
+
+from ..graph import Model
+from ..identify import Identification, Spec
+from ..lti import LTI
+from .calibration import score
+from .context import Context, State
+from .projection import Param, projected_fit
+
+
+def _frozen(a: np.ndarray | None) -> np.ndarray | None:
+    if a is None:
+        return None
+    a = np.asarray(a)
+    v = a.view()
+    v.setflags(write=False)
+    return v
+
+
+@dataclass
+class DriveFit:
+    """Result of :meth:`View.fit_drive`: coefficients of the basis (in drive units) and of the
+    direct columns (in output units at sensor gain 1), the nonlinear parameters z, the
+    recalibrated linear values, the raw prediction, and the optimiser's verdict."""
+
+    coef: np.ndarray
+    direct: np.ndarray
+    z: np.ndarray
+    values: dict[str, float]
+    prediction: np.ndarray
+    drive: np.ndarray
+    success: bool
+    message: str
+    at_bounds: list[str]
+
+
+class View:
+    """What a candidate sees.  Arrays are read-only; ``model`` must not be changed (use
+    :meth:`rewrite` for a copy carrying the current values)."""
+
+    def __init__(self, ctx: Context, state: State, calibrated: Sequence[str]):
+        self._ctx, self._state = ctx, state
+        self.t, self.u, self.y = _frozen(ctx.t), _frozen(ctx.u), _frozen(ctx.y)
+        self.dt = ctx.dt
+        self.fit_idx = _frozen(ctx.ident.fit_idx)
+        self.fit_mask, self.val_mask = _frozen(ctx.ident.fit_mask), _frozen(ctx.ident.val_mask)
+        self.input, self.output = ctx.input, ctx.output
+        self.input_symbol = ctx.model.inputs[ctx.input].symbol
+        self.noise = ctx.noise
+        self.band_hz = ctx.band_hz
+        #: where the drive's power spectrum peaks (Hz)
+        self.main_hz = ctx.main_hz
+        self.fs = ctx.fs
+        #: fast states were residualised: the bond graph's structural elements are not seen
+        self.reduced = bool(ctx.n_fast)
+        self.exact = ctx.lti is not None
+        self.model = state.model
+        self.values = MappingProxyType(dict(state.values))
+        self.linear = tuple(calibrated)
+        self.drive = _frozen(state.drive)
+        self.drive_expr = state.drive_expr
+        self.structural = not state.linear
+        self.causes = tuple(state.causes)
+        self.prediction = _frozen(state.prediction)
+        self.residual = _frozen(ctx.y - state.prediction)
+        self.gain = state.gain
+        #: frequencies (Hz) of the modes of the calibrated nominal model the data resolve
+        self.modes_hz = tuple(ctx.slow_hz)
+        #: the part of the current output that does not pass through the linear core (e.g. an
+        #: added parallel mode), sensor gain 1; drive-side fits keep it
+        self.extra = None
+        if state.drive is not None and ctx.lti is not None:
+            extra = state.raw - self.respond([state.drive])[:, 0]
+            self.extra = _frozen(extra if np.max(np.abs(extra)) > 1e-9 * np.max(np.abs(state.raw)) else
+                                 np.zeros_like(extra))
+
+    # ---- the current model ----------------------------------------------------------------
+    def rewrite(self) -> Model:
+        """A copy of the current model carrying the current values (to extend)."""
+        m = self.model.copy()
+        known = m.all_parameters()
+        m.values.update({k: v for k, v in self.values.items() if k in known})
+        return m
+
+    def with_drive(self, model: Model, expr: sp.Expr) -> Model:
+        """Make the linear core of ``model`` (the nominal model's elements, states and outputs)
+        see ``expr`` where it saw the drive input; the extension's own elements are untouched."""
+        nominal = self._ctx.model
+        V = self.input_symbol
+        new = {name: el.xreplace({V: expr}) for name, el in nominal.elements.items() if V in el.free_symbols()}
+        for name, el in new.items():
+            el.role = getattr(model.elements[name], "role", None)
+            model.elements[name] = el
+        for name, st in nominal.internal_states.items():
+            if V in st.rate.free_symbols:
+                model.internal_states[name].rate = st.rate.xreplace({V: expr})
+        for name, out in nominal.outputs.items():
+            if V in out.expr.free_symbols:
+                model.outputs[name].expr = out.expr.xreplace({V: expr})
+        return model
+
+    def add_to_output(self, model: Model, term) -> None:
+        """Add ``term`` to the compared output of ``model``, inside the sensor gain."""
+        from .context import SENSOR_GAIN
+        g = next(d.symbol for n, (d, _) in model.parameters.items() if n == SENSOR_GAIN)
+        out = model.outputs[self.output]
+        out.expr = out.expr + g * sp.sympify(term)
+
+    def nominal_value(self, name: str) -> float:
+        return self._ctx.ident.current(name)
+
+    def theta_values(self, values: Mapping[str, float] | None = None) -> np.ndarray:
+        """θ of the linear core for the current values (``values`` overriding; others ignored)."""
+        known = self._ctx.core_parameters
+        vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
+        return self._ctx.ident.sim.theta(vals)
+
+    # ---- linear responses -------------------------------------------------------------------
+    def respond(self, columns: Sequence[np.ndarray], values: Mapping[str, float] | None = None) -> np.ndarray:
+        """Output of the linear core (the calibrated nominal dynamics, fast modes residualised,
+        sensor gain 1) driven by each column, from rest."""
+        ctx = self._ctx
+        th = self.theta_values(values)
+        U = np.column_stack(columns)
+        return ctx.lti.state_space(th, ctx.cut).response(ctx.dt, U)
+
+    def frequency_response(self, omega: np.ndarray, values: Mapping[str, float] | None = None) -> np.ndarray:
+        """The linear core's frequency response at ``omega`` (rad/s), sensor gain 1."""
+        ctx = self._ctx
+        th = self.theta_values(values)
+        return ctx.lti.state_space(th, ctx.cut).frequency_response(omega)
+
+    def empirical_frf(self):
+        """(ω rad/s, H, coherence) of the measured output over the input (Welch)."""
+        from .calibration import empirical_frf
+        return empirical_frf(self._ctx.u, self._ctx.y, self._ctx.fs)
+
+    def score(self, raw: np.ndarray) -> tuple[float, float, float, float]:
+        """(sensor gain, offset, RMS fit part, RMS validation part) of a raw prediction."""
+        return score(self._ctx, raw)
+
+    # ---- fitting services ---------------------------------------------------------------------
+    def _linear_params(self) -> list[Param]:
+        from .calibration import param_bounds
+        return [Param(n, self.values[n], *param_bounds(self._ctx, n, self.nominal_value(n))) for n in self.linear]
+
+    def fit_drive(self, basis: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
+                  lower: Sequence[float] = (), upper: Sequence[float] = (), *,
+                  direct: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
+                  identity: bool = True, z0: Sequence[float] = (), z_bounds: Sequence[tuple[float, float]] = (),
+                  z_names: Sequence[str] = (), refit: bool = True, max_nfev: int = 30,
+                  starts: Sequence[Sequence[float]] = ()) -> DriveFit:
+        """Fit the drive-side extension u_eff = [d] + Σ θ_k·basis_k (d: the current drive) through
+        the linear core, plus ``direct`` columns added to the output, by variable projection:
+        the coefficients by bounded linear least squares (``lower``/``upper`` for the basis;
+        direct ones free), jointly with nonlinear parameters ``z`` (``basis``/``direct`` may be
+        functions of z) and, with ``refit``, the calibrated linear parameters (log space)."""
+        if self.drive is None:
+            raise ValueError("the current model is not a drive transform of its linear core")
+        d = np.asarray(self.drive)
+        lin = self._linear_params() if refit else []
+        nz = len(z0)
+        call_b = callable(basis)
+        call_d = callable(direct)
+        fixed_b = None if call_b else list(basis)
+        fixed_d = None if call_d else list(direct)
+        n_basis = len(lower)
+
+        def parts(z):
+            zb = z[:nz]
+            vals = {p.name: p.from_z(zi) for p, zi in zip(lin, z[nz:])}
+            b = list(basis(zb)) if call_b else fixed_b
+            dc = list(direct(zb)) if call_d else fixed_d
+            return vals, b, dc
+
+        extra = np.asarray(self.extra)
+        has_extra = bool(np.any(extra))
+
+        def columns(z):
+            vals, b, dc = parts(z)
+            Y = self.respond(([d] if identity else []) + b, vals)
+            if identity:
+                Y[:, 0] += extra
+            cols = [Y] + ([np.column_stack(dc)] if dc else []) + [np.ones((len(d), 1))]
+            if has_extra and not identity:
+                cols.insert(-1, extra[:, None])
+            return np.column_stack(cols)
+
+        lo = ([-np.inf] if identity else []) + list(lower)
+        hi = ([np.inf] if identity else []) + list(upper)
+        # the direct columns and the offset are free
+        n_dir = len(direct(np.asarray(z0, float))) if call_d else len(fixed_d)
+        n_free = n_dir + 1 + (1 if has_extra and not identity else 0)
+        lo += [-np.inf] * n_free
+        hi += [np.inf] * n_free
+        zb0 = [float(v) for v in z0]
+        zl = [float(a) for a, _ in z_bounds] + [p.z_bounds()[0] for p in lin]
+        zu = [float(b) for _, b in z_bounds] + [p.z_bounds()[1] for p in lin]
+        zlin0 = [p.to_z(p.start) for p in lin]
+        more_starts = [list(s) + zlin0 for s in starts]
+        sol = projected_fit(columns, self._ctx.y, self._ctx.ident.fit_idx, zb0 + zlin0, zl, zu, lo, hi,
+                            max_nfev=max_nfev if (nz or lin) else 1, starts=more_starts)
+        vals, b, dc = parts(sol.z)
+        c = sol.coef
+        gain = c[0] if identity else self.gain
+        gain = gain if gain != 0 else 1.0
+        k0 = 1 if identity else 0
+        theta = c[k0:k0 + n_basis] / gain
+        phi = c[k0 + n_basis:k0 + n_basis + n_dir] / gain
+        drive = (d if identity else 0.0) + (sum(t * bk for t, bk in zip(theta, b)) if b else 0.0)
+        drive = np.asarray(drive, float) * np.ones(len(d))
+        raw = self.respond([drive], vals)[:, 0] + (sum(p * dk for p, dk in zip(phi, dc)) if dc else 0.0)
+        if has_extra:
+            raw = raw + (extra if identity else c[k0 + n_basis + n_dir] / gain * extra)
+        names = list(z_names) + [p.name for p in lin]
+        at = [names[i] if i < len(names) else f"z{i}" for i in sol.at_bounds]
+        return DriveFit(theta, phi, sol.z[:nz], {**self.values, **vals}, raw, drive, sol.success, sol.message, at)
+
+    def identification(self, model: Model, integrate: bool = False) -> Identification:
+        """An :class:`Identification` of ``model`` on the same data and split (exact linear
+        route when the model is linear, unless ``integrate``)."""
+        ident = self._ctx.ident.like(model, rtol=1e-6)
+        if integrate:
+            ident.lti = None
+        return ident
+
+    def simulate(self, model: Model, values: Mapping[str, float]) -> np.ndarray:
+        """Raw output (sensor gain 1, no offset) of ``model`` with ``values`` on every sample."""
+        ident = self.identification(model)
+        known = {p.name for p in ident.sim.eqs.params}
+        return ident.predict({k: v for k, v in values.items() if k in known})
+
+    def fit_model(self, model: Model, new: Sequence[Spec], max_nfev: int = 20, refit: bool = True,
+                  start: Mapping[str, float] | None = None):
+        """Fit the new parameters ``new`` of an extended model (and, with ``refit``, the
+        calibrated linear ones, from ``start`` or the current values) by variable projection
+        over sensor gain and offset; exact linear route when the extended model stays linear,
+        else the compiled integrator.  A spec with lower = upper is held.
+        Returns (values, raw prediction, success, message, names at a bound)."""
+        ident = self.identification(model)
+        known = {p.name for p in ident.sim.eqs.params}
+        base = {k: v for k, v in {**self.values, **(start or {})}.items() if k in known}
+        lin = [Param(p.name, base.get(p.name, p.start), p.lower, p.upper) for p in self._linear_params()] \
+            if refit else []
+        held = {s.name: s.start for s in new if s.lower == s.upper}
+        new = [s for s in new if s.lower != s.upper]
+        base.update(held)
+        specs = list(new)
+
+        def values_of(z):
+            vals = dict(base)
+            vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z[:len(specs)])})
+            vals.update({p.name: p.from_z(zi) for p, zi in zip(lin, z[len(specs):])})
+            return vals
+
+        def columns(z):
+            return np.column_stack([ident.predict(values_of(z)), np.ones(len(self._ctx.y))])
+
+        z0 = [s.to_z(s.start) for s in specs] + [p.to_z(p.start) for p in lin]
+        lb = [s.z_bounds()[0] for s in specs] + [p.z_bounds()[0] for p in lin]
+        ub = [s.z_bounds()[1] for s in specs] + [p.z_bounds()[1] for p in lin]
+        sol = projected_fit(columns, self._ctx.y, self._ctx.ident.fit_idx, z0, lb, ub, [-np.inf] * 2, [np.inf] * 2,
+                            max_nfev=max_nfev)
+        names = [s.name for s in specs] + [p.name for p in lin]
+        return (values_of(sol.z), sol.columns[:, 0], sol.success, sol.message, [names[i] for i in sol.at_bounds])
+
+    def states(self, values: Mapping[str, float] | None = None) -> dict[str, np.ndarray]:
+        """State trajectories (and the output's rate, key ``"output rate"``) of the current
+        model, integrated."""
+        ident = self.identification(self.model, integrate=True)
+        known = {p.name for p in ident.sim.eqs.params}
+        vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
+        res = ident.sim.run(self._ctx.t, {self.input: ident.signal}, params=vals, rtol=1e-5)
+        out = dict(res.states)
+        out["output rate"] = np.gradient(res.outputs[self.output], self._ctx.t)
+        return out
+
+    def state_of(self, element: str) -> str:
+        """Name of the state variable an element stores (e.g. the displacement of a spring)."""
+        eqs = self._ctx.eqs
+        return next(str(s.symbol) for s in eqs.states if s.origin == element)

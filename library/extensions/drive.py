@@ -1,0 +1,338 @@
+"""Effects that act on the drive: the linear core of the model sees a transformed drive
+u_eff = T[d] (d: the drive it saw so far), fitted exactly through the core's linear dynamics
+(Hammerstein bases solved by bounded least squares, jointly with the calibration by variable
+projection; :meth:`bondgraph.diagnosis.View.fit_drive`).
+
+Papers: Rodriguez-Fortun et al., Mechatronics 20 (2010) 303–314 (polarization hysteresis,
+Bouc–Wen and Prandtl–Ishlinskii); Ghafarirad et al., MCMDS 21(2) (2015) 130–152 (PI on the
+bimorph's drive); Wood, Steltz & Fearing, ICRA 2005 (creep as a Kelvin–Voigt chain,
+field-dependent stiffness k_a(E)).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import sympy as sp
+
+from bondgraph import C, I, J0, J1, Quantity, R, Se
+from bondgraph.diagnosis import LINEAR, Candidate, Extension
+from bondgraph.diagnosis.filters import lowpass, resonator
+from library.hysteresis import PrandtlIshlinskii, bouc_wen_response, play_outputs, threshold_grid
+
+NOT_A_DRIVE = "acts on the drive, and the model is no longer a transform of its drive"
+
+
+def drive_scale(view) -> float:
+    return float(np.max(np.abs(view.drive))) or 1.0
+
+
+def loop_area(r: np.ndarray, u: np.ndarray) -> float:
+    """|∮ r du| normalised by the bounding box and the number of cycles: 0 for a
+    single-valued residual, ~0.3 for a fat loop."""
+    area = abs(float(np.sum(0.5 * (r[1:] + r[:-1]) * np.diff(u))))
+    d = np.diff(u)
+    d = d[np.abs(d) > 1e-9 * np.ptp(u)]
+    cycles = max(1.0, float(np.sum(np.diff(np.sign(d)) != 0)) / 2)
+    return area / max(float(np.ptp(r) * np.ptp(u)), 1e-300) / cycles
+
+
+class _DriveCandidate(Candidate):
+    def applies(self, view):
+        return True if view.drive is not None else NOT_A_DRIVE
+
+    def extension(self, view, fit, model, new: dict, drive_expr) -> Extension:
+        values = {**fit.values, **new}
+        return Extension(model, values, list(new), fit.prediction, fit.drive, drive_expr, fit.at_bounds,
+                         fit.success, fit.message)
+
+
+class InputHysteresis(_DriveCandidate):
+    """Rate-independent hysteresis of the drive, u = H[d]: a Prandtl–Ishlinskii operator (play
+    form, ``n_plays`` thresholds over the drive's range), as Ghafarirad et al. model the
+    bimorph and as polarization hysteresis acts at quasi-static rates."""
+
+    cause = "hysteresis"
+    label = "Prandtl-Ishlinskii operator on the drive"
+    cost = 2
+    n_plays = 10
+
+    def evidence(self, view):
+        m = view.fit_mask
+        return {"loop_area": loop_area(view.residual[m], view.drive[m])}
+
+    def fit(self, view):
+        r = threshold_grid(view.drive, self.n_plays)
+        plays = play_outputs(view.drive, r)
+        # the r = 0 play is the drive itself (w ≥ 0); the others may have either sign, so loops
+        # of both orientations (displacement lagging or leading the drive) are representable
+        fit = view.fit_drive(list(plays.T), [0.0] + [-np.inf] * (len(r) - 1), [np.inf] * len(r), identity=False)
+        model = view.rewrite()
+        h = model.operator("H", PrandtlIshlinskii(r, fit.coef), view.drive_expr)
+        view.with_drive(model, h)
+        return self.extension(view, fit, model, {f"H.w{i + 1}": float(w) for i, w in enumerate(fit.coef)}, h)
+
+
+class InputBoucWen(_DriveCandidate):
+    """Rate-independent hysteresis with a differential (Bouc–Wen) state on the drive,
+    u = V + κ·V_r·z, dz/dt = v̇ − β·|v̇|·z − γ·v̇·|z| (v = V/V_r, exponent 1): the DE-based
+    polarization model of Rodriguez-Fortun et al. (eq. 9), whose minor loops drift as
+    Bouc–Wen loops do.  β = s(1 + tanh ρ)/2, γ = s(1 − tanh ρ)/2."""
+
+    cause = "hysteresis"
+    label = "Bouc-Wen state on the drive"
+    cost = 2
+
+    def applies(self, view):
+        if view.drive is None or view.drive_expr != view.input_symbol:
+            return "needs the raw drive's rate (another drive-side effect was added first)"
+        return True
+
+    @staticmethod
+    def shape(z):
+        s, rho = math.exp(z[0]), math.tanh(z[1])
+        return s * (1 + rho) / 2, s * (1 - rho) / 2
+
+    def fit(self, view):
+        Vr = drive_scale(view)
+        v = np.asarray(view.drive) / Vr
+
+        def basis(z):
+            beta, gamma = self.shape(z)
+            return [Vr * bouc_wen_response(v, beta, gamma, 1.0)]
+
+        fit = view.fit_drive(basis, [-np.inf], [np.inf], z0=[math.log(3.0), 0.0],
+                             z_bounds=[(math.log(0.05), math.log(500.0)), (-6.0, 6.0)],
+                             z_names=["bw.s", "bw.rho"], starts=[[math.log(30.0), 0.0]])
+        beta, gamma = self.shape(fit.z)
+        model = view.rewrite()
+        V = view.input_symbol
+        kappa = model.parameter("bw.kappa", float(fit.coef[0]), "", "weight of the Bouc-Wen state in the drive")
+        b = model.parameter("bw.beta", beta, "", "Bouc-Wen beta")
+        g = model.parameter("bw.gamma", gamma, "", "Bouc-Wen gamma")
+        vr = model.parameter("bw.Vr", Vr, "", "reference drive (largest |drive| of the data)")
+        z = model.state("bw.z", 0, unit="", doc="Bouc-Wen hysteretic variable (units of V/V_r)")
+        vdot = model.input_rate(view.input) / vr
+        model.set_rate("bw.z", vdot - b * sp.Abs(vdot) * z - g * vdot * sp.Abs(z))
+        expr = V + kappa * vr * z
+        view.with_drive(model, expr)
+        return self.extension(view, fit, model, {"bw.kappa": float(fit.coef[0]), "bw.beta": beta, "bw.gamma": gamma},
+                              expr)
+
+
+class InputCreep(_DriveCandidate):
+    """Creep: a generalized Kelvin–Voigt chain on the drive (Wood et al., eq. 1),
+    u = d + Σ q_n with cells q̇_n = (c_n·d − q_n)/τ_n, i.e. a step response
+    d0·[1 + Σ c_n(1 − e^(−t/τ_n))]; the c_n ≥ 0 of a fixed relaxation spectrum (two time
+    constants per decade, from well above the model's own time constants to three record
+    lengths) are solved exactly, so log-time creep is represented as well as a few cells.
+    Cells are C_n = c_n, R_n = τ_n/c_n on a 0-junction, starting in equilibrium with the drive.
+    Creep is slower than the model's own dynamics and than the drive's main period (a faster
+    lag is a phase lag, not creep): the spectrum starts at 10/ω of the slowest mode and at a
+    quarter of the main period.  It is small: piezoelectric stacks creep by 1–2 % of their
+    stroke per decade of time, so ratios adding up to more than ``max_ratio`` are not creep."""
+
+    cause = "creep"
+    label = "Kelvin-Voigt creep chain on the drive"
+    kind = LINEAR
+    max_ratio = 0.5
+
+    def taus(self, view) -> np.ndarray:
+        slow = [f for f in view.modes_hz if f > 0]
+        lo = max(5 * view.dt, 10.0 / (2 * math.pi * min(slow)) if slow else 0.0,
+                 0.25 / view.main_hz if view.main_hz > 0 else 0.0)
+        hi = 3 * float(view.t[-1] - view.t[0])
+        n = max(2, int(round(math.log10(hi / lo) * 2)) + 1)
+        return np.geomspace(lo, hi, n)
+
+    def fit(self, view):
+        taus = self.taus(view)
+        d = np.asarray(view.drive)
+        fit = view.fit_drive([lowpass(d, tau, view.dt) for tau in taus], [0.0] * len(taus), [np.inf] * len(taus))
+        keep = [i for i in range(len(taus)) if fit.coef[i] > 1e-6 * max(float(np.max(fit.coef)), 1e-300)]
+        model = view.rewrite()
+        D = view.drive_expr
+        d0 = float(d[0])
+        model.add(Se("creep.src", D), J0("creep.node"))
+        model.bond("creep.src", "creep.node")
+        new, qs = {}, []
+        for k, i in enumerate(keep, 1):
+            c = model.parameter(f"creep.c{k}", float(fit.coef[i]), "", f"creep ratio of cell {k}", bounds=(0, 1e3))
+            tau = model.parameter(f"creep.tau{k}", float(taus[i]), "s", f"creep time constant of cell {k}",
+                                  bounds=(0, 1e6))
+            model.add(J1(f"creep.cell{k}"), C(f"creep.C{k}", c, q0=c * d0), R(f"creep.R{k}", tau / c))
+            model.bond("creep.node", f"creep.cell{k}")
+            model.bond(f"creep.cell{k}", f"creep.C{k}")
+            model.bond(f"creep.cell{k}", f"creep.R{k}")
+            new[f"creep.c{k}"], new[f"creep.tau{k}"] = float(fit.coef[i]), float(taus[i])
+            qs.append(Quantity("q", f"creep.C{k}"))
+        expr = D + sum(qs)
+        view.with_drive(model, expr)
+        ext = self.extension(view, fit, model, new, expr)
+        ext.values.update(new)
+        return ext
+
+    def implausible(self, view, ext):
+        cs = [v for k, v in ext.values.items() if k.startswith("creep.c") and k in ext.new]
+        taus = [v for k, v in ext.values.items() if k.startswith("creep.tau") and k in ext.new]
+        if not cs:
+            return "no creep cell has a positive ratio"
+        if sum(cs) > self.max_ratio:
+            return f"the creep ratios add up to {sum(cs):.2g} (more than {self.max_ratio:g} of the elastic response)"
+        lo = self.taus(view)[0]
+        main = taus[int(np.argmax(cs))]
+        if main <= 1.01 * lo and len(cs) == 1:
+            return f"its only cell is as fast as creep may be (τ = {main:.3g} s): a lag, not creep"
+        return ""
+
+
+class _InputPolynomial(_DriveCandidate):
+    """Static odd nonlinearity of the drive: u = d + s·(a3·d³/V_r² + a5·d⁵/V_r⁴), a3, a5 ≥ 0."""
+
+    sign = -1.0
+    prefix = "sat"
+
+    def evidence(self, view):
+        d = np.asarray(view.drive) / drive_scale(view)
+        cubic = d ** 3 - d * (d @ d ** 3) / max(d @ d, 1e-300)
+        resp = view.respond([cubic])[:, 0]
+        r = view.residual - view.residual.mean()
+        resp = resp - resp.mean()
+        return {"cubic_corr": float(r @ resp / max(np.linalg.norm(r) * np.linalg.norm(resp), 1e-300))}
+
+    def fit(self, view):
+        Vr = drive_scale(view)
+        d = np.asarray(view.drive)
+        fit = view.fit_drive([self.sign * d ** 3 / Vr ** 2, self.sign * d ** 5 / Vr ** 4], [0.0, 0.0],
+                             [np.inf, np.inf])
+        model = view.rewrite()
+        p = self.prefix
+        a3 = model.parameter(f"{p}.a3", float(fit.coef[0]), "", "cubic drive coefficient", bounds=(0, 1e6))
+        a5 = model.parameter(f"{p}.a5", float(fit.coef[1]), "", "quintic drive coefficient", bounds=(0, 1e6))
+        vr = model.parameter(f"{p}.Vr", Vr, "", "reference drive (largest |drive| of the data)")
+        D = view.drive_expr
+        expr = D + self.sign * (a3 * D ** 3 / vr ** 2 + a5 * D ** 5 / vr ** 4)
+        view.with_drive(model, expr)
+        return self.extension(view, fit, model, {f"{p}.a3": float(fit.coef[0]), f"{p}.a5": float(fit.coef[1])},
+                              expr)
+
+
+class InputSaturation(_InputPolynomial):
+    """Saturation: the drive's effect compresses at high field (the polarization saturates,
+    P ≈ P_s·tanh(E/E_s) = E − E³/(3E_s²) + ...)."""
+
+    cause = "saturation"
+    label = "compressive drive nonlinearity (saturating polarization)"
+    sign, prefix = -1.0, "sat"
+
+
+class InputExpansion(_InputPolynomial):
+    """Softening that shows as gain expansion: a field-dependent stiffness k_a(E) that falls
+    with the drive (Wood et al.) makes the displacement per volt grow with amplitude."""
+
+    cause = "softening"
+    label = "expanding drive nonlinearity (field-dependent stiffness k_a(E))"
+    sign, prefix = 1.0, "exp"
+
+
+class InputRC(_DriveCandidate):
+    """An RC input stage: the drive reaches the actuator through a series resistance into a
+    capacitance, u = d/(1 + sRC) (amplifier output resistance, cables)."""
+
+    cause = "electrical-rc"
+    label = "series R with a capacitance on the drive (RC lag)"
+    kind = LINEAR
+    cap = 1e-6
+
+    def _range(self, view):
+        return view.dt / 10, float(view.t[-1] - view.t[0]) / 20
+
+    def fit(self, view):
+        d = np.asarray(view.drive)
+        lo, hi = self._range(view)
+        taus = np.geomspace(lo, hi, 16)
+        idx = view.fit_idx
+        Y = view.respond([lowpass(d, tau, view.dt) for tau in taus])
+        sse = []
+        for j in range(len(taus)):
+            A = np.column_stack([Y[idx, j], np.ones(idx.size)])
+            res = np.linalg.lstsq(A, view.y[idx], rcond=None)[1]
+            sse.append(float(res[0]) if res.size else math.inf)
+        tau0 = float(taus[int(np.argmin(sse))])
+        fit = view.fit_drive(lambda z: [lowpass(d, math.exp(z[0]), view.dt)], [-np.inf], [np.inf], identity=False,
+                             z0=[math.log(tau0)], z_bounds=[(math.log(lo), math.log(hi))], z_names=["rc.R"])
+        tau = math.exp(fit.z[0])
+        model = view.rewrite()
+        Rin = model.parameter("rc.R", tau / self.cap, "ohm", "series resistance of the input stage", bounds=(0, 1e12))
+        Cin = model.parameter("rc.C", self.cap, "F", "capacitance of the input stage (only R·C matters)")
+        D = view.drive_expr
+        model.add(Se("rc.src", D), J1("rc.i"), R("rc.Rs", Rin), J0("rc.node"),
+                  C("rc.C", Cin, q0=Cin * float(view.drive[0])))
+        model.chain("rc.src", "rc.i", "rc.node", "rc.C")
+        model.bond("rc.i", "rc.Rs")
+        expr = Quantity("e", "rc.C")
+        view.with_drive(model, expr)
+        # the stage passes the drive with unit gain; the fitted coefficient is the sensor gain's change
+        fit.drive = lowpass(d, tau, view.dt)
+        fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.extra
+        return self.extension(view, fit, model, {"rc.R": tau / self.cap}, expr)
+
+    def implausible(self, view, ext):
+        tau = ext.values["rc.R"] * self.cap
+        f = 1 / (2 * math.pi * tau)
+        if f > 0.45 * view.fs:
+            return f"its corner ({f:.3g} Hz) is above the data's band"
+        return ""
+
+
+class InputRLC(_DriveCandidate):
+    """A series R–L into the actuator's capacitance on the drive: u = d/(LCs² + RCs + 1), the
+    electrical stage of a long cable or an inductive amplifier output (its resonance
+    ω = 1/√(LC), damping ratio ζ = (R/2)·√(C/L))."""
+
+    cause = "electrical-rc"
+    label = "series R-L with a capacitance on the drive (RLC stage)"
+    kind = LINEAR
+    cap = 1e-6
+
+    def fit(self, view):
+        d = np.asarray(view.drive)
+        top = 2 * math.pi * 0.45 * view.fs
+        low = 2 * math.pi / float(view.t[-1] - view.t[0]) * 10
+        idx = view.fit_idx
+        best = None
+        for om in np.geomspace(low, top, 10):
+            for ze in (0.1, 0.4, 1.0):
+                col = view.respond([om ** 2 * resonator(d, view.dt, om, ze)])[:, 0]
+                A = np.column_stack([col, np.ones(len(d))])[idx]
+                res = np.linalg.lstsq(A, view.y[idx], rcond=None)[1]
+                sse = float(res[0]) if res.size else math.inf
+                if best is None or sse < best[0]:
+                    best = (sse, om, ze)
+        _, om0, ze0 = best
+        fit = view.fit_drive(lambda z: [math.exp(2 * z[0]) * resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]))],
+                             [-np.inf], [np.inf], identity=False, z0=[math.log(om0), math.log(ze0)],
+                             z_bounds=[(math.log(low), math.log(top)), (math.log(0.02), math.log(5.0))],
+                             z_names=["rlc.L", "rlc.R"])
+        om, ze = math.exp(fit.z[0]), math.exp(fit.z[1])
+        L_val, R_val = 1 / (om ** 2 * self.cap), 2 * ze / (om * self.cap)
+        model = view.rewrite()
+        Rp = model.parameter("rlc.R", R_val, "ohm", "series resistance of the input stage", bounds=(0, 1e12))
+        Lp = model.parameter("rlc.L", L_val, "H", "series inductance of the input stage", bounds=(0, 1e12))
+        Cp = model.parameter("rlc.C", self.cap, "F", "capacitance of the input stage (only LC, RC matter)")
+        model.add(Se("rlc.src", view.drive_expr), J1("rlc.loop"), R("rlc.Rs", Rp), I("rlc.Ls", Lp),
+                  C("rlc.Cs", Cp, q0=Cp * float(view.drive[0])))
+        model.bond("rlc.src", "rlc.loop")
+        for e in ("rlc.Rs", "rlc.Ls", "rlc.Cs"):
+            model.bond("rlc.loop", e)
+        expr = Quantity("e", "rlc.Cs")
+        view.with_drive(model, expr)
+        fit.drive = om ** 2 * resonator(d, view.dt, om, ze)
+        fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.extra
+        return self.extension(view, fit, model, {"rlc.R": R_val, "rlc.L": L_val}, expr)
+
+    def implausible(self, view, ext):
+        om = 1 / math.sqrt(ext.values["rlc.L"] * self.cap)
+        if om / (2 * math.pi) > 0.45 * view.fs:
+            return f"its resonance ({om / (2 * math.pi):.3g} Hz) is above the data's band"
+        return ""
