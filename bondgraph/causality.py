@@ -24,7 +24,7 @@ from collections import Counter, defaultdict, deque
 from dataclasses import dataclass, field
 
 from . import config
-from .elements import DISSIPATION, FIXED, STORAGE, CausalConflict
+from .elements import DISSIPATION, FIXED, STORAGE, CausalConflict, Element
 from .errors import CausalityError
 from .graph import Bond, Model
 
@@ -85,6 +85,10 @@ class _Assigner:
         self.trail: list[int] = []
         self.conflicts: Counter = Counter()
         self.attempts = 0
+        #: elements whose causality on one port constrains their others (junctions, TF, GY, ...)
+        self.relays = {n for n, e in self.elements.items()
+                       if type(e).propagate_causality is not Element.propagate_causality}
+        self.pending: set = set()
 
     def sets(self, k: int, end) -> bool | None:
         """Does the element at ``end`` of bond ``k`` set its effort? None when unassigned."""
@@ -107,8 +111,10 @@ class _Assigner:
                 raise CausalConflict(e[0])
         self.setter[k] = setter
         self.trail.append(k)
-        queue.append(end[0])
-        queue.append(self.other(k, end)[0])
+        for name in (end[0], self.other(k, end)[0]):
+            if name in self.relays and name not in self.pending:  # each relay queued once per wave
+                self.pending.add(name)
+                queue.append(name)
 
     def undo(self, mark: int):
         while len(self.trail) > mark:
@@ -117,6 +123,7 @@ class _Assigner:
     def propagate(self, queue: deque):
         while queue:
             name = queue.popleft()
+            self.pending.discard(name)
             known = {end[1]: self.sets(k, end) for k, end in self.incident[name]}
             for port, value in self.elements[name].propagate_causality(known).items():
                 end = (name, port)
@@ -134,6 +141,7 @@ class _Assigner:
         except CausalConflict as exc:
             self.conflicts[exc.args[0] if exc.args else end[0]] += 1
             self.undo(mark)
+            self.pending.clear()
             return False
 
     def search(self, decisions: list[tuple]) -> list[int]:
@@ -204,21 +212,21 @@ def assign_causality(model: Model) -> Causality:
     model.check()
     a = _Assigner(model)
     elements = model.elements
-    order = sorted(elements, key=name_key)
-    ports = [(name, end) for name in order for _, end in sorted(a.incident[name], key=lambda ke: ke[1][1])]
-    for name, end in ports:
-        pref = elements[name].preferred_causality(end[1])
-        if elements[name].causal_class == FIXED and pref is not None:
-            if not a.attempt(a.bond_of[end], end, bool(pref)):
-                raise CausalityError(_source_conflict(model, a, name))
-    decisions = []  # (bond, end, preferred value, may take the other, what is decided)
-    for cls in (STORAGE, DISSIPATION):
-        for name, end in ports:
-            pref = elements[name].preferred_causality(end[1])
-            if elements[name].causal_class == cls and pref is not None:
-                decisions.append((a.bond_of[end], end, bool(pref), True, name))
-    for b in sorted(model.bonds, key=lambda b: (*sorted((_end_key(b.tail), _end_key(b.head))), b.index)):
-        decisions.append((b.index, min((b.tail, b.head), key=_end_key), True, True, f"bond {b.index}"))
+    by_class: dict[int, list] = defaultdict(list)  # causal class -> [(name, end, preferred)], canonical order
+    for name in sorted(elements, key=name_key):
+        elem = elements[name]
+        for _, end in sorted(a.incident[name], key=lambda ke: ke[1][1]):
+            pref = elem.preferred_causality(end[1])
+            if pref is not None:
+                by_class[elem.causal_class].append((name, end, bool(pref)))
+    for name, end, pref in by_class[FIXED]:
+        if not a.attempt(a.bond_of[end], end, pref):
+            raise CausalityError(_source_conflict(model, a, name))
+    decisions = [(a.bond_of[end], end, pref, True, name)  # (bond, end, preferred value, may flip, label)
+                 for cls in (STORAGE, DISSIPATION) for name, end, pref in by_class[cls]]
+    key = {end: _end_key(end) for b in model.bonds for end in (b.tail, b.head)}
+    for b in sorted(model.bonds, key=lambda b: (*sorted((key[b.tail], key[b.head])), b.index)):
+        decisions.append((b.index, min((b.tail, b.head), key=key.__getitem__), True, True, f"bond {b.index}"))
     part = a.components()
     by_part: dict[int, list] = defaultdict(list)
     for d in decisions:
@@ -228,12 +236,9 @@ def assign_causality(model: Model) -> Causality:
         chosen |= {group[j][4] for j in a.search(group)}
     arbitrary = [d[4] for d in decisions if d[4] in chosen and (d[4].startswith("bond ") or
                                                                 elements[d[4]].causal_class == DISSIPATION)]
-    derivative = []
-    for name, end in ports:
-        elem = elements[name]
-        pref = elem.preferred_causality(end[1])
-        if elem.is_storage and pref is not None and a.sets(a.bond_of[end], end) != bool(pref):
-            derivative.append(end)
+    derivative = [end for cls_ports in by_class.values() for name, end, pref in cls_ports
+                  if elements[name].is_storage and a.sets(a.bond_of[end], end) != pref]
+    derivative.sort(key=lambda end: (name_key(end[0]), end[1]))
     return Causality(model, dict(a.setter), derivative, arbitrary)
 
 

@@ -124,7 +124,7 @@ class Deriver:
     def assign(self, var: sp.Symbol, expr, origin: str) -> None:
         if var in self.assign_map:
             raise CausalityError(f"{self.m.name}: variable {var} is computed twice ({self.origin[var]}, {origin})")
-        self.assign_map[var] = sympify(expr, f"{origin}: value of {var}")
+        self.assign_map[var] = _expr(expr, origin, var)
         self.origin[var] = origin
 
     def symbol(self, base: str) -> sp.Symbol:
@@ -132,15 +132,15 @@ class Deriver:
 
     def state(self, base: str, kind: str, x0, origin: str) -> sp.Symbol:
         sym = self.symbol(base)
-        self.states.append(State(sym, kind, origin, sympify(x0, f"{origin}: initial value")))
+        self.states.append(State(sym, kind, origin, _expr(x0, origin, "initial value")))
         return sym
 
     def rate(self, state: sp.Symbol, expr) -> None:
-        self.rates[state] = sympify(expr, f"rate of {state}")
+        self.rates[state] = _expr(expr, "rate", state)
 
     def derivative(self, base: str, stored, origin: str) -> sp.Symbol:
         w = self.symbol(base)
-        self.dependent.append((w, sympify(stored, f"{origin}: stored quantity"), origin))
+        self.dependent.append((w, _expr(stored, origin, "stored quantity"), origin))
         return w
 
     def quantity(self, what: str, key: str, expr) -> None:
@@ -335,3 +335,9 @@ def _collapse(program: list[Statement], rates: dict, outputs: dict):
             kept.append(Statement(st.var, expr, st.origin, st.op))
     return (kept, {k: v.xreplace(sub) for k, v in rates.items()},
             {k: v.xreplace(sub) for k, v in outputs.items()})
+
+
+def _expr(value, origin: str, what) -> sp.Expr:
+    """``value`` as a sympy expression (elements may hand over numbers); the message of a bad
+    value names where it came from (built only then: printing symbols is slow)."""
+    return value if isinstance(value, sp.Expr) else sympify(value, f"{origin}: {what}")

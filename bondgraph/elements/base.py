@@ -121,16 +121,19 @@ class Port:
     ``sets_effort`` is the assigned causality; ``key`` names the port in user expressions
     (``elem`` for one-ports and junctions, ``elem.port`` otherwise)."""
 
-    __slots__ = ("name", "key", "e", "f", "sign", "sets_effort", "origin", "_eqs")
+    __slots__ = ("name", "key", "e", "f", "sign", "sets_effort", "origin", "_eqs", "_f_in")
 
     def __init__(self, name, key, e, f, sign, sets_effort, origin, eqs: EquationBuilder):
         self.name, self.key, self.e, self.f, self.sign = name, key, e, f, sign
         self.sets_effort, self.origin, self._eqs = sets_effort, origin, eqs
+        self._f_in = None
 
     @property
     def f_in(self) -> sp.Expr:
         """Flow into the element (power-in convention)."""
-        return self.sign * self.f
+        if self._f_in is None:
+            self._f_in = self.sign * self.f
+        return self._f_in
 
     def set_effort(self, expr) -> None:
         self._eqs.assign(self.e, expr, self.origin)
