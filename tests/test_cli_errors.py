@@ -204,6 +204,7 @@ FILES.update({
     "data_empty.csv": "",
     "data_no_x.csv": "t,V,y\n0,0,0\n0.001,1,0\n0.002,1,0\n",
     "ref.csv": "t,x\n0,0\n0.01,1e-6\n0.02,2e-6\n",
+    "data_const.csv": "t,V,x\n" + "".join(f"{k * 1e-3!r},2.5,{(k % 5) * 1e-6!r}\n" for k in range(60)),
 })
 BINARY = b"\xff\xfe\x00\x01garbage\x00"
 
@@ -444,6 +445,10 @@ CASES = [
     pytest.param(["fit", "good.py", "data_empty.csv", "--params", "k"], ["data_empty.csv", "empty"],
                  id="fit-data-empty-file"),
     pytest.param(["diagnose", "good.py", "missing.csv"], ["missing.csv"], id="diagnose-data-file-missing"),
+    pytest.param(["fit", "good.py", "data_const.csv", "--params", "k", "--out", "f.json"],
+                 ["data_const.csv", "'V'", "constant"], id="fit-constant-input"),
+    pytest.param(["diagnose", "good.py", "data_const.csv", "--plot", "d.png"], ["data_const.csv", "'V'", "constant"],
+                 id="diagnose-constant-input"),
     # ---- linearize -------------------------------------------------------------------------------------
     pytest.param(["linearize", "good.py", "--json", "--format", "python-control"], ["--json", "contradict"],
                  id="linearize-json-and-python-control"),
