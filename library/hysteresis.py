@@ -336,7 +336,9 @@ class RelativeModifiedPI(_DeadZonePI):
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         n = self.thresholds.size
         h = _virgin_plays(v0, np.asarray(prm[:n], dtype=np.float64))
-        x0 = float(prm[n:2 * n] @ h)
+        x0 = 0.0
+        for i in range(n):   # summed in the kernels' order: a rounding difference would read as a reversal
+            x0 += float(prm[n + i]) * float(h[i])
         return np.r_[h, 0.0, 0.0, 1.0 if x0 >= 0.0 else -1.0, x0]
 
     @staticmethod

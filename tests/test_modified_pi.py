@@ -73,15 +73,20 @@ def test_relative_zero_dead_zones_reduce_to_pi(v, c):
                                (c + 1) * PrandtlIshlinskii(R, W).run(v), atol=1e-12)
 
 
+def normal(low: float, high: float):
+    return st.floats(low, high, allow_subnormal=False)
+
+
 @st.composite
 def invertible(draw, relative: bool):
+    # no subnormal thresholds: an inverse threshold 0.5 * 5e-324 rounds to 0, a dead zone to a line
     n = draw(st.integers(1, 6))
-    r = np.r_[0.0, np.sort(draw(st.lists(st.floats(0.0, 1.0), min_size=n - 1, max_size=n - 1)))]
-    w = np.r_[draw(st.floats(0.2, 3.0)), draw(st.lists(st.floats(-0.1, 1.0), min_size=n - 1, max_size=n - 1))]
+    r = np.r_[0.0, np.sort(draw(st.lists(normal(0.0, 1.0), min_size=n - 1, max_size=n - 1)))]
+    w = np.r_[draw(st.floats(0.2, 3.0)), draw(st.lists(normal(-0.1, 1.0), min_size=n - 1, max_size=n - 1))]
     m = draw(st.integers(0, 4))
     low = 0.0 if relative else -2.0
-    d = np.r_[0.0, draw(st.lists(st.floats(low, 2.0), min_size=m, max_size=m))]
-    ws = np.r_[draw(st.floats(0.2, 2.0)), draw(st.lists(st.floats(0.0, 2.0), min_size=m, max_size=m))]
+    d = np.r_[0.0, draw(st.lists(normal(low, 2.0), min_size=m, max_size=m))]
+    ws = np.r_[draw(st.floats(0.2, 2.0)), draw(st.lists(normal(0.0, 2.0), min_size=m, max_size=m))]
     return (RelativeModifiedPI if relative else ModifiedPI)(r, w, d, ws)
 
 
@@ -97,8 +102,21 @@ def test_modified_pi_inverse_is_exact(data, v, relative):
     except ParameterError:   # a drawn loading curve that turns down has no inverse
         return
     v = np.array(v)
+    if relative:
+        # Without return-point memory a reversal restarts the branch, so a reversal below the
+        # rounding of the PI sum (v = 2e-36 then 0) is seen by one operator and not the other:
+        # exact in exact arithmetic, the inverse is checked on inputs whose steps are resolvable.
+        v = np.round(v * 256.0) / 256.0
     np.testing.assert_allclose(inv.run(op.run(v)), v, rtol=0, atol=1e-9)
     np.testing.assert_allclose(op.run(inv.run(v)), v, rtol=0, atol=1e-9)
+
+
+def test_relative_start_from_rest_is_not_a_reversal():
+    """The rest state's PI sum is summed as the kernels sum it: a last-bit difference at the first
+    sample would start a new branch there (found by the property test above)."""
+    op = RelativeModifiedPI([0.0] * 5, [0.5, 0.0, 0.0, 1.0, 0.921875], [0.0, 1.0], [1.0, 1.0])
+    y = np.array([-1.625, -2.0])
+    np.testing.assert_allclose(op.run(op.inverse().run(y)), y, rtol=0, atol=1e-12)
 
 
 def test_inverse_needs_an_increasing_operator():
