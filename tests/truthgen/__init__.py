@@ -107,6 +107,24 @@ strengths and the rounds used are stored in the record.  (No seed of the three s
 size); ``ci`` 1000-1013 (14 small records: 3 null, 1 compound, all four families);
 ``bench`` 2000-2071 (72 realistic records: 17 null, 9 compound).
 
+References
+----------
+- Rodriguez-Fortun, J.M., Orus, J., Buil, F., Castellanos, J.A. "General bond graph model for
+  piezoelectric actuators and methodology for experimental identification." Mechatronics 20
+  (2010) 303–314.  [the lumped stack, the APA-120ML numbers, field-domain hysteresis]
+- Ghafarirad, H., Rezaei, S.M., Sarhan, A.A.D., Zareinejad, M. "Continuous dynamic modelling of
+  bimorph piezoelectric cantilevered actuators considering hysteresis effect and dynamic
+  behaviour analysis." Mathematical and Computer Modelling of Dynamical Systems 21(2) (2015)
+  130–152, doi:10.1080/13873954.2014.906472.  [bimorph modes, sensor point, input hysteresis]
+- Shahabi, P., Ghafarirad, H., Taghvaeipour, A. "Nonlinear vibration analysis of piezoelectric
+  bending actuators: theoretical and experimental studies." Comptes Rendus Mécanique 347(12)
+  (2019) 953–966, doi:10.1016/j.crme.2019.10.007.  [T226, cubic/quintic softening, nonlinear
+  damping near resonance]
+- Wood, R.J., Steltz, E., Fearing, R.S. "Nonlinear performance limits for high energy density
+  piezoelectric bending actuators." Proc. IEEE International Conference on Robotics and
+  Automation (ICRA), Barcelona, 2005.  [creep cells, Maxwell slip, field-dependent stiffness
+  and damping]
+
 Timing (a loaded 2-core machine): a ``ci`` record takes 0.1-5 s to generate, a few up to
 ~30 s (plus ~5 s once per process to import bondgraph for the model files' values); a
 ``bench`` record 1-60 s, median 16 s, a few that need many rounds of the visibility rule up to
