@@ -181,3 +181,62 @@ def test_causality_search_budget_is_a_setting():
     with config.override({"causality.max_attempts": -10}):
         with pytest.raises(bg.CausalityError, match="causality.max_attempts"):
             bg.derive(model)
+
+
+# ---- the diagnosis on a model with a kind of its own ---------------------------------------------
+class ViscousDamper(Element):
+    """e = c·f as a kind of its own (not an R): the diagnosis must work on models that use it."""
+
+    kind = "Rvisc"
+    symbolic_attrs = ("c",)
+    causal_class = DISSIPATION
+
+    def __init__(self, name, c):
+        super().__init__(name)
+        self.c = bg.elements.sympify(c, f"Rvisc '{name}' coefficient")
+
+    def preferred_causality(self, port):
+        return True
+
+    def equations(self, ports, eqs):
+        p = ports["p"]
+        if p.sets_effort:
+            p.set_effort(self.c * p.f_in)
+        else:
+            p.set_flow_in(p.e / self.c)
+
+
+def oscillator(m=0.01, k=400.0, c=0.05, q0=None):
+    """Mass, spring, ViscousDamper driven by a force; with ``q0`` the spring saturates as
+    k·q0·tanh(q/q0) (a softening that is not the candidates' cubic law)."""
+    g = bg.Model("newkind")
+    F = g.input("F", "N")
+    K = g.parameter("k", k)
+    spring = bg.C("k", 1 / K) if q0 is None else bg.C("k", law=lambda q: K * q0 * sp.tanh(q / q0))
+    g.add(bg.Se("force", F), bg.J1("v"), bg.I("m", g.parameter("m", m)), spring,
+          ViscousDamper("d", g.parameter("c", c)))
+    g.bond("force", "v")
+    for e in ("m", "k", "d"):
+        g.bond("v", e)
+    g.tag("k", "stiffness")
+    g.tag("d", "damping")
+    g.tag("m", "inertia")
+    g.output("x", g.displacement("k"), "m")
+    return g
+
+
+@pytest.mark.parametrize("q0, cause", [(None, []), (0.006, ["softening"])])
+def test_diagnosis_on_a_model_with_a_new_kind(q0, cause):
+    """Data from the oscillator with other linear parameters (and a saturating spring or not),
+    diagnosed with the softening candidates: none on the effect-free record, softening on the other."""
+    from bondgraph.data import Dataset
+    from bondgraph.diagnosis import diagnose, load_candidates
+
+    t = np.linspace(0, 2, 4001)
+    res = bg.simulate(oscillator(k=440.0, c=0.06, q0=q0), t, {"F": bg.Chirp(0.3, 5.0, 60.0, 2.0)}, rtol=1e-9)
+    noise = 1e-3 * np.std(res["x"]) * np.random.default_rng(0).standard_normal(t.size)
+    data = Dataset(t, {"F": res["F"], "x": res["x"] + noise})
+    report = diagnose(oscillator(), data, workers=1,
+                      candidates=[c for c in load_candidates() if c.cause == "softening"])
+    assert report.causes == cause
+
