@@ -95,7 +95,8 @@ class Lure:
                     Y = {o: ss[(self.inputs[1 + j], o)].response(self.dt, w[j])[:, 0] for o in self.outputs}
                     for o in self.outputs:
                         resp[o] += Y[o]
-            new = [phi(k, resp[x_names[k]], resp[a_names[k]] if k in a_names else None) for k in range(self.n)]
+            with np.errstate(over="ignore", invalid="ignore"):
+                new = [phi(k, resp[x_names[k]], resp[a_names[k]] if k in a_names else None) for k in range(self.n)]
             if not all(np.all(np.isfinite(v)) for v in new):
                 raise NotConverged("the iteration diverged")
             change = max(float(np.max(np.abs(a - b))) for a, b in zip(new, w)) if self.n else 0.0
