@@ -163,7 +163,7 @@ def t226_truth(effect: str, changes: dict = T226_CHANGES) -> bg.Model:
         g.set_rate("bw.z", 0.35 * (Vdot - 0.5 * sp.Abs(Vdot) * zb - 0.5 * Vdot * sp.Abs(zb)))
         drive = 0.8 * V + 0.5 * zb
     g.add(Se("force", mp * drive), J1("mode"), I("mass", 1))
-    if effect == "softening":  # seed 001's cubic and quintic modal stiffness
+    if effect == "softening":  # Shahabi et al. (2019)'s cubic and quintic modal stiffness
         g.add(C("spring", energy=lambda q: w ** 2 * q ** 2 / 2 - 6.94e17 * q ** 4 / 4 + 1.443e28 * q ** 6 / 6))
     else:
         g.add(C("spring", 1 / w ** 2))
