@@ -48,6 +48,46 @@ def _virgin_plays(v0: float, r: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.maximum(v0 - r, np.minimum(v0 + r, 0.0)), dtype=np.float64)
 
 
+# ---- kernel helpers (plain functions: compiled with the kernels that call them) -----------------
+def _frozen_pi_sum(v, mem, prm, n):
+    """sum_i w_i max(v - r_i, min(v + r_i, h_i)) with the plays h = mem[:n] frozen."""
+    x = 0.0
+    for i in range(n):
+        x += prm[n + i] * max(v - prm[i], min(v + prm[i], mem[i]))
+    return x
+
+
+def _advance_plays(v, mem, prm, n):
+    """Advance the plays mem[:n] to input v; returns their weighted sum (the PI sum)."""
+    x = 0.0
+    for i in range(n):
+        mem[i] = max(v - prm[i], min(v + prm[i], mem[i]))
+        x += prm[n + i] * mem[i]
+    return x
+
+
+def _dead_zone_sum(x, prm, n, m):
+    """sum_j ws_j S_{d_j}(x): S_d(x) = max(0, x - d) for d > 0, min(0, x - d) for d < 0, x for d = 0."""
+    y = 0.0
+    for j in range(m):
+        d = prm[2 * n + j]
+        if d > 0.0:
+            y += prm[2 * n + m + j] * max(0.0, x - d)
+        elif d < 0.0:
+            y += prm[2 * n + m + j] * min(0.0, x - d)
+        else:
+            y += prm[2 * n + m + j] * x
+    return y
+
+
+def _branch_gain(u, prm, n, m):
+    """g(u) = sum_j ws_j max(0, u - d_j): the relative dead-zone stage along a branch."""
+    g = 0.0
+    for j in range(m):
+        g += prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+    return g
+
+
 def _indexed(stem: str, n: int) -> tuple[str, ...]:
     return tuple(f"{stem}{i}" for i in range(1, n + 1))
 
@@ -77,7 +117,8 @@ class _PlayBank(MemoryOperator):
 
     @staticmethod
     def commit(v, mem, prm):
-        """Advance every play to input ``v``: h_i = max(v - r_i, min(v + r_i, h_i))."""
+        """Advance every play to input ``v``: h_i = max(v - r_i, min(v + r_i, h_i)) (reads only
+        the thresholds, so :func:`play_outputs` uses it with prm = r)."""
         for i in range(len(mem)):
             mem[i] = max(v - prm[i], min(v + prm[i], mem[i]))
 
@@ -94,11 +135,7 @@ class PrandtlIshlinskii(_PlayBank):
     @staticmethod
     def output(v, mem, prm):
         """y = sum_i w_i max(v - r_i, min(v + r_i, h_i)) with the plays h frozen."""
-        n = len(mem)
-        y = 0.0
-        for i in range(n):
-            y += prm[n + i] * max(v - prm[i], min(v + prm[i], mem[i]))
-        return y
+        return _frozen_pi_sum(v, mem, prm, len(mem))
 
     def small_signal_gain(self, prm: np.ndarray) -> float:
         """Slope right after a reversal: the sum of the weights of the r = 0 plays."""
@@ -215,21 +252,7 @@ class ModifiedPI(_DeadZonePI):
     def output(v, mem, prm):
         """Dead-zone superposition of the PI sum, with the plays h frozen."""
         n = len(mem)
-        m = (len(prm) - 2 * n) // 2
-        x = 0.0
-        for i in range(n):
-            x += prm[n + i] * max(v - prm[i], min(v + prm[i], mem[i]))
-        y = 0.0
-        for j in range(m):
-            d = prm[2 * n + j]
-            if d > 0.0:
-                s = max(0.0, x - d)
-            elif d < 0.0:
-                s = min(0.0, x - d)
-            else:
-                s = x
-            y += prm[2 * n + m + j] * s
-        return y
+        return _dead_zone_sum(_frozen_pi_sum(v, mem, prm, n), prm, n, (len(prm) - 2 * n) // 2)
 
     def inverse(self) -> "InverseModifiedPI":
         """The exact inverse: the inverse dead-zone map (static, both sides by Kuhnen's formula)
@@ -253,53 +276,20 @@ class InverseModifiedPI(_DeadZonePI):
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         """Plays at rest after a monotone approach from 0 to the mapped input x(v0)."""
         n = self.n_memory
-        return _virgin_plays(_dead_zone_map(v0, prm, n), np.asarray(prm[:n], dtype=np.float64))
+        x0 = _dead_zone_sum(float(v0), prm, n, (len(prm) - 2 * n) // 2)
+        return _virgin_plays(x0, np.asarray(prm[:n], dtype=np.float64))
 
     @staticmethod
     def output(v, mem, prm):
         """Static dead-zone map of the input, then the PI sum with the plays h frozen."""
         n = len(mem)
-        m = (len(prm) - 2 * n) // 2
-        x = 0.0
-        for j in range(m):
-            d = prm[2 * n + j]
-            if d > 0.0:
-                s = max(0.0, v - d)
-            elif d < 0.0:
-                s = min(0.0, v - d)
-            else:
-                s = v
-            x += prm[2 * n + m + j] * s
-        y = 0.0
-        for i in range(n):
-            y += prm[n + i] * max(x - prm[i], min(x + prm[i], mem[i]))
-        return y
+        return _frozen_pi_sum(_dead_zone_sum(v, prm, n, (len(prm) - 2 * n) // 2), mem, prm, n)
 
     @staticmethod
     def commit(v, mem, prm):
         """Advance the plays to the mapped input x(v)."""
         n = len(mem)
-        m = (len(prm) - 2 * n) // 2
-        x = 0.0
-        for j in range(m):
-            d = prm[2 * n + j]
-            if d > 0.0:
-                s = max(0.0, v - d)
-            elif d < 0.0:
-                s = min(0.0, v - d)
-            else:
-                s = v
-            x += prm[2 * n + m + j] * s
-        for i in range(n):
-            mem[i] = max(x - prm[i], min(x + prm[i], mem[i]))
-
-
-def _dead_zone_map(v: float, prm: np.ndarray, n: int) -> float:
-    """sum_j ws_j S_{d_j}(v) for the dead-zone part of a prm vector with n plays."""
-    m = (prm.size - 2 * n) // 2
-    d, ws = prm[2 * n:2 * n + m], prm[2 * n + m:2 * n + 2 * m]
-    s = np.where(d > 0.0, np.maximum(0.0, v - d), np.where(d < 0.0, np.minimum(0.0, v - d), v))
-    return float(ws @ s)
+        _advance_plays(_dead_zone_sum(v, prm, n, (len(prm) - 2 * n) // 2), mem, prm, n)
 
 
 class RelativeModifiedPI(_DeadZonePI):
@@ -336,9 +326,7 @@ class RelativeModifiedPI(_DeadZonePI):
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         n = self.thresholds.size
         h = _virgin_plays(v0, np.asarray(prm[:n], dtype=np.float64))
-        x0 = 0.0
-        for i in range(n):   # summed in the kernels' order: a rounding difference would read as a reversal
-            x0 += float(prm[n + i]) * float(h[i])
+        x0 = _frozen_pi_sum(v0, h, prm, n)   # as the kernels sum it: a last-bit difference would be a reversal
         return np.r_[h, 0.0, 0.0, 1.0 if x0 >= 0.0 else -1.0, x0]
 
     @staticmethod
@@ -346,36 +334,23 @@ class RelativeModifiedPI(_DeadZonePI):
         """y on the current branch (or on the new one if x turned back), plays frozen."""
         n = len(mem) - 4
         m = (len(prm) - 2 * n) // 2
-        x = 0.0
-        for i in range(n):
-            x += prm[n + i] * max(v - prm[i], min(v + prm[i], mem[i]))
+        x = _frozen_pi_sum(v, mem, prm, n)
         x_r, y_r, s = mem[n], mem[n + 1], mem[n + 2]
         if s * (x - mem[n + 3]) < 0.0:   # turned back: a reversal at the last accepted point
-            u = s * (mem[n + 3] - x_r)
-            for j in range(m):
-                y_r += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+            y_r += s * _branch_gain(s * (mem[n + 3] - x_r), prm, n, m)
             x_r = mem[n + 3]
             s = -s
-        u = s * (x - x_r)
-        y = y_r
-        for j in range(m):
-            y += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
-        return y
+        return y_r + s * _branch_gain(s * (x - x_r), prm, n, m)
 
     @staticmethod
     def commit(v, mem, prm):
         """Advance the plays; on a reversal of the PI sum start a new branch at the last point."""
         n = len(mem) - 4
         m = (len(prm) - 2 * n) // 2
-        x = 0.0
-        for i in range(n):
-            mem[i] = max(v - prm[i], min(v + prm[i], mem[i]))
-            x += prm[n + i] * mem[i]
+        x = _advance_plays(v, mem, prm, n)
         s = mem[n + 2]
         if s * (x - mem[n + 3]) < 0.0:
-            u = s * (mem[n + 3] - mem[n])
-            for j in range(m):
-                mem[n + 1] += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+            mem[n + 1] += s * _branch_gain(s * (mem[n + 3] - mem[n]), prm, n, m)
             mem[n] = mem[n + 3]
             mem[n + 2] = -s
         mem[n + 3] = x
@@ -411,8 +386,7 @@ class InverseRelativeModifiedPI(_DeadZonePI):
         n = self.thresholds.size
         m = self.deadzones.size
         s = 1.0 if v0 >= 0.0 else -1.0
-        d, ws = prm[2 * n:2 * n + m], prm[2 * n + m:2 * n + 2 * m]
-        x0 = s * float(ws @ np.maximum(0.0, abs(v0) - d))
+        x0 = s * _branch_gain(abs(v0), prm, n, m)
         return np.r_[_virgin_plays(x0, np.asarray(prm[:n], dtype=np.float64)), 0.0, 0.0, s, v0]
 
     @staticmethod
@@ -422,19 +396,10 @@ class InverseRelativeModifiedPI(_DeadZonePI):
         m = (len(prm) - 2 * n) // 2
         v_r, x_r, s = mem[n], mem[n + 1], mem[n + 2]
         if s * (v - mem[n + 3]) < 0.0:
-            u = s * (mem[n + 3] - v_r)
-            for j in range(m):
-                x_r += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+            x_r += s * _branch_gain(s * (mem[n + 3] - v_r), prm, n, m)
             v_r = mem[n + 3]
             s = -s
-        u = s * (v - v_r)
-        x = x_r
-        for j in range(m):
-            x += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
-        y = 0.0
-        for i in range(n):
-            y += prm[n + i] * max(x - prm[i], min(x + prm[i], mem[i]))
-        return y
+        return _frozen_pi_sum(x_r + s * _branch_gain(s * (v - v_r), prm, n, m), mem, prm, n)
 
     @staticmethod
     def commit(v, mem, prm):
@@ -443,18 +408,11 @@ class InverseRelativeModifiedPI(_DeadZonePI):
         m = (len(prm) - 2 * n) // 2
         s = mem[n + 2]
         if s * (v - mem[n + 3]) < 0.0:
-            u = s * (mem[n + 3] - mem[n])
-            for j in range(m):
-                mem[n + 1] += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
+            mem[n + 1] += s * _branch_gain(s * (mem[n + 3] - mem[n]), prm, n, m)
             mem[n] = mem[n + 3]
             s = -s
             mem[n + 2] = s
-        u = s * (v - mem[n])
-        x = mem[n + 1]
-        for j in range(m):
-            x += s * prm[2 * n + m + j] * max(0.0, u - prm[2 * n + j])
-        for i in range(n):
-            mem[i] = max(x - prm[i], min(x + prm[i], mem[i]))
+        _advance_plays(mem[n + 1] + s * _branch_gain(s * (v - mem[n]), prm, n, m), mem, prm, n)
         mem[n + 3] = v
 
 
