@@ -75,6 +75,12 @@ def test_data_check_example_flags_micrometres():
     assert not mod.displacement_in_metres(Dataset([0.0, 1.0], {"x": [0.0, 12e-6]}))
 
 
+def test_command_page_lists_every_command():
+    from bondgraph.cli.registry import COMMANDS   # filled when bondgraph.cli is imported (above)
+    text = (DOCS / "command-line.md").read_text()
+    assert COMMANDS and all(re.search(rf"^\| `{name}[ `]", text, re.M) for name in COMMANDS), sorted(COMMANDS)
+
+
 def test_settings_page_lists_the_framework_settings():
     page = (DOCS / "settings.md").read_text()
     for name in config.DEFAULTS:
