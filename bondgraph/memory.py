@@ -25,7 +25,7 @@ already compiled with ``numba.njit`` are used as they are (or recompiled from th
 with their helpers, when numba refuses them); ``output = staticmethod(f)`` and
 ``output = numba.njit(f)`` work too.  A function numba cannot compile is a
 :class:`~bondgraph.errors.ModelError` naming the operator, the function and the rule it broke.
-Subclass :class:`MemoryOperator` to add an operator; see ``library/hysteresis.py`` for the
+Subclass :class:`MemoryOperator` to add an operator; see ``library/hysteresis/`` for the
 play/stop (Prandtl–Ishlinskii) and Maxwell-slip banks.
 """
 from __future__ import annotations

@@ -221,7 +221,7 @@ def pi_operator(thresholds: Sequence[float], weights: Sequence[float]):
     try:
         from library.hysteresis import PrandtlIshlinskii
     except ImportError as exc:  # the hysteresis library is optional for the linear models
-        raise ModelError("PI hysteresis needs library/hysteresis.py (PrandtlIshlinskii), which is not "
+        raise ModelError("PI hysteresis needs library/hysteresis/ (PrandtlIshlinskii), which is not "
                          f"available: {exc}") from None
     return PrandtlIshlinskii(np.asarray(thresholds, float), np.asarray(weights, float))
 

@@ -1,4 +1,4 @@
-"""Hysteresis operators (library/hysteresis.py): operator properties, contracts, inverse, fits."""
+"""Hysteresis operators (library/hysteresis/): operator properties, contracts, inverse, fits."""
 from __future__ import annotations
 
 import math

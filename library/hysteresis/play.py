@@ -1,51 +1,14 @@
-"""Rate-independent hysteresis operators: Prandtl–Ishlinskii (play and stop forms), the modified PI
-(dead zones on the absolute PI sum, eq. 12, or measured from the last reversal, Sec. 5.3) of
-Rodriguez-Fortun, J.M., Orus, J., Buil, F., Castellanos, J.A. "General bond graph model for
-piezoelectric actuators and methodology for experimental identification." Mechatronics 20 (2010)
-303-314, with exact inverses, and the Maxwell-slip model of Wood, R.J., Steltz, E., Fearing, R.S.
-"Nonlinear performance limits for high energy density piezoelectric bending actuators." Proc. IEEE
-ICRA, Barcelona, 2005. The initial-memory convention follows Ghafarirad, H., Rezaei, S.M., Sarhan,
-A.A.D., Zareinejad, M. "Continuous dynamic modelling of bimorph piezoelectric cantilevered
-actuators considering hysteresis effect and dynamic behaviour analysis." Mathematical and
-Computer Modelling of Dynamical Systems 21(2) (2015) 130-152.
-
-Physics-free: every operator maps a scalar input v to an output y. Play/stop thresholds r_i and
-Maxwell-slip yield displacements carry the units of v, dead zones d_j the units of the PI sum,
-weights w_i the units of y per unit of v. Each class is a :class:`MemoryOperator` (pure
-``output``/in-place ``commit`` kernels, parameters in one flat float64 array).
-
-Memory of a play-based operator is the vector of play outputs (for Maxwell slip: the slip
-positions, which are the same thing). Initial memory convention, used throughout (Ghafarirad et al. 2015
-eq. 32 with y_0 = 0): at rest at v0 each play holds the value reached by a monotone approach
-from the demagnetised state v = 0, h_i = max(v0 - r_i, min(v0 + r_i, 0)). With this convention
-the analytic inverse of :meth:`PrandtlIshlinskii.inverse` is exact from rest: the monotone
-approach 0 -> v0 maps onto the monotone approach 0 -> H[v0] of the inverse operator.
-"""
+"""Play-based operators: Prandtl–Ishlinskii (play and stop forms) and the modified PI with dead
+zones on the absolute PI sum or measured from the last reversal, with their exact inverses.
+Kernels and the helpers they call live in this one file (numba caches a kernel only when all
+its helpers share its file)."""
 from __future__ import annotations
 
-import numba
 import numpy as np
-from scipy.optimize import nnls
 
-from bondgraph import MemoryOperator, ParameterError
+from bondgraph import ParameterError
 
-
-def _vector(name: str, values, n: int | None = None, nonneg: bool = False) -> np.ndarray:
-    """A read-only 1-D finite float64 copy of ``values`` (optionally of length n, >= 0)."""
-    a = np.array(values, dtype=np.float64).ravel()
-    if a.size == 0 or not np.all(np.isfinite(a)):
-        raise ParameterError(f"{name} must be a non-empty sequence of finite numbers")
-    if n is not None and a.size != n:
-        raise ParameterError(f"{name} has {a.size} entries, expected {n}")
-    if nonneg and np.any(a < 0):
-        raise ParameterError(f"{name} must be >= 0")
-    a.flags.writeable = False
-    return a
-
-
-def _virgin_plays(v0: float, r: np.ndarray) -> np.ndarray:
-    """Play outputs after a monotone approach from 0 to v0 (the initial-memory convention)."""
-    return np.ascontiguousarray(np.maximum(v0 - r, np.minimum(v0 + r, 0.0)), dtype=np.float64)
+from .base import VectorOperator, _indexed, _kuhnen_inverse, _merge_zero, _vector, _virgin_plays
 
 
 # ---- kernel helpers (plain functions: compiled with the kernels that call them) -----------------
@@ -88,28 +51,16 @@ def _branch_gain(u, prm, n, m):
     return g
 
 
-def _indexed(stem: str, n: int) -> tuple[str, ...]:
-    return tuple(f"{stem}{i}" for i in range(1, n + 1))
-
-
-class _PlayBank(MemoryOperator):
+class _PlayBank(VectorOperator):
     """Shared part of the play-based operators: n plays, prm = [r_1..r_n, w_1..w_n, ...]."""
+
+    vectors = ("thresholds", "weights")
 
     def __init__(self, thresholds, weights):
         self.thresholds = _vector("thresholds", thresholds, nonneg=True)
         self.weights = _vector("weights", weights, self.thresholds.size)
         n = self.thresholds.size
         self.parameter_names = _indexed("r", n) + _indexed("w", n)
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.thresholds.tolist()}, {self.weights.tolist()})"
-
-    def parameter_values(self) -> np.ndarray:
-        return np.concatenate([self.thresholds, self.weights])
-
-    @property
-    def n_memory(self) -> int:
-        return self.thresholds.size
 
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         """Play outputs at rest at ``v0`` (monotone approach from 0), units of v."""
@@ -177,34 +128,11 @@ class PIStop(_PlayBank):
         return float(np.sum(prm[n:2 * n][prm[:n] > 0.0]))
 
 
-def _kuhnen_inverse(r: np.ndarray, w: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """Thresholds and weights of the inverse of a superposition y = sum_i w_i F_{r_i} of plays
-    (F = H_r) or one-sided dead zones (F = max(0, . - r)), Kuhnen's formula: with the terms
-    sorted by r (r_1 = 0) and partial sums W_i = w_1 + .. + w_i,
-    r'_i = sum_{j<=i} w_j (r_i - r_j),  w'_1 = 1/w_1,  w'_i = -w_i / (W_i W_{i-1}).
-    Requires r_1 = 0 and every W_i > 0 (a strictly increasing loading curve)."""
-    order = np.argsort(r, kind="stable")
-    r, w = r[order], w[order]
-    big_w = np.cumsum(w)
-    if r[0] != 0.0 or np.any(big_w <= 0.0):
-        raise ParameterError(
-            f"{what} inverse needs a term with threshold 0 and positive partial weight sums "
-            "(sorted by threshold); the loading curve is not strictly increasing")
-    w_inv = np.empty_like(w)
-    w_inv[0] = 1.0 / w[0]
-    w_inv[1:] = -w[1:] / (big_w[1:] * big_w[:-1])
-    return big_w * r - np.cumsum(w * r), w_inv
-
-
-def _merge_zero(d: np.ndarray, ws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One d = 0 term holding the summed weight of all d = 0 terms (first), the others after."""
-    zero = d == 0.0
-    return np.r_[0.0, d[~zero]], np.r_[np.sum(ws[zero]), ws[~zero]]
-
-
 class _DeadZonePI(_PlayBank):
     """Shared parameters of a PI stage and a dead-zone stage: prm = [r_1..r_n, w_1..w_n,
     d_1..d_m, ws_1..ws_m]; S_d(x) = max(0, x - d) for d > 0, min(0, x - d) for d < 0, x for d = 0."""
+
+    vectors = ("thresholds", "weights", "deadzones", "dz_weights")
 
     def __init__(self, thresholds, weights, deadzones, dz_weights):
         super().__init__(thresholds, weights)
@@ -212,13 +140,6 @@ class _DeadZonePI(_PlayBank):
         self.dz_weights = _vector("dz_weights", dz_weights, self.deadzones.size)
         m = self.deadzones.size
         self.parameter_names += _indexed("d", m) + _indexed("ws", m)
-
-    def __repr__(self) -> str:
-        return (f"{type(self).__name__}({self.thresholds.tolist()}, {self.weights.tolist()}, "
-                f"{self.deadzones.tolist()}, {self.dz_weights.tolist()})")
-
-    def parameter_values(self) -> np.ndarray:
-        return np.concatenate([self.thresholds, self.weights, self.deadzones, self.dz_weights])
 
     def _zero_gains(self, prm: np.ndarray) -> tuple[float, float]:
         """(sum of w over r = 0, sum of ws over d = 0): the slopes of both stages after a reversal."""
@@ -292,7 +213,21 @@ class InverseModifiedPI(_DeadZonePI):
         _advance_plays(_dead_zone_sum(v, prm, n, (len(prm) - 2 * n) // 2), mem, prm, n)
 
 
-class RelativeModifiedPI(_DeadZonePI):
+class _RelativeDeadZones(_DeadZonePI):
+    """Dead zones measured from the last reversal (d_j >= 0); memory = the n plays and the
+    branch state [start of the stage's input, start of its output, direction, last input]."""
+
+    def __init__(self, thresholds, weights, deadzones, dz_weights):
+        super().__init__(thresholds, weights, deadzones, dz_weights)
+        if np.any(self.deadzones < 0.0):
+            raise ParameterError("relative dead zones are distances from the last reversal: d_j >= 0")
+
+    @property
+    def n_memory(self) -> int:
+        return self.thresholds.size + 4
+
+
+class RelativeModifiedPI(_RelativeDeadZones):
     """Modified PI with the dead zones measured from the last reversal (Rodriguez-Fortun et al.
     2010, Sec. 5.3 and Fig. 20: "d_j are relative values with respect to the change of direction
     value ... so that the shape of the loop depends on the amplitude of the signal and not on its
@@ -313,15 +248,6 @@ class RelativeModifiedPI(_DeadZonePI):
     """
 
     kind = "modified_pi_relative"
-
-    def __init__(self, thresholds, weights, deadzones, dz_weights):
-        super().__init__(thresholds, weights, deadzones, dz_weights)
-        if np.any(self.deadzones < 0.0):
-            raise ParameterError("relative dead zones are distances from the last reversal: d_j >= 0")
-
-    @property
-    def n_memory(self) -> int:
-        return self.thresholds.size + 4
 
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         n = self.thresholds.size
@@ -364,7 +290,7 @@ class RelativeModifiedPI(_DeadZonePI):
         return InverseRelativeModifiedPI(pi.thresholds, pi.weights, d_inv, ws_inv)
 
 
-class InverseRelativeModifiedPI(_DeadZonePI):
+class InverseRelativeModifiedPI(_RelativeDeadZones):
     """Inverse of :class:`RelativeModifiedPI`: the relative dead-zone stage acts on the input
     first, x = x_r + s g(s (v - v_r)) with reversals of v, then the PI sum sum_i w_i H_i[x].
 
@@ -372,15 +298,6 @@ class InverseRelativeModifiedPI(_DeadZonePI):
     :meth:`RelativeModifiedPI.inverse`); memory = [h_1..h_n, v_r, x_r, s, v_last]."""
 
     kind = "modified_pi_relative_inverse"
-
-    def __init__(self, thresholds, weights, deadzones, dz_weights):
-        super().__init__(thresholds, weights, deadzones, dz_weights)
-        if np.any(self.deadzones < 0.0):
-            raise ParameterError("relative dead zones are distances from the last reversal: d_j >= 0")
-
-    @property
-    def n_memory(self) -> int:
-        return self.thresholds.size + 4
 
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         n = self.thresholds.size
@@ -414,150 +331,3 @@ class InverseRelativeModifiedPI(_DeadZonePI):
             mem[n + 2] = s
         _advance_plays(mem[n + 1] + s * _branch_gain(s * (v - mem[n]), prm, n, m), mem, prm, n)
         mem[n + 3] = v
-
-
-class MaxwellSlip(MemoryOperator):
-    """Maxwell slip (Wood, Steltz & Fearing 2005): n parallel branches, spring k_i in series with a Coulomb slip
-    element of break-away force f_i. Input displacement delta, output force
-    F = sum_i k_i (delta - delta_i); branch i sticks while |k_i (delta - delta_i)| < f_i.
-
-    ``stiffnesses`` k_i > 0 (units of y/v), ``breakaway_forces`` f_i >= 0 (units of y);
-    prm = [k_1..k_n, f_1..f_n]; memory = slip positions delta_i (units of v), which are the play
-    outputs of thresholds f_i/k_i (see :meth:`to_pi_stop`).
-    """
-
-    kind = "maxwell_slip"
-
-    def __init__(self, stiffnesses, breakaway_forces):
-        self.stiffnesses = _vector("stiffnesses", stiffnesses)
-        if np.any(self.stiffnesses <= 0):
-            raise ParameterError("stiffnesses must be > 0")
-        self.breakaway_forces = _vector("breakaway_forces", breakaway_forces,
-                                        self.stiffnesses.size, nonneg=True)
-        n = self.stiffnesses.size
-        self.parameter_names = _indexed("k", n) + _indexed("f", n)
-
-    def __repr__(self) -> str:
-        return f"MaxwellSlip({self.stiffnesses.tolist()}, {self.breakaway_forces.tolist()})"
-
-    def parameter_values(self) -> np.ndarray:
-        return np.concatenate([self.stiffnesses, self.breakaway_forces])
-
-    @property
-    def n_memory(self) -> int:
-        return self.stiffnesses.size
-
-    def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
-        """Slip positions at rest at ``v0`` after a monotone approach from 0, units of v."""
-        n = self.n_memory
-        return _virgin_plays(v0, prm[n:2 * n] / prm[:n])
-
-    @staticmethod
-    def output(v, mem, prm):
-        """F = sum_i clip(k_i (v - delta_i), -f_i, f_i) with the slip positions frozen."""
-        n = len(mem)
-        y = 0.0
-        for i in range(n):
-            y += max(-prm[n + i], min(prm[n + i], prm[i] * (v - mem[i])))
-        return y
-
-    @staticmethod
-    def commit(v, mem, prm):
-        """Slip every branch whose spring force would exceed its break-away force."""
-        n = len(mem)
-        for i in range(n):
-            r = prm[n + i] / prm[i]
-            mem[i] = max(v - r, min(v + r, mem[i]))
-
-    def small_signal_gain(self, prm: np.ndarray) -> float:
-        """Slope right after a reversal: the sum of k_i over branches with f_i > 0."""
-        n = self.n_memory
-        return float(np.sum(prm[:n][prm[n:2 * n] > 0.0]))
-
-    def to_pi_stop(self) -> PIStop:
-        """The equal stop-form PI operator: r_i = f_i / k_i, w_i = k_i."""
-        return PIStop(self.breakaway_forces / self.stiffnesses, self.stiffnesses)
-
-
-# --- identification -----------------------------------------------------------------------
-
-_commit_plays = numba.njit(cache=True)(_PlayBank.commit)
-
-
-@numba.njit(cache=True)
-def _play_matrix(v, r, h):
-    out = np.empty((v.size, r.size))
-    for k in range(v.size):
-        _commit_plays(v[k], h, r)
-        out[k, :] = h
-    return out
-
-
-def play_outputs(v, thresholds) -> np.ndarray:
-    """Outputs of plays with the given thresholds for a sampled input, from rest at v[0].
-
-    Returns an (n_samples, n_plays) array in units of v (initial-memory convention of the module).
-    """
-    v = np.ascontiguousarray(v, dtype=np.float64).ravel()
-    r = np.ascontiguousarray(_vector("thresholds", thresholds, nonneg=True))
-    if v.size == 0:
-        raise ParameterError("input sequence is empty")
-    return _play_matrix(v, r, _virgin_plays(v[0], r))
-
-
-def threshold_grid(v, n: int) -> np.ndarray:
-    """n equally spaced thresholds 0, R/n, ..., (n-1)R/n with R = (max v - min v)/2, units of v.
-
-    A play only opens a loop when the input swings by more than 2r, so R is the largest useful
-    threshold (Rodriguez-Fortun et al. 2010: r_i = P_i / 2 over the input range).
-    """
-    v = np.asarray(v, dtype=np.float64)
-    return np.linspace(0.0, 0.5 * float(np.ptp(v)), int(n), endpoint=False)
-
-
-def fit_pi_weights(v, y, thresholds, offset: bool = False):
-    """Non-negative least-squares PI weights w (units of y/v) for y ~ sum_i w_i H_{r_i}[v].
-
-    The r = 0 play is v itself, so a threshold 0 gives the linear term. With ``offset`` an
-    additive constant c (units of y, either sign) is fitted too and ``(w, c)`` is returned.
-    Columns are scaled internally so NNLS is insensitive to the units of v and y.
-    """
-    a = play_outputs(v, thresholds)
-    y = np.asarray(y, dtype=np.float64).ravel()
-    if y.size != a.shape[0]:
-        raise ParameterError(f"y has {y.size} samples, v has {a.shape[0]}")
-    n = a.shape[1]
-    if offset:
-        a = np.hstack([a, np.ones((a.shape[0], 1)), -np.ones((a.shape[0], 1))])
-    scale = np.max(np.abs(a), axis=0)
-    scale[scale == 0.0] = 1.0
-    y_scale = max(float(np.max(np.abs(y))), np.finfo(float).tiny)
-    sol = nnls(a / scale, y / y_scale, maxiter=50 * a.shape[1])[0] / scale * y_scale
-    if offset:
-        return sol[:n], float(sol[n] - sol[n + 1])
-    return sol[:n]
-
-
-@numba.njit(cache=True)
-def _bouc_wen_path(v, beta, gamma, n, z0, out):
-    z = z0
-    out[0] = z
-    for k in range(1, v.shape[0]):
-        dv = v[k] - v[k - 1]
-        # sub-steps keep each explicit update small against the loop's curvature
-        m = 1 + int(abs(dv) * (abs(beta) + abs(gamma) + 1.0) * 8.0)
-        h = dv / m
-        for _ in range(m):
-            az = abs(z)
-            z += h - beta * abs(h) * az ** (n - 1.0) * z - gamma * h * az ** n
-        out[k] = z
-
-
-def bouc_wen_response(v, beta: float, gamma: float, n: float, z0: float = 0.0) -> np.ndarray:
-    """Bouc–Wen variable z along a sampled input path (rate independent):
-    dz = dv − β·|dv|·|z|^(n−1)·z − γ·dv·|z|^n, from z0 (units of v; z saturates near
-    (β + γ)^(−1/n)).  For identification: z depends on the path only, not on time."""
-    v = np.ascontiguousarray(v, dtype=np.float64)
-    out = np.empty_like(v)
-    _bouc_wen_path(v, float(beta), float(gamma), float(n), float(z0), out)
-    return out
