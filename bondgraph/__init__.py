@@ -30,7 +30,7 @@ _EXPORTS = {
     "Parameter": "parameters",
     "Chirp": "signals", "Constant": "signals", "PiecewiseLinear": "signals", "Ramp": "signals",
     "Signal": "signals", "Sine": "signals", "Step": "signals", "Triangle": "signals",
-    "Experiment": "simulate", "SimResult": "simulate", "Simulator": "simulate", "simulate": "simulate",
+    "Experiment": "experiment", "SimResult": "simulate", "Simulator": "simulate", "simulate": "simulate",
 }
 
 __all__ = list(_EXPORTS)

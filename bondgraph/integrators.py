@@ -28,9 +28,7 @@ from scipy.integrate import RK45
 from .model_functions import FUNCTION_TYPE
 
 
-#: signal kinds (see bondgraph.signals) and the length of a signal's parameter row
-CONST, STEP, RAMP, SINE, CHIRP, TRIANGLE, PWL = range(7)
-NPAR = 6
+from .signals import CHIRP, CONST, PWL, RAMP, SINE, STEP  # signal kinds (the last, TRIANGLE, is the else branch)
 
 
 @njit(cache=True, inline="always")

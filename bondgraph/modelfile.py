@@ -23,7 +23,7 @@ from typing import Any, Mapping
 from .errors import BondGraphError, ModelError, ParameterError, UsageError, did_you_mean
 from .graph import Model
 from .parameters import Parameter, ParameterValues
-from .simulate import Experiment
+from .experiment import Experiment
 
 
 @dataclass

@@ -24,7 +24,11 @@ from typing import Mapping, NamedTuple
 import numpy as np
 
 from .errors import SignalError
-from .integrators import CHIRP, CONST, NPAR, PWL, RAMP, SINE, STEP, TRIANGLE, sample_inputs
+
+#: signal kinds (the compiled integrator, bondgraph.integrators, switches on them) and the
+#: length of a signal's parameter row
+CONST, STEP, RAMP, SINE, CHIRP, TRIANGLE, PWL = range(7)
+NPAR = 6
 
 
 
@@ -168,6 +172,7 @@ class SignalBank:
         t = np.atleast_1d(np.asarray(t, float))
         out = np.zeros((t.size, len(self.names)))
         if self.names:
+            from .integrators import sample_inputs   # numba, imported when a signal is first sampled
             sample_inputs(t, *self.args(), out)
         return out
 
