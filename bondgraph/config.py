@@ -70,6 +70,8 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.reference_poles": Default(6, "real poles of the flexible linear reference, spread over the record's "
                                             "time scales"),
     "diagnosis.max_chain": Default(3, "most causes named in one diagnosis (compound effects)"),
+    "diagnosis.check_max_steps": Default(2_000_000, "integrator steps allowed to the second route (the extended "
+                                         "model integrated as a check); beyond, the check is skipped"),
     "diagnosis.max_fit_points": Default(20000, "samples of the fit part used by the optimisers (evenly thinned)"),
 }
 

@@ -168,15 +168,18 @@ class Identification:
         return Identification(model, self.data, **args)
 
     # ---- simulation and scores ---------------------------------------------------------------
-    def predict(self, values: Mapping[str, float] | None = None, inputs=None) -> np.ndarray:
+    def predict(self, values: Mapping[str, float] | None = None, inputs=None,
+                drive: np.ndarray | None = None) -> np.ndarray:
         """Model output at every data time, without offset (exact LTI recursion when the model
         is linear and the data uniformly sampled, with the modes faster than ``cut``
-        residualised, from rest; else the compiled integrator)."""
+        residualised, from rest; else the compiled integrator).  ``drive``: other input samples
+        for the exact route (one per data time, units of the input)."""
         self.nfev += 1
         if self.lti is not None and not inputs:
             th = self.sim.theta(values)
             ss = self.lti.state_space(th, self.cut)
-            return ss.response(self.dt, self.u, None if ss.fast else self.sim.initial_state(th))[:, 0]
+            u = self.u if drive is None else np.asarray(drive, float)
+            return ss.response(self.dt, u, None if ss.fast else self.sim.initial_state(th))[:, 0]
         res = self.sim.run(self.t, {self.input: self.signal, **(inputs or {})}, params=values,
                            rtol=self.rtol, method=self.method)
         return res.outputs[self.output]

@@ -84,7 +84,7 @@ def test_command_page_lists_every_command():
 def test_settings_page_lists_the_framework_settings():
     page = (DOCS / "settings.md").read_text()
     for name in config.DEFAULTS:
-        if name.split(".")[0] in ("simulate", "causality", "codegen", "data"):
+        if name.split(".")[0] in ("simulate", "causality", "codegen", "data", "diagnosis"):
             assert f"`{name}`" in page, name
 
 

@@ -209,12 +209,14 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
 
 
 def _integrated(ctx: Context, model: Model, state: State) -> float | None:
-    """Validation RMS of the extended bond graph integrated by the compiled solver (second route)."""
+    """Validation RMS of the extended bond graph integrated by the compiled solver (second route);
+    None when it fails or needs more than ``diagnosis.check_max_steps`` steps (a stiff model)."""
     try:
-        ident = ctx.ident.like(model, rtol=1e-7)
+        ident = ctx.ident.like(model, rtol=1e-7, method="dopri5")
         ident.lti = None
         known = {p.name for p in ident.sim.eqs.params}
-        raw = ident.predict({k: v for k, v in state.values.items() if k in known and k != SENSOR_GAIN})
+        with config.override({"simulate.max_steps": config.get("diagnosis.check_max_steps")}):
+            raw = ident.predict({k: v for k, v in state.values.items() if k in known and k != SENSOR_GAIN})
     except (BondGraphError, SimulationError):
         return None
     return score(ctx, raw)[3]

@@ -92,6 +92,19 @@ class View:
         m.values.update({k: v for k, v in self.values.items() if k in known})
         return m
 
+    @property
+    def on_core(self) -> bool:
+        """True when the current model is a drive transform of its linear core: a structural
+        extension can then extend :meth:`core` and be fitted driven by ``drive``."""
+        return self.drive is not None and not self.structural and self.exact and not self.reduced
+
+    def core(self) -> Model:
+        """A copy of the linear core (the calibrated nominal model) carrying the current values."""
+        m = self._ctx.model.copy()
+        known = m.all_parameters()
+        m.values.update({k: v for k, v in self.values.items() if k in known})
+        return m
+
     def with_drive(self, model: Model, expr: sp.Expr) -> Model:
         """Make the linear core of ``model`` (the nominal model's elements, states and outputs)
         see ``expr`` where it saw the drive input; the extension's own elements are untouched."""
@@ -242,17 +255,24 @@ class View:
 
     def fit_model(self, model: Model, new: Sequence[Spec], max_nfev: int = 20, refit: bool = True,
                   start: Mapping[str, float] | None = None,
-                  predict: Callable[[Mapping[str, float]], np.ndarray] | None = None):
+                  predict: Callable[[Mapping[str, float]], np.ndarray] | None = None,
+                  drive: np.ndarray | None = None):
         """Fit the new parameters ``new`` of an extended model (and, with ``refit``, the
         calibrated linear ones, from ``start`` or the current values) by variable projection
         over sensor gain and offset; exact linear route when the extended model stays linear,
         else the compiled integrator, or ``predict(values)`` if given (e.g. :meth:`lure`).  A spec
         with lower = upper is held.  Returns (values, raw prediction, success, message, names at
-        a bound)."""
+        a bound).  ``drive``: for an extension of :meth:`core`, the drive it sees (``self.drive``);
+        the output part outside the core (``extra``) is added."""
         if predict is None:
             ident = self.identification(model)
             known = {p.name for p in ident.sim.eqs.params}
             predict = ident.predict
+            if drive is not None and ident.lti is not None:
+                extra = 0.0 if self.extra is None else self.extra
+
+                def predict(values):
+                    return ident.predict(values, drive=drive) + extra
         else:
             known = set(model.all_parameters())
         base = {k: v for k, v in {**self.values, **(start or {})}.items() if k in known}
@@ -281,16 +301,25 @@ class View:
         return (values_of(sol.z), sol.columns[:, 0], sol.success, sol.message, [names[i] for i in sol.at_bounds])
 
     def lure(self, model: Model, elements: Sequence[str], partners: Mapping[str, str | None]):
-        """A :class:`~bondgraph.diagnosis.lure.Lure` system of ``model`` (linear) for nonlinear
-        terms on ``elements``, on this record's grid; None when the model is not linear."""
+        """A :class:`~bondgraph.diagnosis.lure.Lure` system for nonlinear terms on ``elements``,
+        on this record's grid: of the linear core when the current model is a drive transform of
+        it (:attr:`on_core`: e.g. after hysteresis on the drive), else of ``model``.  Its
+        ``drive`` is the series to feed it and ``extra`` the output part outside it (or None);
+        None when that model is not linear."""
         from ..errors import BondGraphError
         from .lure import Lure
         if not self.exact or self.reduced:
             return None
         try:
-            return Lure(model, self.input, self.output, elements, partners, self._ctx.dt)
+            if self.on_core:
+                lure = Lure(self.core(), self.input, self.output, elements, partners, self._ctx.dt)
+                lure.drive, lure.extra = np.asarray(self.drive), self.extra
+            else:
+                lure = Lure(model, self.input, self.output, elements, partners, self._ctx.dt)
+                lure.drive, lure.extra = np.asarray(self.u), None
         except BondGraphError:
             return None
+        return lure
 
     def states(self, values: Mapping[str, float] | None = None) -> dict[str, np.ndarray]:
         """State trajectories (and the output's rate, key ``"output rate"``) of the current

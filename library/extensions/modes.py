@@ -124,9 +124,9 @@ class OutputMode(Candidate):
             return "the inertia's dynamics are faster than the data resolve"
         return True if view.exact else "needs a model linear in its states"
 
-    def build(self, view, omega, zeta, m2):
+    def build(self, view, model, omega, zeta, m2):
+        """``model`` (the current model or its linear core) with the output stage added."""
         el = view.model.with_role("inertia")[0]
-        model = view.rewrite()
         om = model.parameter("om.omega", omega, "rad/s", "natural frequency of the output stage")
         ze = model.parameter("om.zeta", zeta, "", "damping ratio of the output stage")
         m = model.parameter("om.m2", m2, "kg", "mass of the output stage")
@@ -144,18 +144,20 @@ class OutputMode(Candidate):
         el = view.model.with_role("inertia")[0]
         M = 1.0 / slope(view.model, el, view.values)
         best = None
+        on_core = view.on_core   # fitted on the linear core, driven by what it sees (exact route)
         for om in mismatch_peaks(view)[:2]:
             specs = [Spec("om.omega", om, om / 3, om * 3, log=True), Spec("om.zeta", 0.03, 1e-4, 1.0, log=True),
                      Spec("om.m2", 0.2 * M, 1e-3 * M, 10 * M, log=True)]
-            model = self.build(view, om, 0.03, 0.2 * M)
-            values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=20)
+            model = self.build(view, view.core() if on_core else view.rewrite(), om, 0.03, 0.2 * M)
+            values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=20,
+                                                      drive=view.drive if on_core else None)
             rf = view.score(raw)[2]
             if best is None or rf < best[0]:
                 best = (rf, values, raw, ok, msg, at)
         if best is None:
             raise ValueError("no frequency-response mismatch to place a mode at")
         _, values, raw, ok, msg, at = best
-        model = self.build(view, values["om.omega"], values["om.zeta"], values["om.m2"])
+        model = self.build(view, view.rewrite(), values["om.omega"], values["om.zeta"], values["om.m2"])
         new = ["om.omega", "om.zeta", "om.m2"]
         return Extension(model, values, new, raw, None, None, at, ok, msg)
 

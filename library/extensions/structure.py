@@ -1,7 +1,8 @@
 """Nonlinear laws inside the structure, found through element roles (``stiffness``,
 ``damping``): cubic softening and amplitude-dependent damping of a bender (Shahabi,
 Ghafarirad & Taghvaeipour, C. R. Mécanique 347 (2019)).  When the rest of the model is
-linear they are simulated on the exact linear route as a Lur'e system
+linear, or a drive transform of its linear core (hysteresis or creep on the drive named
+before), they are simulated on the exact linear route as a Lur'e system
 (:meth:`bondgraph.diagnosis.View.lure`), else, or when that iteration does not converge (a
 strong nonlinear resonance), with the compiled integrator."""
 from __future__ import annotations
@@ -68,7 +69,7 @@ class _Centred(Candidate):
         names = [f"{self.prefix}_{el}" for el in els]
         lure = view.lure(view.rewrite(), els, partners)
         if lure is not None:
-            series = lure.linear_responses(dict(view.values), np.asarray(view.u))
+            series = lure.linear_responses(dict(view.values), lure.drive)
             xs = {el: series[f"diag.x{k}"] for k, el in enumerate(els)}
             az = {el: series.get(f"diag.a{k}") for k, el in enumerate(els)}
         else:
@@ -80,11 +81,10 @@ class _Centred(Candidate):
         model = self.build(view, {el: 0.0 for el in els}, r2s)
         predict = None
         if lure is not None:
-            u = np.asarray(view.u)
-
             def predict(values):
                 cs = [values[n] for n in names]
-                return lure.simulate(values, u, lambda k, x, a: self.term(cs[k], r2s[els[k]], x, a))
+                raw = lure.simulate(values, lure.drive, lambda k, x, a: self.term(cs[k], r2s[els[k]], x, a))
+                return raw if lure.extra is None else raw + lure.extra
 
         def fitted(specs, nfev, start=None):
             try:
