@@ -1,0 +1,47 @@
+"""The diagnosis on the ci seed set of the independent truth generator, through the command line
+as a user runs it (``python -m bondgraph diagnose MODEL DATA --json``, two workers).
+
+The truths are tests/truthgen's (its package docstring is the protocol: hand-written physics of
+four device families, mechanisms structurally unlike the diagnosis' candidates, drawn linear
+parameters, drives, coloured noise, jittered time, a visibility rule).  The set was fixed before
+the engine was tuned and is never tuned on.  The protocol's target is >= 90 % right and at most
+1 false alarm in 15 null draws; what the engine gives today (benchmarks/README.md, "Diagnosis
+accuracy") is 9 of these 14 right (the first cause right on 10), one false alarm on the three
+null records, every record answered in under 40 s.  This test guards that level: one record
+more may turn wrong (optimiser paths differ slightly between machines) but not two, no
+second false alarm, and every record is answered well inside the 2-minute goal.
+"""
+from __future__ import annotations
+
+import pytest
+
+from truthgen import SEEDS, draw
+from truthgen.runner import diagnose_record
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    work = tmp_path_factory.mktemp("ci_set")
+    return [diagnose_record(draw(seed, "ci"), workdir=work, timeout=300, workers=2) for seed in SEEDS["ci"]]
+
+
+def _table(results) -> str:
+    return "\n".join(f"{r['seed']} {r['family']} {r['truth']}: {r['cause']} {r['causes']} "
+                     f"{'right' if r['right'] else 'WRONG'} {r['wall']} s {r['error'] or ''}" for r in results)
+
+
+def test_every_record_is_answered_in_minutes(results):
+    assert all(r["error"] is None for r in results), _table(results)
+    assert max(r["wall"] for r in results) < 120, _table(results)
+
+
+def test_accuracy_holds_its_measured_level(results):
+    right = sum(r["right"] for r in results)
+    first = sum(r["first_right"] for r in results)
+    assert right >= 8 and first >= 9, _table(results)
+
+
+def test_null_records_raise_at_most_one_alarm(results):
+    nulls = [r for r in results if r["truth"] == "none"]
+    assert len(nulls) >= 3
+    assert sum(not r["right"] for r in nulls) <= 1, _table(results)
