@@ -54,6 +54,29 @@ def recursion(Ad, Bd, Cd, Dd, x0, U, Y):
                 x[i] = xn[i]
 
 
+@njit(cache=True)
+def recursion_rows(Ad, Bd, Cd, Dd, x0, u, Y):
+    """x[k+1] = Ad x[k] + Bd u[k], Y[k, r] = Cd[r] x[k] + Dd[r] u[k]: one input, several outputs."""
+    n = Ad.shape[0]
+    N = u.shape[0]
+    p = Cd.shape[0]
+    x = x0.copy()
+    xn = np.empty(n)
+    for k in range(N):
+        for r in range(p):
+            acc = Dd[r, 0] * u[k]
+            for i in range(n):
+                acc += Cd[r, i] * x[i]
+            Y[k, r] = acc
+        for i in range(n):
+            s = Bd[i, 0] * u[k]
+            for l in range(n):
+                s += Ad[i, l] * x[l]
+            xn[i] = s
+        for i in range(n):
+            x[i] = xn[i]
+
+
 @dataclass(frozen=True)
 class StateSpace:
     """Numeric single-input single-output (A, B, C, D); ``fast`` modes were residualised."""
@@ -92,6 +115,19 @@ class StateSpace:
             # the discrete state is ξ = x − Γ1·u (as in scipy.signal.cont2discrete, method 'foh')
             recursion(Phi, Gam, Cd, Dd, x0 - G1[:, 0] * col[0, 0], col, out)
             Y[:, j] = out[:, 0]
+        return Y
+
+    def response_rows(self, dt: float, u: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
+        """Outputs C[r]·x + D[r]·u of this system's states (its A and B) driven from rest by the
+        samples ``u`` (linear in between): an array (len(u), rows), one state recursion for all."""
+        u = np.ascontiguousarray(u, float)
+        C, D = np.atleast_2d(np.asarray(C, float)), np.asarray(D, float).reshape(-1, 1)
+        if self.n == 0:
+            return u[:, None] * D[:, 0]
+        Phi, Gam, G1 = foh(self.A, self.B, dt)
+        Y = np.empty((u.size, C.shape[0]))
+        recursion_rows(Phi, Gam, np.ascontiguousarray(C), np.ascontiguousarray(D + C @ G1),
+                       -G1[:, 0] * u[0], u, Y)
         return Y
 
 

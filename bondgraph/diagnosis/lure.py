@@ -73,8 +73,18 @@ class Lure:
     def linear_responses(self, values: Mapping[str, float], u: np.ndarray) -> dict[str, np.ndarray]:
         """The element variables (``diag.x<k>``, ``diag.a<k>``) and output of the linear model."""
         th = self.theta(values)
-        return {o: self.lti[(self.inputs[0], o)].state_space(th, self.cut).response(self.dt, u)[:, 0]
-                for o in self.outputs}
+        ss = {key: lti.state_space(th, self.cut) for key, lti in self.lti.items()}
+        return self._respond(ss, self.inputs[0], u)
+
+    def _respond(self, ss: dict, input: str, u: np.ndarray) -> dict[str, np.ndarray]:
+        """Every output's response to ``input`` driven by ``u``: one state recursion when the
+        systems of that input share A and B (they do without residualisation), else one each."""
+        first = ss[(input, self.outputs[0])]
+        parts = [ss[(input, o)] for o in self.outputs]
+        if all(p.n == first.n and np.array_equal(p.A, first.A) and np.array_equal(p.B, first.B) for p in parts):
+            Y = first.response_rows(self.dt, u, np.vstack([p.C for p in parts]), np.vstack([p.D for p in parts]))
+            return {o: Y[:, r] for r, o in enumerate(self.outputs)}
+        return {o: p.response(self.dt, u)[:, 0] for o, p in zip(self.outputs, parts)}
 
     def simulate(self, values: Mapping[str, float], u: np.ndarray,
                  phi: Callable[[int, np.ndarray, np.ndarray | None], np.ndarray],
@@ -82,8 +92,7 @@ class Lure:
         """Raw output for the drive samples ``u`` with w_k = phi(k, x_k, a_k)."""
         th = self.theta(values)
         ss = {key: lti.state_space(th, self.cut) for key, lti in self.lti.items()}
-        u_in = self.inputs[0]
-        base = {o: ss[(u_in, o)].response(self.dt, u)[:, 0] for o in self.outputs}
+        base = self._respond(ss, self.inputs[0], u)
         w = [np.zeros_like(u) for _ in range(self.n)]
         x_names = [f"diag.x{k}" for k in range(self.n)]
         a_names = {k: f"diag.a{k}" for k in range(self.n) if self.partners[k]}
@@ -92,7 +101,7 @@ class Lure:
             resp = {o: base[o].copy() for o in self.outputs}
             for j in range(self.n):
                 if np.any(w[j]):
-                    Y = {o: ss[(self.inputs[1 + j], o)].response(self.dt, w[j])[:, 0] for o in self.outputs}
+                    Y = self._respond(ss, self.inputs[1 + j], w[j])
                     for o in self.outputs:
                         resp[o] += Y[o]
             with np.errstate(over="ignore", invalid="ignore"):
