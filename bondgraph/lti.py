@@ -120,14 +120,36 @@ class StateSpace:
     def response_rows(self, dt: float, u: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
         """Outputs C[r]·x + D[r]·u of this system's states (its A and B) driven from rest by the
         samples ``u`` (linear in between): an array (len(u), rows), one state recursion for all."""
-        u = np.ascontiguousarray(u, float)
+        return self.sampled(dt, C, D).response(u)
+
+    def sampled(self, dt: float, C: np.ndarray, D: np.ndarray) -> "Sampled":
+        """The first-order-hold discretisation of this system's states with output rows C, D,
+        to drive with many sample sequences (see :meth:`response_rows`)."""
         C, D = np.atleast_2d(np.asarray(C, float)), np.asarray(D, float).reshape(-1, 1)
         if self.n == 0:
-            return u[:, None] * D[:, 0]
+            return Sampled(None, None, C, D, None)
         Phi, Gam, G1 = foh(self.A, self.B, dt)
-        Y = np.empty((u.size, C.shape[0]))
-        recursion_rows(Phi, Gam, np.ascontiguousarray(C), np.ascontiguousarray(D + C @ G1),
-                       -G1[:, 0] * u[0], u, Y)
+        return Sampled(Phi, Gam, np.ascontiguousarray(C), np.ascontiguousarray(D + C @ G1), G1)
+
+
+@dataclass(frozen=True)
+class Sampled:
+    """A discretised single-input system with several output rows: ξ[k+1] = Φξ[k] + Γu[k],
+    y[k] = Cξ[k] + Dd·u[k] (Dd = D + C·Γ1), from rest (ξ[0] = −Γ1·u[0])."""
+
+    Phi: np.ndarray | None
+    Gam: np.ndarray | None
+    C: np.ndarray
+    Dd: np.ndarray
+    G1: np.ndarray | None
+
+    def response(self, u: np.ndarray) -> np.ndarray:
+        """Outputs (len(u), rows) for the input samples ``u``."""
+        u = np.ascontiguousarray(u, float)
+        if self.Phi is None:
+            return u[:, None] * self.Dd[:, 0]
+        Y = np.empty((u.size, self.C.shape[0]))
+        recursion_rows(self.Phi, self.Gam, self.C, self.Dd, -self.G1[:, 0] * u[0], u, Y)
         return Y
 
 

@@ -72,36 +72,44 @@ class Lure:
 
     def linear_responses(self, values: Mapping[str, float], u: np.ndarray) -> dict[str, np.ndarray]:
         """The element variables (``diag.x<k>``, ``diag.a<k>``) and output of the linear model."""
-        th = self.theta(values)
-        ss = {key: lti.state_space(th, self.cut) for key, lti in self.lti.items()}
-        return self._respond(ss, self.inputs[0], u)
+        return self._respond(self._systems(self.theta(values)), self.inputs[0], u)
 
-    def _respond(self, ss: dict, input: str, u: np.ndarray) -> dict[str, np.ndarray]:
-        """Every output's response to ``input`` driven by ``u``: one state recursion when the
-        systems of that input share A and B (they do without residualisation), else one each."""
-        first = ss[(input, self.outputs[0])]
-        parts = [ss[(input, o)] for o in self.outputs]
-        if all(p.n == first.n and np.array_equal(p.A, first.A) and np.array_equal(p.B, first.B) for p in parts):
-            Y = first.response_rows(self.dt, u, np.vstack([p.C for p in parts]), np.vstack([p.D for p in parts]))
-            return {o: Y[:, r] for r, o in enumerate(self.outputs)}
-        return {o: p.response(self.dt, u)[:, 0] for o, p in zip(self.outputs, parts)}
+    def _systems(self, th: np.ndarray) -> dict:
+        """Per input, its discretised system with every output as a row (one state recursion for
+        all, discretised once per parameter vector), or, when the outputs' systems do not share
+        A and B (after residualisation), their state spaces."""
+        out = {}
+        for i in self.inputs:
+            parts = [self.lti[(i, o)].state_space(th, self.cut) for o in self.outputs]
+            first = parts[0]
+            if all(p.n == first.n and np.array_equal(p.A, first.A) and np.array_equal(p.B, first.B) for p in parts):
+                out[i] = first.sampled(self.dt, np.vstack([p.C for p in parts]), np.vstack([p.D for p in parts]))
+            else:
+                out[i] = parts
+        return out
+
+    def _respond(self, systems: dict, input: str, u: np.ndarray) -> dict[str, np.ndarray]:
+        """Every output's response to ``input`` driven by the samples ``u``."""
+        sys = systems[input]
+        if isinstance(sys, list):
+            return {o: p.response(self.dt, u)[:, 0] for o, p in zip(self.outputs, sys)}
+        Y = sys.response(u)
+        return {o: Y[:, r] for r, o in enumerate(self.outputs)}
 
     def simulate(self, values: Mapping[str, float], u: np.ndarray,
                  phi: Callable[[int, np.ndarray, np.ndarray | None], np.ndarray],
                  tol: float = 1e-7, max_iter: int = 200) -> np.ndarray:
         """Raw output for the drive samples ``u`` with w_k = phi(k, x_k, a_k)."""
-        th = self.theta(values)
-        ss = {key: lti.state_space(th, self.cut) for key, lti in self.lti.items()}
-        base = self._respond(ss, self.inputs[0], u)
+        systems = self._systems(self.theta(values))
+        base = self._respond(systems, self.inputs[0], u)
         w = [np.zeros_like(u) for _ in range(self.n)]
         x_names = [f"diag.x{k}" for k in range(self.n)]
         a_names = {k: f"diag.a{k}" for k in range(self.n) if self.partners[k]}
-        scale = max(float(np.max(np.abs(base[self.outputs[0]]))), 1e-300)
         for _ in range(max_iter):
             resp = {o: base[o].copy() for o in self.outputs}
             for j in range(self.n):
                 if np.any(w[j]):
-                    Y = self._respond(ss, self.inputs[1 + j], w[j])
+                    Y = self._respond(systems, self.inputs[1 + j], w[j])
                     for o in self.outputs:
                         resp[o] += Y[o]
             with np.errstate(over="ignore", invalid="ignore"):
@@ -112,12 +120,12 @@ class Lure:
             size = max(max(float(np.max(np.abs(a))) for a in new), 1e-300)
             w = new
             if change <= tol * size:
-                return self._final(ss, base, w)
+                return self._final(systems, base, w)
         raise NotConverged(f"no convergence in {max_iter} iterations (the nonlinear term is too strong "
                            f"for the fixed-point route)")
 
-    def _final(self, ss, base, w) -> np.ndarray:
+    def _final(self, systems, base, w) -> np.ndarray:
         y = base[self.outputs[0]].copy()
         for j in range(self.n):
-            y += ss[(self.inputs[1 + j], self.outputs[0])].response(self.dt, w[j])[:, 0]
+            y += self._respond(systems, self.inputs[1 + j], w[j])[self.outputs[0]]
         return y
