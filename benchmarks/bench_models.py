@@ -68,5 +68,9 @@ def stack_model(layers: int):
 
 
 def apa_pi():
-    """APA-120ML with the modified-PI polarization (12 plays) and its default experiment."""
-    return load_file_model("apa120ml", hysteresis="pi")
+    """APA-120ML with the modified-PI polarization (12 plays, dead zones on the absolute PI sum,
+    Table 3 read with signed weights) and its default experiment.  The reading is pinned: the
+    model file's default became the relative dead zones, an operator without return-point
+    memory whose branches restart at every reversal of its input, so two integrators that
+    commit at different steps legitimately part by more than their tolerance."""
+    return load_file_model("apa120ml", hysteresis="pi", table3="absolute-signed")
