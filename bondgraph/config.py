@@ -57,7 +57,8 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.fast_factor": Default(10.0, "modes faster than this many times the data's Nyquist frequency are "
                                            "residualised (replaced by their static contribution)"),
     "diagnosis.decimate_margin": Default(8.0, "records are decimated while the new Nyquist frequency stays this many "
-                                              "times above the drive's band and the slow modes"),
+                                              "times above the drive's band (and 1.25 times above the band where the "
+                                              "output stands above its noise floor)"),
     "diagnosis.min_z": Default(3.0, "a cause must lower the squared validation error by this many standard errors "
                                     "(effective sample size from the residuals' autocorrelation)"),
     "diagnosis.min_gain": Default(1.1, "a cause must lower the validation RMS by at least this factor"),

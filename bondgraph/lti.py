@@ -30,28 +30,35 @@ from .errors import UsageError, did_you_mean
 
 
 @njit(cache=True)
-def recursion(Ad, Bd, Cd, Dd, x0, U, Y):
-    """x[k+1] = Ad x[k] + Bd u[k], y[k] = Cd x[k] + Dd u[k] for every column of U (one input each)."""
+def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
+    """x_j[k+1] = Ad x_j[k] + Bd u_j[k], y_j[k] = Cd x_j[k] + Dd u_j[k] for every column j of U
+    (one input each, states X0[:, j] at k = 0), all columns in one pass over the samples; the
+    outputs are kept at the sample indices ``rows`` (ascending) only: Y[r, j] = y_j[rows[r]]."""
     n = Ad.shape[0]
     N, m = U.shape
-    x = np.empty(n)
-    xn = np.empty(n)
-    for j in range(m):
-        for i in range(n):
-            x[i] = x0[i]
-        for k in range(N):
+    x = X0.copy()
+    xn = np.empty((n, m))
+    r = 0
+    R = rows.shape[0]
+    for k in range(N):
+        keep = r < R and rows[r] == k
+        for j in range(m):
             u = U[k, j]
-            acc = Dd[0, 0] * u
-            for i in range(n):
-                acc += Cd[0, i] * x[i]
-            Y[k, j] = acc
+            if keep:
+                acc = Dd[0, 0] * u
+                for i in range(n):
+                    acc += Cd[0, i] * x[i, j]
+                Y[r, j] = acc
             for i in range(n):
                 s = Bd[i, 0] * u
                 for l in range(n):
-                    s += Ad[i, l] * x[l]
-                xn[i] = s
-            for i in range(n):
-                x[i] = xn[i]
+                    s += Ad[i, l] * x[l, j]
+                xn[i, j] = s
+        for i in range(n):
+            for j in range(m):
+                x[i, j] = xn[i, j]
+        if keep:
+            r += 1
 
 
 @njit(cache=True)
@@ -97,24 +104,22 @@ class StateSpace:
     def frequency_response(self, omega) -> np.ndarray:
         return frequency_response(self.A, self.B, self.C, self.D, omega)
 
-    def response(self, dt: float, U: np.ndarray, x0: np.ndarray | None = None) -> np.ndarray:
+    def response(self, dt: float, U: np.ndarray, x0: np.ndarray | None = None,
+                 rows: np.ndarray | None = None) -> np.ndarray:
         """Output for each column of ``U`` (inputs sampled every ``dt`` s, linear in between),
-        from the state ``x0`` (default rest)."""
+        from the state ``x0`` (default rest); at the sample indices ``rows`` (ascending) only,
+        if given."""
         U = np.asarray(U, float)
         U = np.ascontiguousarray(U.reshape(-1, 1) if U.ndim == 1 else U)
         if self.n == 0:
-            return self.D[0, 0] * U
+            return self.D[0, 0] * (U if rows is None else U[rows])
         Phi, Gam, G1 = foh(self.A, self.B, dt)
         x0 = np.zeros(self.n) if x0 is None else np.asarray(x0, float)
-        Y = np.empty_like(U)
-        Cd = np.ascontiguousarray(self.C)
-        Dd = self.D + self.C @ G1
-        for j in range(U.shape[1]):
-            col = np.ascontiguousarray(U[:, j:j + 1])
-            out = np.empty_like(col)
-            # the discrete state is ξ = x − Γ1·u (as in scipy.signal.cont2discrete, method 'foh')
-            recursion(Phi, Gam, Cd, Dd, x0 - G1[:, 0] * col[0, 0], col, out)
-            Y[:, j] = out[:, 0]
+        rows = np.arange(U.shape[0]) if rows is None else np.ascontiguousarray(rows, np.int64)
+        Y = np.empty((rows.size, U.shape[1]))
+        # the discrete state is ξ = x − Γ1·u (as in scipy.signal.cont2discrete, method 'foh')
+        X0 = np.ascontiguousarray(x0[:, None] - G1[:, :1] * U[0][None, :])
+        recursion(Phi, Gam, np.ascontiguousarray(self.C), self.D + self.C @ G1, X0, U, rows, Y)
         return Y
 
     def response_rows(self, dt: float, u: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:

@@ -190,10 +190,12 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None) -> 
         if z_frf is not None:
             route = "frequency response, then time series"
 
-    def columns(z):
+    def columns(z, rows):
         vals = dict(nominal)
         vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
-        return np.column_stack([ctx.ident.predict(vals), np.ones(len(ctx.y))])
+        raw = ctx.ident.predict(vals)
+        raw = raw if rows is None else raw[rows]
+        return np.column_stack([raw, np.ones(raw.size)])
 
     lb, ub = (np.array([s.z_bounds() for s in specs]).T if specs else (np.zeros(0), np.zeros(0)))
     z0 = np.array([s.to_z(s.start) for s in specs])

@@ -79,7 +79,7 @@ class Context:
         self.cut = None
         self.slow_hz: list[float] = []
         if lti.exact:
-            data, fs = self._decimate(lti, th0, data, fs)
+            data, fs = self._decimate(lti, th0, data, fs, output_band(y, fs, noise_density))
             self.cut = config.get("diagnosis.fast_factor") * math.pi * fs
             ss = lti.state_space(th0, self.cut)
             self.slow_hz = sorted({round(abs(p) / (2 * math.pi), 6) for p in ss.poles()})
@@ -114,20 +114,26 @@ class Context:
         #: parameter names of the working model (the linear core of every chain state)
         self.core_parameters = frozenset(p.name for p in self.eqs.params)
 
-    def _decimate(self, lti: LTI, th0, data: Dataset, fs: float):
+    def _decimate(self, lti: LTI, th0, data: Dataset, fs: float, y_band: float | None):
         """Decimate while the new Nyquist frequency stays ``decimate_margin`` times above the
-        drive's band and every mode the data can resolve."""
-        ss = lti.state_space(th0, config.get("diagnosis.fast_factor") * math.pi * fs)
-        modes = [abs(p) / (2 * math.pi) for p in ss.poles()]
-        f_max = max([self.band_hz] + modes)
-        q = int(fs / (2 * config.get("diagnosis.decimate_margin") * max(f_max, 1e-300)))
+        drive's band and 1.25 times above the band where the measured output stands above its
+        noise floor (``y_band``: resonances the drive rings, harmonics an effect makes); without
+        a noise floor, above every mode of the model the data can resolve instead."""
+        margin = config.get("diagnosis.decimate_margin")
+        if y_band is not None:
+            q = int(min(fs / (2 * margin * max(self.band_hz, 1e-300)), fs / (2 * 1.25 * max(y_band, 1e-300))))
+            why = f"the output stands above its noise floor up to {y_band:.4g} Hz"
+        else:
+            ss = lti.state_space(th0, config.get("diagnosis.fast_factor") * math.pi * fs)
+            modes = [abs(p) / (2 * math.pi) for p in ss.poles()]
+            q = int(fs / (2 * margin * max([self.band_hz] + modes)))
+            why = f"the fastest mode the data resolve is at {max(modes):.4g} Hz" if modes else ""
         q = min(q, len(data) // 2000)
         if q < 2:
             return data, fs
         out = data.decimate(q)
         self.notes.append(f"decimated by {q} ({fs:.6g} → {fs / q:.6g} Hz): the drive's band ends near "
-                          f"{self.band_hz:.4g} Hz" + (f" and the fastest mode the data resolve is at {max(modes):.4g} Hz"
-                                                      if modes else ""))
+                          f"{self.band_hz:.4g} Hz" + (f" and {why}" if why else ""))
         return out, fs / q
 
     @property
@@ -181,6 +187,18 @@ def noise_psd(y: np.ndarray, u: np.ndarray, fs: float, band: float) -> float | N
     if np.count_nonzero(quiet) < 4:
         return None
     return float(np.median(Pyy[quiet]))
+
+
+def output_band(y: np.ndarray, fs: float, noise_density: float | None, above: float = 10.0) -> float | None:
+    """Highest frequency (Hz) where the output's power density exceeds ``above`` times the
+    noise density (Welch, at least 8 segments), or None without a noise estimate."""
+    if noise_density is None or noise_density <= 0:
+        return None
+    n = len(y)
+    nper = int(min(n, 2 ** max(8, min(14, int(math.log2(max(n, 256) / 8))))))
+    f, Pyy = signal.welch(y, fs, nperseg=nper, detrend="linear")
+    loud = np.nonzero(Pyy[1:] > above * noise_density)[0]
+    return float(f[1 + loud[-1]]) if loud.size else float(f[1])
 
 
 def _blocks(mask: np.ndarray) -> list[slice]:

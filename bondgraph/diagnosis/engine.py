@@ -18,7 +18,7 @@ from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State
 from .decision import compare, judge, reference_prediction, regress
-from .pool import Pool
+from .pool import Pool, single_threaded_blas
 from .report import CandidateResult, Report, Step
 from .view import View
 
@@ -154,6 +154,13 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     causes on the extended model until none passes; ``progress``: a
     :class:`bondgraph.progress.Progress` (one count per candidate fitted, notes for the
     stages) or any callable taking a line of text."""
+    with single_threaded_blas():
+        return _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
+                         validation, workers, chain, progress, source, equations)
+
+
+def _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output, validation,
+              workers, chain, progress, source, equations) -> Report:
     started = time.time()
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     tick = getattr(progress, "advance", None)

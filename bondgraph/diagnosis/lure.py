@@ -60,6 +60,7 @@ class Lure:
             raise BondGraphError("the model is not linear in its states")
         self.partners = [bool(partners.get(el)) for el in elements]
         self.eqs, self.dt, self.cut = eqs, dt, cut
+        self._last: list[np.ndarray] | None = None
 
     def theta(self, values: Mapping[str, float]) -> np.ndarray:
         from ..codegen import parameter_vector
@@ -99,12 +100,16 @@ class Lure:
     def simulate(self, values: Mapping[str, float], u: np.ndarray,
                  phi: Callable[[int, np.ndarray, np.ndarray | None], np.ndarray],
                  tol: float = 1e-7, max_iter: int = 200) -> np.ndarray:
-        """Raw output for the drive samples ``u`` with w_k = phi(k, x_k, a_k)."""
+        """Raw output for the drive samples ``u`` with w_k = phi(k, x_k, a_k), iterated from the
+        last solution found for a drive of the same length (a fit moves the parameters a little
+        at a time, so a few iterations then suffice)."""
         systems = self._systems(self.theta(values))
         base = self._respond(systems, self.inputs[0], u)
-        w = [np.zeros_like(u) for _ in range(self.n)]
+        last = self._last
+        w = list(last) if last is not None and len(last[0]) == len(u) else [np.zeros_like(u) for _ in range(self.n)]
         x_names = [f"diag.x{k}" for k in range(self.n)]
         a_names = {k: f"diag.a{k}" for k in range(self.n) if self.partners[k]}
+        self._last = None
         for _ in range(max_iter):
             resp = {o: base[o].copy() for o in self.outputs}
             for j in range(self.n):
@@ -120,6 +125,7 @@ class Lure:
             size = max(max(float(np.max(np.abs(a))) for a in new), 1e-300)
             w = new
             if change <= tol * size:
+                self._last = w
                 return self._final(systems, base, w)
         raise NotConverged(f"no convergence in {max_iter} iterations (the nonlinear term is too strong "
                            f"for the fixed-point route)")

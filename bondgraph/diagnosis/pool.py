@@ -21,6 +21,7 @@ from .. import config
 def _worker(ctx, calibrated, candidates, settings, tasks, results) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     config.restore(settings)
+    single_threaded_blas()
     from .engine import run_candidate
     while True:
         task = tasks.get()
@@ -28,6 +29,13 @@ def _worker(ctx, calibrated, candidates, settings, tasks, results) -> None:
             return
         index, state = task
         results.put((index, run_candidate(ctx, state, calibrated, candidates[index])))
+
+
+def single_threaded_blas():
+    """One BLAS thread in this process (the diagnosis' matrices are small and its workers share
+    the cores: threaded BLAS only oversubscribes them, several times slower)."""
+    from threadpoolctl import threadpool_limits
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 class Pool:

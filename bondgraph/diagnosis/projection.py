@@ -53,31 +53,34 @@ class Projected:
     at_bounds: list[int]
 
 
-def projected_fit(columns: Callable[[np.ndarray], np.ndarray], y: np.ndarray, idx: np.ndarray,
+def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray], y: np.ndarray, idx: np.ndarray,
                   z0: Sequence[float], lb: Sequence[float], ub: Sequence[float],
                   lower: Sequence[float], upper: Sequence[float], max_nfev: int = 40,
                   starts: Sequence[Sequence[float]] = ()) -> Projected:
     """min over z in [lb, ub] of min over lower ≤ c ≤ upper of ||y[idx] − A(z)[idx]·c||.
 
-    ``columns(z)`` returns A(z) on every sample; ``starts`` are extra start points (the best
-    solution wins)."""
+    ``columns(z, rows)`` returns the rows ``rows`` of A(z) (every sample for None: the optimiser
+    asks for the rows ``idx`` only, the result holds A on every sample); ``starts`` are extra
+    start points (the best solution wins)."""
     scale = max(float(np.std(y[idx])), 1e-300)
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
 
-    def solve(z):
-        A = columns(z)
-        c = bounded_lstsq(A[idx], y[idx], lower, upper)
-        return c, A
+    yi = y[idx]
 
     def resid(z):
-        c, A = solve(z)
-        r = (A[idx] @ c - y[idx]) / scale
+        Ai = columns(z, idx)
+        c = bounded_lstsq(Ai, yi, lower, upper)
+        r = (Ai @ c - yi) / scale
         return r if np.all(np.isfinite(r)) else np.full(idx.size, 1e3)
+
+    def final(z):
+        A = columns(z, None)
+        return bounded_lstsq(A[idx], yi, lower, upper), A
 
     z0 = np.asarray(z0, float)
     if z0.size == 0:
-        c, A = solve(z0)
-        r = resid(z0)
+        c, A = final(z0)
+        r = (A[idx] @ c - yi) / scale
         return Projected(z0, c, A, 0.5 * float(r @ r), 1, True, "linear least squares", [])
     best = None
     for start in [z0, *[np.asarray(s, float) for s in starts]]:
@@ -85,7 +88,7 @@ def projected_fit(columns: Callable[[np.ndarray], np.ndarray], y: np.ndarray, id
                             x_scale=1.0)
         if best is None or sol.cost < best.cost:
             best = sol
-    c, A = solve(best.x)
+    c, A = final(best.x)
     width = np.where(np.isfinite(ub - lb), ub - lb, 1.0)
     at = [i for i in range(best.x.size)
           if best.x[i] - lb[i] < 1e-3 * width[i] or ub[i] - best.x[i] < 1e-3 * width[i]]

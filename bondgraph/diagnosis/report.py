@@ -101,6 +101,7 @@ class Report:
                 "candidates": [c.as_json() for c in self.candidates],
                 "steps": [s.as_json() for s in steps],
                 "why": self.steps[-1].why if self.steps else "",
+                "stop": self.steps[-1].as_json() if self.steps and self.steps[-1].cause == "none" else None,
                 "noise_rms": self.noise,
                 "extended_rms_integrated": self.extended_rms_integrated,
                 "calibration": self.calibration, "data": self.data, "notes": self.notes,

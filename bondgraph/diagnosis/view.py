@@ -139,13 +139,15 @@ class View:
         return self._ctx.ident.sim.theta(vals)
 
     # ---- linear responses -------------------------------------------------------------------
-    def respond(self, columns: Sequence[np.ndarray], values: Mapping[str, float] | None = None) -> np.ndarray:
+    def respond(self, columns: Sequence[np.ndarray] | np.ndarray, values: Mapping[str, float] | None = None,
+                rows: np.ndarray | None = None) -> np.ndarray:
         """Output of the linear core (the calibrated nominal dynamics, fast modes residualised,
-        sensor gain 1) driven by each column, from rest."""
+        sensor gain 1) driven by each column (a sequence of series, or a 2-D array with one
+        per column), from rest; at the sample indices ``rows`` only, if given."""
         ctx = self._ctx
         th = self.theta_values(values)
-        U = np.column_stack(columns)
-        return ctx.lti.state_space(th, ctx.cut).response(ctx.dt, U)
+        U = columns if isinstance(columns, np.ndarray) and columns.ndim == 2 else np.column_stack(columns)
+        return ctx.lti.state_space(th, ctx.cut).response(ctx.dt, U, rows=rows)
 
     def frequency_response(self, omega: np.ndarray, values: Mapping[str, float] | None = None) -> np.ndarray:
         """The linear core's frequency response at ``omega`` (rad/s), sensor gain 1."""
@@ -199,14 +201,21 @@ class View:
         extra = np.asarray(self.extra)
         has_extra = bool(np.any(extra))
 
-        def columns(z):
+        first = [] if call_b else ([d] if identity else []) + fixed_b
+        fixed_U = np.column_stack(first) if first else None
+
+        def columns(z, rows):
             vals, b, dc = parts(z)
-            Y = self.respond(([d] if identity else []) + b, vals)
+            U = fixed_U if fixed_U is not None else np.column_stack(([d] if identity else []) + b)
+            Y = self.respond(U, vals, rows)
+            ex = extra if rows is None else extra[rows]
             if identity:
-                Y[:, 0] += extra
-            cols = [Y] + ([np.column_stack(dc)] if dc else []) + [np.ones((len(d), 1))]
+                Y[:, 0] += ex
+            n = Y.shape[0]
+            cols = [Y] + ([np.column_stack(dc) if rows is None else np.column_stack(dc)[rows]] if dc else []) \
+                + [np.ones((n, 1))]
             if has_extra and not identity:
-                cols.insert(-1, extra[:, None])
+                cols.insert(-1, ex[:, None])
             return np.column_stack(cols)
 
         lo = ([-np.inf] if identity else []) + list(lower)
@@ -289,8 +298,10 @@ class View:
             vals.update({p.name: p.from_z(zi) for p, zi in zip(lin, z[len(specs):])})
             return vals
 
-        def columns(z):
-            return np.column_stack([predict(values_of(z)), np.ones(len(self._ctx.y))])
+        def columns(z, rows):
+            raw = predict(values_of(z))
+            raw = raw if rows is None else raw[rows]
+            return np.column_stack([raw, np.ones(raw.size)])
 
         z0 = [s.to_z(s.start) for s in specs] + [p.to_z(p.start) for p in lin]
         lb = [s.z_bounds()[0] for s in specs] + [p.z_bounds()[0] for p in lin]
