@@ -52,6 +52,9 @@ DEFAULTS: dict[str, Default] = {
     # diagnosis (bondgraph.diagnosis): what counts as evidence; see that package's docstring
     "diagnosis.spread": Default(10.0, "linear parameters are calibrated within x/÷ this factor of the model's "
                                       "values (and their declared bounds); the sensor gain is free"),
+    "diagnosis.tolerance": Default(2.0, "a plausible device has its linear parameters within x/÷ this factor of the "
+                                        "model's values (a model file's TOLERANCE may set others per parameter); "
+                                        "linear structural causes are fitted within it and must beat it"),
     "diagnosis.identifiable": Default(1e-3, "a linear parameter is calibrated only if its pivot in the normalised "
                                             "sensitivity matrix (pivoted QR) is at least this share of the largest"),
     "diagnosis.fast_factor": Default(10.0, "modes faster than this many times the data's Nyquist frequency are "
@@ -68,6 +71,9 @@ DEFAULTS: dict[str, Default] = {
                                               "min_z against the calibrated model)"),
     "diagnosis.linear_share": Default(0.7, "a linear structural cause must explain this share of what the flexible "
                                            "linear reference explains over the calibrated model"),
+    "diagnosis.equivalent": Default(1.05, "passing candidates whose validation RMS is within this factor of the "
+                                          "best's, and their gain over the flexible linear "
+                                          "reference too, are equivalent: the one with the fewest new parameters is named"),
     "diagnosis.reference_poles": Default(6, "real poles of the flexible linear reference, spread over the record's "
                                             "time scales"),
     "diagnosis.max_chain": Default(3, "most causes named in one diagnosis (compound effects)"),

@@ -105,6 +105,11 @@ def table3_operator(reading: str = "relative-signed"):
 #: linear parameters the diagnosis calibrates to data before looking for missing effects
 CALIBRATE = ["a", "K", "c"]
 
+#: plausible spread of a real device around these values (×/÷ factor; others: the setting
+#: diagnosis.tolerance, 2 for material constants): damping is known to an order of magnitude
+#: at best, geometry (thickness, lengths, mode shapes) and capacitance (kx) far better
+TOLERANCE = {"c": 15.0, "l": 1.1, "T": 1.1, "kx": 1.5}
+
 
 def build(p):
     g = Model("APA-120ML", __doc__.splitlines()[0])

@@ -112,6 +112,11 @@ EXPERIMENT = Experiment(t_end=0.2, dt=2e-5, inputs={"V": Chirp(63.5, f0=200.0, f
 #: linear parameters the diagnosis calibrates to data before looking for missing effects
 CALIBRATE = ["m_eff", "k_a", "b_a"]
 
+#: plausible spread of a real device around these values (×/÷ factor; others: the setting
+#: diagnosis.tolerance, 2 for material constants): damping is known to an order of magnitude
+#: at best, geometry (thickness, lengths, mode shapes) and capacitance (kx) far better
+TOLERANCE = {"b_a": 15.0}
+
 
 def laminate(p) -> dict:
     """Section numbers of the laminate at nominal width: EI (N m^2), mass per area (kg/m^2) of

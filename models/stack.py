@@ -35,6 +35,11 @@ EXPERIMENT = Experiment(t_end=0.02, dt=1e-5, inputs={"V": Step(100.0, t0=1e-3)})
 #: linear parameters the diagnosis calibrates to data before looking for missing effects
 CALIBRATE = ["a", "K", "c"]
 
+#: plausible spread of a real device around these values (×/÷ factor; others: the setting
+#: diagnosis.tolerance, 2 for material constants): damping is known to an order of magnitude
+#: at best, geometry (thickness, lengths, mode shapes) and capacitance (kx) far better
+TOLERANCE = {"c": 15.0, "l": 1.1, "kx": 1.5}
+
 def build(p):
     n = p.layers
     g = Model(f"stack of {n} layers" + (" (lumped)" if p.lumped else ""), __doc__.splitlines()[0])

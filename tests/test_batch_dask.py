@@ -33,7 +33,7 @@ from bondgraph.batch.jobs import memo_info  # noqa: E402
 from bondgraph.batch.table import Table  # noqa: E402
 from bondgraph.cli import main  # noqa: E402
 from bondgraph.data import read_csv, write_csv  # noqa: E402
-from bondgraph.diagnosis import diagnose  # noqa: E402
+from bondgraph.diagnosis import diagnose, model_file_options  # noqa: E402
 from bondgraph.fitting import fit_parameters  # noqa: E402
 from bondgraph.linearize import linearize  # noqa: E402
 from bondgraph.modelfile import load_model  # noqa: E402
@@ -72,7 +72,7 @@ def direct(records):
     """The diagnosis of the effect-free record, called directly in this process."""
     lm = load_model(APA)
     data = read_csv(records[2], required=("t", "V", "x"))
-    return diagnose(lm.model, data, calibrate_first=getattr(lm.module, "CALIBRATE", None), workers=1).as_json()
+    return diagnose(lm.model, data, **model_file_options(lm.module), workers=1).as_json()
 
 
 def check_diagnosis_rows(table, records, direct):

@@ -117,9 +117,9 @@ def _diagnose(job: Job, opts: Options) -> dict:
 def diagnosis_row(loaded, data, opts: Options) -> dict:
     """The diagnosis of one record (the one call of the diagnosis API in batch runs): cause,
     causes, gain, RMS before and after, and the best gain of each candidate cause."""
-    from ..diagnosis import diagnose
+    from ..diagnosis import diagnose, model_file_options
 
-    report = diagnose(loaded.model, data, calibrate_first=getattr(loaded.module, "CALIBRATE", None),
+    report = diagnose(loaded.model, data, **model_file_options(loaded.module),
                       input=opts.input, output=opts.output, validation=opts.validation, workers=1,
                       source=str(loaded.path)).as_json()
     causes = report.get("causes", [report["cause"]] if report["cause"] != "none" else [])

@@ -16,14 +16,14 @@ from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, comm
              QUIET_ARG,
          ])
 def run(args):
-    from ..diagnosis import diagnose
+    from ..diagnosis import diagnose, model_file_options
     from ..progress import Progress
 
     with outputs(args, "plot") as out:  # checked before the work, written only if it all succeeds
         lm = load(args)
         data = read_data(args)
         with Progress("diagnosing", unit="candidates", mode="quiet" if args.quiet else "auto") as bar:
-            report = diagnose(lm.model, data, calibrate_first=getattr(lm.module, "CALIBRATE", None),
+            report = diagnose(lm.model, data, **model_file_options(lm.module),
                               input=args.model_input, output=args.model_output, validation=args.validation,
                               workers=args.workers, chain=not args.no_chain, progress=bar, source=str(args.model))
         if args.json:

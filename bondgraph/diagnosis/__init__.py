@@ -31,9 +31,9 @@ public names (:class:`Candidate`, :class:`Extension`, :class:`View`, :mod:`.filt
 """
 from . import filters, rewrite
 from .candidate import LINEAR, NONLINEAR, Candidate, Extension
-from .engine import diagnose, load_candidates
+from .engine import diagnose, load_candidates, model_file_options
 from .report import CandidateResult, Report, Step
 from .view import DriveFit, View
 
-__all__ = ["diagnose", "load_candidates", "Candidate", "Extension", "View", "DriveFit", "Report", "Step",
+__all__ = ["diagnose", "load_candidates", "model_file_options", "Candidate", "Extension", "View", "DriveFit", "Report", "Step",
            "CandidateResult", "LINEAR", "NONLINEAR", "filters", "rewrite"]

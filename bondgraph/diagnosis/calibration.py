@@ -18,7 +18,7 @@ from __future__ import annotations
 import fnmatch
 import math
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 from scipy import signal
@@ -47,6 +47,12 @@ class Calibration:
     success: bool
     message: str
     route: str
+    #: |value| bounds of a plausible device (each parameter's tolerance around the model's value)
+    plausible: dict[str, tuple[float, float]] = field(default_factory=dict)
+    #: calibrated parameters outside their tolerance, with value / model's value
+    outside: dict[str, float] = field(default_factory=dict)
+    #: validation RMS of the plausible device (the calibration within tolerance), when it differs
+    rms_plausible: float | None = None
     notes: list[str] = field(default_factory=list)
 
     def as_json(self) -> dict:
@@ -54,7 +60,8 @@ class Calibration:
                 "nominal": {k: self.nominal[k] for k in self.free}, "bounds": self.bounds,
                 "at_bounds": self.at_bounds, "sensor_gain": self.gain, "offset": self.offset,
                 "rms_fit": self.rms_fit, "rms_validation": self.rms_validation, "success": self.success,
-                "message": self.message, "route": self.route}
+                "message": self.message, "route": self.route, "outside_tolerance": self.outside,
+                "rms_plausible": self.rms_plausible}
 
 
 def patterns(names: Sequence[str], pats: Sequence[str] | None) -> list[str]:
@@ -72,9 +79,10 @@ def linear_parameters(ctx: Context) -> list[str]:
     return [n for n in lti.parameters if n != SENSOR_GAIN and ctx.ident.current(n) != 0.0]
 
 
-def param_bounds(ctx: Context, name: str, value: float) -> tuple[float, float]:
-    """|value| bounds: ×/÷ spread, within the declared bounds."""
-    spread = config.get("diagnosis.spread")
+def param_bounds(ctx: Context, name: str, value: float, factor: float | None = None) -> tuple[float, float]:
+    """|value| bounds: ×/÷ ``factor`` (default the setting ``diagnosis.spread``), within the
+    declared bounds."""
+    spread = config.get("diagnosis.spread") if factor is None else factor
     lo, hi = abs(value) / spread, abs(value) * spread
     decl = ctx.model.all_parameters().get(name)
     if decl is not None and decl.bounds is not None and value > 0:
@@ -131,32 +139,28 @@ def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
     return 2 * np.pi * f[keep], (Puy / np.maximum(Puu, 1e-300))[keep], coh[keep]
 
 
-def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, starts: int = 12):
-    """Multi-start fit of the free parameters to the empirical frequency response, the gain
-    removed (the mean log-magnitude difference); returns the best z or None."""
-    w, H, coh = empirical_frf(ctx.u, ctx.y, ctx.fs)
-    if w.size < 2 * len(specs) + 2:
-        return None
-    H = sign * H
+def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarray, H: np.ndarray,
+            coh: np.ndarray, starts: Sequence[np.ndarray] = (), random: int = 12, max_nfev: int = 60):
+    """Multi-start fit of ``frf_of(z)`` (complex, at ``w``) to the measured ``H``: log-magnitude
+    (its coherence-weighted mean removed: the sensor gain is solved later) and wrapped phase,
+    weighted by √coherence.  Starts: ``z0``, ``starts``, and ``random`` perturbations of z0
+    (σ = 0.5 in z).  Returns the best z or None."""
     wt = np.sqrt(coh)
 
     def fres(z):
-        vals = dict(values)
-        vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
-        Hm = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w)
-        d = np.log(Hm + 1e-300) - np.log(H + 1e-300)
+        d = np.log(frf_of(z) + 1e-300) - np.log(H + 1e-300)
         re = d.real - np.sum(wt ** 2 * d.real) / np.sum(wt ** 2)
         im = np.angle(np.exp(1j * d.imag))
-        return np.concatenate([wt * re, wt * im])
+        r = np.concatenate([wt * re, wt * im])
+        return r if np.all(np.isfinite(r)) else np.full(r.size, 1e3)
 
-    lb, ub = np.array([s.z_bounds() for s in specs]).T
     rng = np.random.default_rng(1)
-    z_nom = np.array([s.to_z(s.start) for s in specs])
+    points = [np.asarray(z0, float)] + [np.asarray(s, float) for s in starts]
+    points += [np.clip(points[0] + rng.normal(0, 0.5, points[0].size), lb, ub) for _ in range(random)]
     best = None
-    for k in range(starts):
-        z0 = z_nom if k == 0 else np.clip(z_nom + rng.normal(0, 0.5, z_nom.size), lb, ub)
+    for p in points:
         try:
-            sol = least_squares(fres, z0, bounds=(lb, ub), max_nfev=60)
+            sol = least_squares(fres, np.clip(p, lb, ub), bounds=(lb, ub), max_nfev=max_nfev)
         except (ValueError, np.linalg.LinAlgError):
             continue
         if best is None or sol.cost < best.cost:
@@ -164,29 +168,30 @@ def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, sta
     return None if best is None else best.x
 
 
-def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None) -> tuple[State, Calibration]:
-    """Calibrate every identifiable linear parameter (see the module docstring)."""
-    say = say or (lambda s: None)
-    names = linear_parameters(ctx)
-    known = list(ctx.model.all_parameters())
-    for pat in priority or ():
-        if not patterns(known, [pat]):
-            raise UsageError(f"CALIBRATE entry '{pat}' matches no parameter of {ctx.model.name}")
-    nominal = {n: ctx.ident.current(n) for n in names}
-    raw0 = ctx.ident.predict(nominal)
+def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, z0: np.ndarray):
+    """The free parameters fitted to the empirical frequency response (:func:`fit_frf`), or None
+    when the drive leaves too few coherent frequencies."""
+    w, H, coh = empirical_frf(ctx.u, ctx.y, ctx.fs)
+    if w.size < 2 * len(specs) + 2:
+        return None
+
+    def frf_of(z):
+        vals = dict(values)
+        vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
+        return ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w)
+
+    lb, ub = np.array([s.z_bounds() for s in specs]).T
+    return fit_frf(frf_of, z0, lb, ub, w, sign * H, coh)
+
+
+def _fit(ctx: Context, specs: list[Param], nominal: dict, sign: float, z0: np.ndarray, starts=()):
+    """Frequency response first when the data allow, then the time series by variable projection
+    (sensor gain and offset solved exactly); (values, raw prediction, solution, route)."""
     idx = ctx.ident.fit_idx
-    scale = float(np.linalg.norm(ctx.y[idx] - ctx.y[idx].mean())) or 1.0
-    S = sensitivities(ctx, names, nominal, raw0)
-    free, held = select(S, names, patterns(names, priority), config.get("diagnosis.identifiable"), scale)
-    bounds = {n: param_bounds(ctx, n, nominal[n]) for n in free}
-    specs = [Param(n, nominal[n], *bounds[n]) for n in free]
-    say(f"calibrating {', '.join(free) or 'the sensor gain and offset only'}"
-        + (f" (held: {', '.join(held)})" if held else ""))
-    sign = 1.0 if float(np.dot(raw0[idx] - raw0[idx].mean(), ctx.y[idx] - ctx.y[idx].mean())) >= 0 else -1.0
     route = "time series"
     z_frf = None
     if specs and ctx.lti is not None:
-        z_frf = _frf_starts(ctx, specs, nominal, sign)
+        z_frf = _frf_starts(ctx, specs, nominal, sign, z0)
         if z_frf is not None:
             route = "frequency response, then time series"
 
@@ -198,18 +203,75 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None) -> 
         return np.column_stack([raw, np.ones(raw.size)])
 
     lb, ub = (np.array([s.z_bounds() for s in specs]).T if specs else (np.zeros(0), np.zeros(0)))
-    z0 = np.array([s.to_z(s.start) for s in specs])
-    sol = projected_fit(columns, ctx.y, idx, z0 if z_frf is None else z_frf, lb, ub, [-np.inf] * 2, [np.inf] * 2,
-                        max_nfev=40, starts=[] if z_frf is None else [z0])
+    first = z0 if z_frf is None else z_frf
+    sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * 2, [np.inf] * 2, max_nfev=40,
+                        starts=([] if z_frf is None else [z0]) + list(starts))
     values = dict(nominal)
     values.update({s.name: s.from_z(zi) for s, zi in zip(specs, sol.z)})
-    raw = sol.columns[:, 0]
+    return values, sol.columns[:, 0], sol, route
+
+
+def tolerances(names: Sequence[str], tolerance: Mapping[str, float] | None) -> dict[str, float]:
+    """The plausible factor of each parameter: the first matching pattern of ``tolerance`` (the
+    model file's ``TOLERANCE``), else the setting ``diagnosis.tolerance``."""
+    default = float(config.get("diagnosis.tolerance"))
+    out = {}
+    for n in names:
+        out[n] = next((float(f) for pat, f in (tolerance or {}).items() if fnmatch.fnmatchcase(n, pat)), default)
+    return out
+
+
+def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
+              tolerance: Mapping[str, float] | None = None) -> tuple[State, Calibration, State]:
+    """Calibrate every identifiable linear parameter (see the module docstring): the best linear
+    explanation within ×/÷ ``diagnosis.spread`` (the null), and the plausible device within each
+    parameter's tolerance (:func:`tolerances`), which linear structural causes must beat.
+    Returns (null state, its calibration, plausible state)."""
+    say = say or (lambda s: None)
+    names = linear_parameters(ctx)
+    known = list(ctx.model.all_parameters())
+    for pat in priority or ():
+        if not patterns(known, [pat]):
+            raise UsageError(f"CALIBRATE entry '{pat}' matches no parameter of {ctx.model.name}")
+    for pat in tolerance or {}:
+        if not patterns(known, [pat]):
+            raise UsageError(f"TOLERANCE entry '{pat}' matches no parameter of {ctx.model.name}")
+    nominal = {n: ctx.ident.current(n) for n in names}
+    raw0 = ctx.ident.predict(nominal)
+    idx = ctx.ident.fit_idx
+    scale = float(np.linalg.norm(ctx.y[idx] - ctx.y[idx].mean())) or 1.0
+    S = sensitivities(ctx, names, nominal, raw0)
+    free, held = select(S, names, patterns(names, priority), config.get("diagnosis.identifiable"), scale)
+    bounds = {n: param_bounds(ctx, n, nominal[n]) for n in free}
+    specs = [Param(n, nominal[n], *bounds[n]) for n in free]
+    say(f"calibrating {', '.join(free) or 'the sensor gain and offset only'}"
+        + (f" (held: {', '.join(held)})" if held else ""))
+    sign = 1.0 if float(np.dot(raw0[idx] - raw0[idx].mean(), ctx.y[idx] - ctx.y[idx].mean())) >= 0 else -1.0
+    z0 = np.array([s.to_z(s.start) for s in specs])
+    values, raw, sol, route = _fit(ctx, specs, nominal, sign, z0)
     gain, offset, rf, rv = score(ctx, raw)
+    factors = tolerances(free, tolerance)
+    plausible = {n: param_bounds(ctx, n, nominal[n], factors[n]) for n in free}
+    outside = {n: values[n] / nominal[n] for n in free
+               if not plausible[n][0] * (1 - 1e-9) <= abs(values[n]) <= plausible[n][1] * (1 + 1e-9)}
     cal = Calibration(values, nominal, free, held, {k: tuple(v) for k, v in bounds.items()},
-                      [specs[i].name for i in sol.at_bounds], gain, offset, rf, rv, sol.success, sol.message, route)
+                      [specs[i].name for i in sol.at_bounds], gain, offset, rf, rv, sol.success, sol.message, route,
+                      plausible=plausible, outside=outside)
     state = State(ctx.model, values, raw, gain, offset, ctx.u if ctx.lti is not None else None,
                   ctx.model.inputs[ctx.input].symbol if ctx.lti is not None else None, [], ctx.lti is not None)
-    return state, cal
+    if not outside:
+        return state, cal, state
+    say(f"outside their tolerance: {', '.join(f'{n} ×{r:.3g}' for n, r in outside.items())}; "
+        f"calibrating the plausible device too")
+    pspecs = [Param(n, min(max(abs(values[n]), plausible[n][0]), plausible[n][1]) * (1 if values[n] > 0 else -1),
+                    *plausible[n]) for n in free]
+    pz0 = np.array([s.to_z(s.start) for s in pspecs])
+    pvalues, praw, psol, _ = _fit(ctx, pspecs, nominal, sign, pz0,
+                                  starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])])
+    pgain, poffset, _, prv = score(ctx, praw)
+    cal.rms_plausible = prv
+    pstate = State(ctx.model, pvalues, praw, pgain, poffset, state.drive, state.drive_expr, [], state.linear)
+    return state, cal, pstate
 
 
 def score(ctx: Context, raw: np.ndarray) -> tuple[float, float, float, float]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -32,11 +32,18 @@ class Outcome:
     raw: np.ndarray | None = None
 
 
-def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate) -> Outcome:
-    """Fit one candidate on the chain state (in a worker or in the calling process)."""
+def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate,
+                  plausible: tuple[State, dict] | None = None) -> Outcome:
+    """Fit one candidate on the chain state (in a worker or in the calling process).  A linear
+    structural candidate starts from the plausible device instead, when one is given
+    (``(state, bounds)``: the calibration within tolerance), and refits within its bounds."""
     started = time.time()
     res = CandidateResult(cand.cause, cand.label, cand.kind)
-    view = View(ctx, state, calibrated)
+    if cand.kind == LINEAR and plausible is not None:
+        view = View(ctx, plausible[0], calibrated, bounds=plausible[1])
+        res.against = "plausible"
+    else:
+        view = View(ctx, state, calibrated)
     try:
         ok = cand.applies(view)
         if ok is not True:
@@ -61,8 +68,12 @@ def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: C
         res.seconds = time.time() - started
 
 
-def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome]) -> tuple[Step, Outcome | None]:
-    """Score every outcome against the state and the flexible linear reference; pick the winner."""
+def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
+           plausible: State | None = None) -> tuple[Step, Outcome | None]:
+    """Score every outcome against the state and the flexible linear reference; pick the winner.
+    Linear structural candidates fitted on the ``plausible`` device are compared with it, and
+    must explain ``linear_share`` of what the best linear explanation (the null or the flexible
+    reference, whichever is better) explains over it."""
     idx, y = ctx.ident.fit_idx, ctx.y
     drive = state.drive if state.drive is not None else ctx.u
     ref_cols, ref_pred = reference_prediction(view.respond, drive, state.raw, y, idx, ctx.dt, ctx.span)
@@ -70,33 +81,52 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome]) -> t
     e_ref = y - ref_pred
     val = ctx.ident.val_mask
     rms_state, rms_ref = rms(e_state[val]), rms(e_ref[val])
+    e_plaus = y - plausible.prediction if plausible is not None else None
+    rms_plaus = rms(e_plaus[val]) if plausible is not None else None
     for oc in outcomes:
         r = oc.result
         if oc.raw is None:
             continue
         g, b, r.rms_fit, r.rms_validation = score(ctx, oc.raw)
         e = y - (g * oc.raw + b)
-        base = compare(e_state, e, ctx.blocks)
+        on_plausible = r.against == "plausible" and e_plaus is not None
+        base = compare(e_plaus if on_plausible else e_state, e, ctx.blocks)
         r.gain, r.z, r.n_eff = base.gain, base.z, base.n_eff
         e_both = y - regress(np.column_stack([oc.raw, ref_cols]), y, idx)
         vr = compare(e_ref, e_both, ctx.blocks)
         r.gain_reference, r.z_reference = vr.gain, vr.z
-        explained_ref = rms_state ** 2 - rms_ref ** 2
-        r.share = (rms_state ** 2 - r.rms_validation ** 2) / explained_ref if explained_ref > 0 else None
+        before = rms_plaus if on_plausible else rms_state
+        explained_ref = before ** 2 - min(rms_ref, rms_state) ** 2
+        r.share = (before ** 2 - r.rms_validation ** 2) / explained_ref if explained_ref > 0 else None
         implausible = r.verdict
         v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], implausible)
         r.passed, r.verdict = v.passed, v.reason
         if not r.success and r.passed:
             r.verdict += " (optimiser not converged)"
-    passing = [oc for oc in outcomes if oc.result.passed]
-    # rank by what is explained when every linear correction is allowed too: a linear cause
-    # gains little over the reference, an effect beyond any linear one gains more
-    winner = max(passing, key=lambda oc: (round(oc.result.gain_reference, 2), oc.result.gain)) if passing else None
+    winner = _simplest_of_best([oc for oc in outcomes if oc.result.passed])
     why = _why(winner, outcomes, rms_state, rms_ref, ctx.noise)
-    step = Step(winner.result.cause if winner else "none", winner.result.gain if winner else 1.0, rms_state,
+    before = rms_plaus if winner is not None and winner.result.against == "plausible" else rms_state
+    step = Step(winner.result.cause if winner else "none", winner.result.gain if winner else 1.0, before,
                 winner.result.rms_validation if winner else rms_state, rms_ref,
                 [oc.result for oc in outcomes], why)
     return step, winner
+
+
+def _simplest_of_best(passing: list[Outcome]) -> Outcome | None:
+    """The passing candidate to name: the best ranks by what it explains when every linear
+    correction is allowed too (a linear cause gains little over the reference, an effect beyond
+    any linear one more), then by its own gain; of the candidates the data cannot tell from the
+    best (validation RMS within ``diagnosis.equivalent`` of it), the one with the fewest new parameters is named (a saturation curve that a 10-play operator
+    reproduces is a saturation, not hysteresis), provided it also explains about as much as the
+    best beyond the flexible linear reference (a lag that mimics a loop at one rate does not)."""
+    if not passing:
+        return None
+    best = max(passing, key=lambda oc: (round(oc.result.gain_reference, 2), oc.result.gain))
+    margin = config.get("diagnosis.equivalent")
+    tied = [oc for oc in passing
+            if oc is best or (oc.result.gain_reference * margin >= best.result.gain_reference
+                              and oc.result.rms_validation <= margin * best.result.rms_validation)]
+    return min(tied, key=lambda oc: (oc.result.n_params, -oc.result.gain))
 
 
 def _why(winner, outcomes, rms_state, rms_ref, noise) -> str:
@@ -139,16 +169,24 @@ def load_candidates() -> list[Candidate]:
     return out
 
 
+def model_file_options(module) -> dict:
+    """The diagnosis options a model file declares: ``CALIBRATE`` (calibrate_first) and
+    ``TOLERANCE`` (tolerance)."""
+    return {"calibrate_first": getattr(module, "CALIBRATE", None), "tolerance": getattr(module, "TOLERANCE", None)}
+
+
 def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | None = None,
              calibrate_first: Sequence[str] | None = None, input: str | None = None, output: str | None = None,
              data_input: str | None = None, data_output: str | None = None, validation: float = 0.3,
              workers: int = 2, chain: bool = True, progress=None, source: str = "",
-             equations: bool = True) -> Report:
+             equations: bool = True, tolerance: Mapping[str, float] | None = None) -> Report:
     """Diagnose what ``model`` misses in ``data`` (see the package docstring).
 
     ``candidates``: the causes to try (default: the installed entry points);
     ``calibrate_first``: parameter names or glob patterns preferred when linear parameters
-    cannot be told apart (e.g. the model file's ``CALIBRATE``); ``input``/``output``: the
+    cannot be told apart (e.g. the model file's ``CALIBRATE``); ``tolerance``: {pattern: factor}
+    of plausible device-to-device spread (the model file's ``TOLERANCE``; others
+    ``diagnosis.tolerance``); ``input``/``output``: the
     model's (default: its first declared); ``data_input``/``data_output``: the data columns
     (default: the same names); ``workers``: parallel processes; ``chain``: keep naming
     causes on the extended model until none passes; ``progress``: a
@@ -156,17 +194,18 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     stages) or any callable taking a line of text."""
     with single_threaded_blas():
         return _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
-                         validation, workers, chain, progress, source, equations)
+                         validation, workers, chain, progress, source, equations, tolerance)
 
 
 def _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output, validation,
-              workers, chain, progress, source, equations) -> Report:
+              workers, chain, progress, source, equations, tolerance) -> Report:
     started = time.time()
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     tick = getattr(progress, "advance", None)
     cands = list(candidates) if candidates is not None else load_candidates()
     ctx = Context(model, data, input, output, data_input, data_output, validation, say)
-    state, cal = calibrate(ctx, calibrate_first, say)
+    state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance)
+    plausible = (pstate, cal.plausible) if pstate is not state else None
     say(f"calibrated in {time.time() - started:.1f} s: validation RMS {cal.rms_validation:.4g}")
     steps: list[Step] = []
     baseline = state
@@ -176,14 +215,15 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
             if not pending:
                 break
             outcomes = {}
-            for n, (i, oc) in enumerate(pool.run(state, pending), 1):
+            first = plausible if k == 0 else None
+            for n, (i, oc) in enumerate(pool.run(state, pending, first), 1):
                 outcomes[i] = oc
                 if tick is not None:
                     tick(status=_line(k + 1, n, len(pending), oc.result))
                 else:
                     say(_line(k + 1, n, len(pending), oc.result))
             ordered = [outcomes[i] for i in pending]
-            step, winner = assess(ctx, state, View(ctx, state, cal.free), ordered)
+            step, winner = assess(ctx, state, View(ctx, state, cal.free), ordered, first[0] if first else None)
             steps.append(step)
             say(f"step {k + 1}: {step.why}")
             if winner is None:

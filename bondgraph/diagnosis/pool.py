@@ -27,8 +27,8 @@ def _worker(ctx, calibrated, candidates, settings, tasks, results) -> None:
         task = tasks.get()
         if task is None:
             return
-        index, state = task
-        results.put((index, run_candidate(ctx, state, calibrated, candidates[index])))
+        index, state, plausible = task
+        results.put((index, run_candidate(ctx, state, calibrated, candidates[index], plausible)))
 
 
 def single_threaded_blas():
@@ -54,16 +54,17 @@ class Pool:
                 p.start()
                 self._procs.append(p)
 
-    def run(self, state, indices: Sequence[int]) -> Iterator[tuple[int, object]]:
-        """(index, outcome) for every candidate index, as they finish (costly ones start first)."""
+    def run(self, state, indices: Sequence[int], plausible=None) -> Iterator[tuple[int, object]]:
+        """(index, outcome) for every candidate index, as they finish (costly ones start first);
+        ``plausible``: (state, bounds) of the plausible device for linear structural candidates."""
         from .engine import run_candidate
         order = sorted(indices, key=lambda i: -getattr(self.candidates[i], "cost", 1))
         if not self._procs:
             for i in order:
-                yield i, run_candidate(self.ctx, state, self.calibrated, self.candidates[i])
+                yield i, run_candidate(self.ctx, state, self.calibrated, self.candidates[i], plausible)
             return
         for i in order:
-            self._tasks.put((i, state))
+            self._tasks.put((i, state, plausible))
         for _ in order:
             while True:
                 try:

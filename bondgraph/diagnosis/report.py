@@ -34,6 +34,9 @@ class CandidateResult:
     verdict: str = ""
     passed: bool = False
     seconds: float = 0.0
+    #: "plausible" when fitted from, and compared with, the plausible device (the calibration
+    #: within tolerance) instead of the null
+    against: str = ""
 
     def as_json(self) -> dict:
         out = {"cause": self.cause, "label": self.label, "kind": self.kind, "gain": self.gain,
@@ -42,6 +45,8 @@ class CandidateResult:
                "n_params": self.n_params, "params": self.params, "evidence": self.evidence,
                "at_bounds": self.at_bounds, "success": self.success, "message": self.message,
                "passed": self.passed, "verdict": self.verdict, "seconds": round(self.seconds, 2)}
+        if self.against:
+            out["against"] = self.against
         if self.skipped:
             out["skipped"] = self.skipped
         if self.error:

@@ -48,8 +48,10 @@ class View:
     """What a candidate sees.  Arrays are read-only; ``model`` must not be changed (use
     :meth:`rewrite` for a copy carrying the current values)."""
 
-    def __init__(self, ctx: Context, state: State, calibrated: Sequence[str]):
+    def __init__(self, ctx: Context, state: State, calibrated: Sequence[str],
+                 bounds: Mapping[str, tuple[float, float]] | None = None):
         self._ctx, self._state = ctx, state
+        self._bounds = dict(bounds or {})
         self.t, self.u, self.y = _frozen(ctx.t), _frozen(ctx.u), _frozen(ctx.y)
         self.dt = ctx.dt
         self.fit_idx = _frozen(ctx.ident.fit_idx)
@@ -166,8 +168,15 @@ class View:
 
     # ---- fitting services ---------------------------------------------------------------------
     def _linear_params(self) -> list[Param]:
+        """The calibrated linear parameters as refit specs: within the view's bounds (the
+        plausible device's, for a linear structural candidate) or ×/÷ ``diagnosis.spread``."""
         from .calibration import param_bounds
-        return [Param(n, self.values[n], *param_bounds(self._ctx, n, self.nominal_value(n))) for n in self.linear]
+        out = []
+        for n in self.linear:
+            lo, hi = self._bounds.get(n) or param_bounds(self._ctx, n, self.nominal_value(n))
+            v = self.values[n]
+            out.append(Param(n, math.copysign(min(max(abs(v), lo), hi), v), lo, hi))
+        return out
 
     def fit_drive(self, basis: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
                   lower: Sequence[float] = (), upper: Sequence[float] = (), *,
