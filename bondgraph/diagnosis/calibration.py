@@ -204,6 +204,9 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, sign: float, z0: np.nd
 
     lb, ub = (np.array([s.z_bounds() for s in specs]).T if specs else (np.zeros(0), np.zeros(0)))
     first = z0 if z_frf is None else z_frf
+    if z_frf is None and specs:   # no frequency response to start from: a few random starts too
+        rng = np.random.default_rng(2)
+        starts = list(starts) + [np.clip(z0 + rng.normal(0, 0.5, z0.size), lb, ub) for _ in range(4)]
     sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * 2, [np.inf] * 2, max_nfev=40,
                         starts=([] if z_frf is None else [z0]) + list(starts))
     values = dict(nominal)

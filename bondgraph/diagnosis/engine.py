@@ -30,6 +30,8 @@ class Outcome:
     result: CandidateResult
     extension: Extension | None = None
     raw: np.ndarray | None = None
+    #: the current model with its linear parameters refitted from where the candidate left them
+    linear_refit: np.ndarray | None = None
 
 
 def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate,
@@ -59,7 +61,8 @@ def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: C
         if cand.kind == LINEAR:
             res.verdict = cand.implausible(view, ext)
         ext.prediction = None
-        return Outcome(res, ext, np.asarray(raw, float))
+        refit = view.refit_linear(ext.values)
+        return Outcome(res, ext, np.asarray(raw, float), refit)
     except (BondGraphError, SimulationError, np.linalg.LinAlgError, ValueError, FloatingPointError,
             ZeroDivisionError) as exc:
         res.error = f"{type(exc).__name__}: {exc}"
@@ -90,12 +93,17 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
         g, b, r.rms_fit, r.rms_validation = score(ctx, oc.raw)
         e = y - (g * oc.raw + b)
         on_plausible = r.against == "plausible" and e_plaus is not None
-        base = compare(e_plaus if on_plausible else e_state, e, ctx.blocks)
+        before = e_plaus if on_plausible else e_state
+        if oc.linear_refit is not None:   # credit the effect, not a better linear refit
+            gr, br, _, rv = score(ctx, oc.linear_refit)
+            if rv < rms(before[val]):
+                before = y - (gr * oc.linear_refit + br)
+        base = compare(before, e, ctx.blocks)
         r.gain, r.z, r.n_eff = base.gain, base.z, base.n_eff
         e_both = y - regress(np.column_stack([oc.raw, ref_cols]), y, idx)
         vr = compare(e_ref, e_both, ctx.blocks)
         r.gain_reference, r.z_reference = vr.gain, vr.z
-        before = rms_plaus if on_plausible else rms_state
+        before = rms(before[val])
         explained_ref = before ** 2 - min(rms_ref, rms_state) ** 2
         r.share = (before ** 2 - r.rms_validation ** 2) / explained_ref if explained_ref > 0 else None
         implausible = r.verdict

@@ -167,14 +167,15 @@ class View:
         return score(self._ctx, raw)
 
     # ---- fitting services ---------------------------------------------------------------------
-    def _linear_params(self) -> list[Param]:
-        """The calibrated linear parameters as refit specs: within the view's bounds (the
-        plausible device's, for a linear structural candidate) or ×/÷ ``diagnosis.spread``."""
+    def _linear_params(self, start: Mapping[str, float] | None = None) -> list[Param]:
+        """The calibrated linear parameters as refit specs (from ``start`` or the current
+        values): within the view's bounds (the plausible device's, for a linear structural
+        candidate) or ×/÷ ``diagnosis.spread``."""
         from .calibration import param_bounds
         out = []
         for n in self.linear:
             lo, hi = self._bounds.get(n) or param_bounds(self._ctx, n, self.nominal_value(n))
-            v = self.values[n]
+            v = (start or {}).get(n, self.values[n])
             out.append(Param(n, math.copysign(min(max(abs(v), lo), hi), v), lo, hi))
         return out
 
@@ -183,16 +184,17 @@ class View:
                   direct: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
                   identity: bool = True, z0: Sequence[float] = (), z_bounds: Sequence[tuple[float, float]] = (),
                   z_names: Sequence[str] = (), refit: bool = True, max_nfev: int = 30,
-                  starts: Sequence[Sequence[float]] = ()) -> DriveFit:
+                  starts: Sequence[Sequence[float]] = (), start: Mapping[str, float] | None = None) -> DriveFit:
         """Fit the drive-side extension u_eff = [d] + Σ θ_k·basis_k (d: the current drive) through
         the linear core, plus ``direct`` columns added to the output, by variable projection:
         the coefficients by bounded linear least squares (``lower``/``upper`` for the basis;
         direct ones free), jointly with nonlinear parameters ``z`` (``basis``/``direct`` may be
-        functions of z) and, with ``refit``, the calibrated linear parameters (log space)."""
+        functions of z) and, with ``refit``, the calibrated linear parameters (log space, from
+        ``start`` or the current values)."""
         if self.drive is None:
             raise ValueError("the current model is not a drive transform of its linear core")
         d = np.asarray(self.drive)
-        lin = self._linear_params() if refit else []
+        lin = self._linear_params(start) if refit else []
         nz = len(z0)
         call_b = callable(basis)
         call_d = callable(direct)
@@ -256,6 +258,16 @@ class View:
         names = list(z_names) + [p.name for p in lin]
         at = [names[i] if i < len(names) else f"z{i}" for i in sol.at_bounds]
         return DriveFit(theta, phi, sol.z[:nz], {**self.values, **vals}, raw, drive, sol.success, sol.message, at)
+
+    def refit_linear(self, start: Mapping[str, float]) -> np.ndarray | None:
+        """Raw prediction of the current model with only its calibrated linear parameters
+        refitted, from ``start`` (where a candidate's joint fit left them): what that refit
+        alone explains, so that a candidate is credited only with what its effect adds.  None
+        when the current model is not a drive transform of its linear core or has no
+        calibrated parameter."""
+        if self.drive is None or not self.linear or not self.exact:
+            return None
+        return self.fit_drive(start=start, max_nfev=20).prediction
 
     def identification(self, model: Model, integrate: bool = False) -> Identification:
         """An :class:`Identification` of ``model`` on the same data and split (exact linear
