@@ -53,6 +53,9 @@ class Calibration:
     outside: dict[str, float] = field(default_factory=dict)
     #: validation RMS of the plausible device (the calibration within tolerance), when it differs
     rms_plausible: float | None = None
+    #: delay of the measured output behind the drive (s): the measurement chain's, solved with
+    #: the linear parameters
+    delay: float = 0.0
     notes: list[str] = field(default_factory=list)
 
     def as_json(self) -> dict:
@@ -61,7 +64,7 @@ class Calibration:
                 "at_bounds": self.at_bounds, "sensor_gain": self.gain, "offset": self.offset,
                 "rms_fit": self.rms_fit, "rms_validation": self.rms_validation, "success": self.success,
                 "message": self.message, "route": self.route, "outside_tolerance": self.outside,
-                "rms_plausible": self.rms_plausible}
+                "rms_plausible": self.rms_plausible, "delay": self.delay}
 
 
 def patterns(names: Sequence[str], pats: Sequence[str] | None) -> list[str]:
@@ -128,6 +131,27 @@ def select(S: np.ndarray, names: Sequence[str], priority: Sequence[str], tol: fl
     return [names[k] for k in kept], held
 
 
+def _delay_identifiable(ctx: Context, S: np.ndarray, names: Sequence[str], free: Sequence[str], nominal: dict,
+                        raw0: np.ndarray, scale: float, step: float = 0.1) -> bool:
+    """Whether the output's delay behind the drive (per sample) does something to the output
+    that the calibrated parameters and the sensor gain do not (the pivot rule of
+    :func:`select`, the delay taken last)."""
+    idx = ctx.ident.fit_idx
+    col = ((ctx.ident.predict(nominal, drive=ctx.drive_with_delay(step)) - raw0)[idx] / step)[:, None]
+    Q, _ = np.linalg.qr(np.column_stack([raw0[idx], np.ones(idx.size)]))
+    col = col - Q @ (Q.T @ col)
+    kept = S[:, [names.index(n) for n in free]]
+    ref = max(float(np.max(np.linalg.norm(S, axis=0))) if S.size else 0.0, float(np.linalg.norm(col)))
+    full = float(np.linalg.norm(col))
+    if kept.size:
+        Qk, _ = np.linalg.qr(kept)
+        col = col - Qk @ (Qk.T @ col)
+    nr = float(np.linalg.norm(col))
+    # a delay is a nuisance parameter: solved only when clearly apart from the model's own
+    # (more than 0.1 rad from their span), else it trades against a time constant
+    return nr >= config.get("diagnosis.identifiable") * ref and nr >= 0.1 * full and nr >= 1e-6 * scale
+
+
 def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
     """(ω rad/s, H, coherence) of output/input from Welch estimates (detrended segments)."""
     n = len(u)
@@ -168,50 +192,65 @@ def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarra
     return None if best is None else best.x
 
 
-def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, z0: np.ndarray):
-    """The free parameters fitted to the empirical frequency response (:func:`fit_frf`), or None
-    when the drive leaves too few coherent frequencies."""
-    w, H, coh = empirical_frf(ctx.u, ctx.y, ctx.fs)
-    if w.size < 2 * len(specs) + 2:
+#: the measured output's delay behind the drive is sought within ± this many samples
+MAX_DELAY = 0.5
+
+
+def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, z0: np.ndarray, delay: bool):
+    """The free parameters (and the delay, last, if ``delay``) fitted to the empirical frequency
+    response (:func:`fit_frf`), or None when the drive leaves too few coherent frequencies."""
+    w, H, coh = empirical_frf(ctx.u_recorded, ctx.y, ctx.fs)
+    if w.size < 2 * len(z0) + 2:
         return None
 
     def frf_of(z):
         vals = dict(values)
         vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
-        return ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w)
+        Hm = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w)
+        return Hm * np.exp(-1j * w * z[-1] * ctx.dt) if delay else Hm
 
-    lb, ub = np.array([s.z_bounds() for s in specs]).T
+    lb, ub = _z_bounds(specs, delay)
     return fit_frf(frf_of, z0, lb, ub, w, sign * H, coh)
 
 
-def _fit(ctx: Context, specs: list[Param], nominal: dict, sign: float, z0: np.ndarray, starts=()):
+def _z_bounds(specs: list[Param], delay: bool):
+    lb = [s.z_bounds()[0] for s in specs] + ([-MAX_DELAY] if delay else [])
+    ub = [s.z_bounds()[1] for s in specs] + ([MAX_DELAY] if delay else [])
+    return np.array(lb, float), np.array(ub, float)
+
+
+def _fit(ctx: Context, specs: list[Param], nominal: dict, sign: float, z0: np.ndarray, starts=(),
+         delay: bool = False):
     """Frequency response first when the data allow, then the time series by variable projection
-    (sensor gain and offset solved exactly); (values, raw prediction, solution, route)."""
+    (sensor gain and offset solved exactly); with ``delay``, the output's delay behind the drive
+    (samples, last in z) too.  (values, delay, raw prediction, solution, route)."""
     idx = ctx.ident.fit_idx
     route = "time series"
+    z0 = np.append(z0, 0.0) if delay else np.asarray(z0, float)
+    starts = [np.append(s, 0.0) if delay else s for s in starts]
     z_frf = None
-    if specs and ctx.lti is not None:
-        z_frf = _frf_starts(ctx, specs, nominal, sign, z0)
+    if z0.size and ctx.lti is not None:
+        z_frf = _frf_starts(ctx, specs, nominal, sign, z0, delay)
         if z_frf is not None:
             route = "frequency response, then time series"
 
     def columns(z, rows):
         vals = dict(nominal)
         vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
-        raw = ctx.ident.predict(vals)
+        raw = ctx.ident.predict(vals, drive=ctx.drive_with_delay(z[-1]) if delay else None)
         raw = raw if rows is None else raw[rows]
         return np.column_stack([raw, np.ones(raw.size)])
 
-    lb, ub = (np.array([s.z_bounds() for s in specs]).T if specs else (np.zeros(0), np.zeros(0)))
+    lb, ub = _z_bounds(specs, delay)
     first = z0 if z_frf is None else z_frf
-    if z_frf is None and specs:   # no frequency response to start from: a few random starts too
+    if z_frf is None and z0.size:   # no frequency response to start from: a few random starts too
         rng = np.random.default_rng(2)
         starts = list(starts) + [np.clip(z0 + rng.normal(0, 0.5, z0.size), lb, ub) for _ in range(4)]
     sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * 2, [np.inf] * 2, max_nfev=40,
                         starts=([] if z_frf is None else [z0]) + list(starts))
     values = dict(nominal)
     values.update({s.name: s.from_z(zi) for s, zi in zip(specs, sol.z)})
-    return values, sol.columns[:, 0], sol, route
+    return values, (float(sol.z[-1]) if delay else 0.0), sol.columns[:, 0], sol, route
 
 
 def tolerances(names: Sequence[str], tolerance: Mapping[str, float] | None) -> dict[str, float]:
@@ -251,15 +290,22 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
         + (f" (held: {', '.join(held)})" if held else ""))
     sign = 1.0 if float(np.dot(raw0[idx] - raw0[idx].mean(), ctx.y[idx] - ctx.y[idx].mean())) >= 0 else -1.0
     z0 = np.array([s.to_z(s.start) for s in specs])
-    values, raw, sol, route = _fit(ctx, specs, nominal, sign, z0)
+    with_delay = ctx.lti is not None and _delay_identifiable(ctx, S, names, free, nominal, raw0, scale)
+    if ctx.lti is not None and not with_delay:
+        held["output delay"] = "not separable from the calibrated parameters"
+    values, delay, raw, sol, route = _fit(ctx, specs, nominal, sign, z0, delay=with_delay)
+    if with_delay and abs(delay) >= 0.99 * MAX_DELAY:   # a model error the delay mimics: not a delay
+        held["output delay"] = f"it went to its search bound (±{MAX_DELAY:g} samples): a model error, not a delay"
+        values, delay, raw, sol, route = _fit(ctx, specs, nominal, sign, z0)
+    ctx.set_delay(delay)
     gain, offset, rf, rv = score(ctx, raw)
     factors = tolerances(free, tolerance)
     plausible = {n: param_bounds(ctx, n, nominal[n], factors[n]) for n in free}
     outside = {n: values[n] / nominal[n] for n in free
                if not plausible[n][0] * (1 - 1e-9) <= abs(values[n]) <= plausible[n][1] * (1 + 1e-9)}
     cal = Calibration(values, nominal, free, held, {k: tuple(v) for k, v in bounds.items()},
-                      [specs[i].name for i in sol.at_bounds], gain, offset, rf, rv, sol.success, sol.message, route,
-                      plausible=plausible, outside=outside)
+                      [(specs[i].name if i < len(specs) else "delay") for i in sol.at_bounds], gain, offset, rf, rv,
+                      sol.success, sol.message, route, plausible=plausible, outside=outside, delay=delay * ctx.dt)
     state = State(ctx.model, values, raw, gain, offset, ctx.u if ctx.lti is not None else None,
                   ctx.model.inputs[ctx.input].symbol if ctx.lti is not None else None, [], ctx.lti is not None)
     if not outside:
@@ -269,7 +315,7 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     pspecs = [Param(n, min(max(abs(values[n]), plausible[n][0]), plausible[n][1]) * (1 if values[n] > 0 else -1),
                     *plausible[n]) for n in free]
     pz0 = np.array([s.to_z(s.start) for s in pspecs])
-    pvalues, praw, psol, _ = _fit(ctx, pspecs, nominal, sign, pz0,
+    pvalues, _, praw, psol, _ = _fit(ctx, pspecs, nominal, sign, pz0,
                                   starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])])
     pgain, poffset, _, prv = score(ctx, praw)
     cal.rms_plausible = prv

@@ -15,6 +15,7 @@ from ..data import Dataset
 from ..equations import derive
 from ..graph import Model
 from ..data import uniform_step
+from ..data.sampling import interpolation_compensated
 from ..identify import Identification, check_varies
 from ..lti import LTI, first_input, first_output
 from ..simulate import Simulator
@@ -96,23 +97,43 @@ class Context:
             self.n_states, self.n_fast = lti.n, 0
             self.notes.append("the model is not linear in its states: calibration and candidates use the "
                               "compiled integrator")
-        self.data = data
         self.fs = fs
         #: white-noise equivalent of the measurement noise in the (decimated) record
         self.noise_psd = noise_density
         self.noise = math.sqrt(noise_density * fs / 2) if noise_density is not None else None
         say(f"{len(data)} samples at {fs:.6g} Hz, drive band {self.band_hz:.4g} Hz"
             + (f", {self.n_fast} fast states residualised" if self.n_fast else ""))
-        self.ident = Identification(Simulator(self.eqs), data, self.input, self.output, self.data_input,
-                                    self.data_output, validation, max_fit_points=config.get("diagnosis.max_fit_points"),
-                                    lti=lti if lti.exact else None, cut=self.cut)
         self.validation = validation
+        #: the drive as recorded (after resampling and decimation)
+        self.u_recorded = data.column(self.data_input)
+        self._lti = lti if lti.exact else None
+        self._data = data
+        self._sim = Simulator(self.eqs)
+        #: delay (in samples) of the measured output behind the drive, solved by the calibration
+        self.delay = 0.0
+        self.set_delay(0.0)
+        #: parameter names of the working model (the linear core of every chain state)
+        self.core_parameters = frozenset(p.name for p in self.eqs.params)
+
+    def drive_with_delay(self, delay: float) -> np.ndarray:
+        """The recorded drive as the exact route must see it: compensated for its linear
+        interpolation (it was sampled from a band-limited signal) and delayed by ``delay``
+        samples (the measurement chain's delay of the output behind the drive)."""
+        return interpolation_compensated(self.u_recorded, delay)
+
+    def set_delay(self, delay: float) -> None:
+        """Use the drive delayed by ``delay`` samples from now on (data, identification, u)."""
+        self.delay = float(delay)
+        cols = {k: self._data.column(k) for k in self._data.names if k != "t"}
+        cols[self.data_input] = self.drive_with_delay(delay)
+        self.data = Dataset(self._data.t, cols, self._data.metadata, self._data.path)
+        self.ident = Identification(self._sim, self.data, self.input, self.output, self.data_input,
+                                    self.data_output, self.validation,
+                                    max_fit_points=config.get("diagnosis.max_fit_points"), lti=self._lti, cut=self.cut)
         self.u, self.y, self.t = self.ident.u, self.ident.y, self.ident.t
         self.dt = self.ident.dt
         self.lti = self.ident.lti
         self.blocks = _blocks(self.ident.val_mask)
-        #: parameter names of the working model (the linear core of every chain state)
-        self.core_parameters = frozenset(p.name for p in self.eqs.params)
 
     def _decimate(self, lti: LTI, th0, data: Dataset, fs: float, y_band: float | None):
         """Decimate while the new Nyquist frequency stays ``decimate_margin`` times above the

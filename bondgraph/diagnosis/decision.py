@@ -3,7 +3,8 @@ errors with the residuals' autocorrelation taken into account, and the decision 
 
 **Comparison.** Two predictions a and b are compared on the validation blocks through their
 mean squared errors A and B: the statistic is log(A/B) (twice the log of the gain) over its
-standard error, z.  Model errors are correlated in time, so n samples are worth far fewer
+standard error, z, taken as Student's t on K − 1 degrees of freedom and expressed as the
+normal deviate of the same probability (few batches make a weaker case).  Model errors are correlated in time, so n samples are worth far fewer
 independent ones: the standard error comes from batches, each spanning four times the lag at
 which the autocorrelation of e_a² − e_b² (about each block's mean) first falls to zero (a
 whole period of a periodic error), never straddling two blocks; by the delta method,
@@ -86,10 +87,18 @@ def compare(ea: np.ndarray, eb: np.ndarray, blocks: list[slice]) -> Comparison:
     A, B = float(A_k.mean()) if K else 0.0, float(B_k.mean()) if K else 0.0
     if K < 2 or A <= 0 or B <= 0:
         return Comparison(gain, 0.0, float(K))
-    stat = math.log(A / B)
-    se = float(np.std(A_k / A - B_k / B, ddof=1)) / math.sqrt(K)
-    z = stat / se if se > 0 else (math.inf if stat > 0 else -math.inf if stat < 0 else 0.0)
+    z = _z(math.log(A / B), float(np.std(A_k / A - B_k / B, ddof=1)) / math.sqrt(K), K)
     return Comparison(gain, z, float(K))
+
+
+def _z(stat: float, se: float, K: int) -> float:
+    """Student's t = stat/se on K − 1 degrees of freedom, as the normal deviate of the same
+    one-sided probability (so that thresholds keep their meaning with few batches)."""
+    from scipy import stats
+    if se <= 0:
+        return math.inf if stat > 0 else -math.inf if stat < 0 else 0.0
+    t = stat / se
+    return float(np.sign(t) * stats.norm.isf(stats.t.sf(abs(t), K - 1)))
 
 
 def reference_taus(dt: float, span: float) -> np.ndarray:

@@ -246,7 +246,7 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                      "validation_share": validation, "input": ctx.input, "output": ctx.output,
                      "drive_band_hz": ctx.band_hz},
                     list(ctx.notes), noise=ctx.noise)
-    report.predictions = {"t": ctx.t, "u": ctx.u, "y": ctx.y, "baseline": baseline.prediction}
+    report.predictions = {"t": ctx.t, "u": ctx.u_recorded, "y": ctx.y, "baseline": baseline.prediction}
     if causes:
         ext_model = state.model.copy()
         ext_model.values.update({k: v for k, v in state.values.items() if k in ext_model.all_parameters()})

@@ -1,25 +1,31 @@
 """A linear model with static nonlinear terms in some elements' laws (a Lur'e system),
-simulated on the exact linear route by fixed-point iteration.
+simulated on the exact linear route.
 
-The model's elements ``el_k`` get laws law_k(x) + w_k with w_k = φ_k(x_k, a_k), x_k the
-element's own variable (q of a C, p of an I, f of an R) and a_k the displacement of a partner
-element (or 0).  The model with the w_k as extra inputs is linear: y = G_uy[u] + Σ G_wy[w],
-x_k = G_ux[u] + Σ G_wx[w] (each G exact on the sampled grid, w linear between samples).
-Iterating w ← φ(x(w)) from w = 0 converges when the nonlinear terms are small against the
-linear dynamics (the usual case of a weak structural nonlinearity); otherwise
-:class:`NotConverged` is raised and the caller integrates the rewritten model instead.
+The model's elements ``el_k`` get laws law_k(x) + w_k with w_k = term(c_k, r2_k, x_k, a_k),
+x_k the element's own variable (q of a C, p of an I, f of an R) and a_k the displacement of a
+partner element (or None).  The model with the w_k as extra inputs is linear; its
+first-order-hold discretisation (every input linear between samples, exact for the linear
+part) is stepped sample by sample in compiled code, and at each sample the small implicit
+equation w = term(x(w)) (x depends on w only through the hold's direct term) is solved by
+Newton's method from the previous sample's w; the term, a polynomial in x and a, is passed
+as its coefficients, so the stepping kernel is compiled once.  Unlike iterating on whole trajectories, this converges however strong the
+nonlinearity (a softening resonance that jumps between branches included); when a step does
+not (a term that makes the model unstable), :class:`NotConverged` is raised and the caller
+integrates the rewritten model.
 """
 from __future__ import annotations
 
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
+import sympy as sp
+from numba import njit
 
 from ..elements import C, I, R
 from ..equations import derive
 from ..errors import BondGraphError
 from ..graph import Model, Quantity
-from ..lti import LTI
+from ..lti import LTI, foh
 from .rewrite import modify_law
 
 
@@ -40,7 +46,7 @@ class Lure:
     ``partners[el]``: an element whose displacement the term of ``el`` uses, or None."""
 
     def __init__(self, model: Model, input: str, output: str, elements: Sequence[str],
-                 partners: Mapping[str, str | None], dt: float, cut: float | None = None):
+                 partners: Mapping[str, str | None], dt: float):
         aug = model.copy()
         self.n = len(elements)
         ws = []
@@ -59,8 +65,7 @@ class Lure:
         if not all(lti.exact for lti in self.lti.values()):
             raise BondGraphError("the model is not linear in its states")
         self.partners = [bool(partners.get(el)) for el in elements]
-        self.eqs, self.dt, self.cut = eqs, dt, cut
-        self._last: list[np.ndarray] | None = None
+        self.eqs, self.dt = eqs, dt
 
     def theta(self, values: Mapping[str, float]) -> np.ndarray:
         from ..codegen import parameter_vector
@@ -71,67 +76,183 @@ class Lure:
                 th[index[k]] = v
         return th
 
-    def linear_responses(self, values: Mapping[str, float], u: np.ndarray) -> dict[str, np.ndarray]:
-        """The element variables (``diag.x<k>``, ``diag.a<k>``) and output of the linear model."""
-        return self._respond(self._systems(self.theta(values)), self.inputs[0], u)
-
-    def _systems(self, th: np.ndarray) -> dict:
-        """Per input, its discretised system with every output as a row (one state recursion for
-        all, discretised once per parameter vector), or, when the outputs' systems do not share
-        A and B (after residualisation), their state spaces."""
-        out = {}
-        for i in self.inputs:
-            parts = [self.lti[(i, o)].state_space(th, self.cut) for o in self.outputs]
-            first = parts[0]
-            if all(p.n == first.n and np.array_equal(p.A, first.A) and np.array_equal(p.B, first.B) for p in parts):
-                out[i] = first.sampled(self.dt, np.vstack([p.C for p in parts]), np.vstack([p.D for p in parts]))
-            else:
-                out[i] = parts
-        return out
-
-    def _respond(self, systems: dict, input: str, u: np.ndarray) -> dict[str, np.ndarray]:
-        """Every output's response to ``input`` driven by the samples ``u``."""
-        sys = systems[input]
-        if isinstance(sys, list):
-            return {o: p.response(self.dt, u)[:, 0] for o, p in zip(self.outputs, sys)}
-        Y = sys.response(u)
+    def linear_responses(self, values: Mapping[str, float], u: np.ndarray, term: Callable) -> dict[str, np.ndarray]:
+        """The element variables (``diag.x<k>``, ``diag.a<k>``) and output of the linear model
+        (``term``: the one :meth:`simulate` will use; it is not applied here)."""
+        Y, _ = self._run(values, u, term, np.zeros((self.n, 2)), False)
         return {o: Y[:, r] for r, o in enumerate(self.outputs)}
 
     def simulate(self, values: Mapping[str, float], u: np.ndarray,
-                 phi: Callable[[int, np.ndarray, np.ndarray | None], np.ndarray],
-                 tol: float = 1e-7, max_iter: int = 200) -> np.ndarray:
-        """Raw output for the drive samples ``u`` with w_k = phi(k, x_k, a_k), iterated from the
-        last solution found for a drive of the same length (a fit moves the parameters a little
-        at a time, so a few iterations then suffice)."""
-        systems = self._systems(self.theta(values))
-        base = self._respond(systems, self.inputs[0], u)
-        last = self._last
-        w = list(last) if last is not None and len(last[0]) == len(u) else [np.zeros_like(u) for _ in range(self.n)]
-        x_names = [f"diag.x{k}" for k in range(self.n)]
-        a_names = {k: f"diag.a{k}" for k in range(self.n) if self.partners[k]}
-        self._last = None
-        for _ in range(max_iter):
-            resp = {o: base[o].copy() for o in self.outputs}
-            for j in range(self.n):
-                if np.any(w[j]):
-                    Y = self._respond(systems, self.inputs[1 + j], w[j])
-                    for o in self.outputs:
-                        resp[o] += Y[o]
-            with np.errstate(over="ignore", invalid="ignore"):
-                new = [phi(k, resp[x_names[k]], resp[a_names[k]] if k in a_names else None) for k in range(self.n)]
-            if not all(np.all(np.isfinite(v)) for v in new):
-                raise NotConverged("the iteration diverged")
-            change = max(float(np.max(np.abs(a - b))) for a, b in zip(new, w)) if self.n else 0.0
-            size = max(max(float(np.max(np.abs(a))) for a in new), 1e-300)
-            w = new
-            if change <= tol * size:
-                self._last = w
-                return self._final(systems, base, w)
-        raise NotConverged(f"no convergence in {max_iter} iterations (the nonlinear term is too strong "
-                           f"for the fixed-point route)")
+                 term: Callable, coefs: Sequence[tuple[float, float]]) -> np.ndarray:
+        """Raw output for the drive samples ``u`` with w_k = term(c_k, r2_k, x_k, a_k),
+        ``coefs[k] = (c_k, r2_k)``; ``term`` is written in arithmetic that works on sympy
+        symbols and is a polynomial in x and a (see :func:`polynomial_term`)."""
+        Y, ok = self._run(values, u, term, np.asarray(coefs, float).reshape(self.n, 2), True)
+        if not ok:
+            raise NotConverged("the nonlinear term makes the model diverge (an implicit step did not converge)")
+        return Y[:, 0]
 
-    def _final(self, systems, base, w) -> np.ndarray:
-        y = base[self.outputs[0]].copy()
-        for j in range(self.n):
-            y += self._respond(systems, self.inputs[1 + j], w[j])[self.outputs[0]]
-        return y
+    def _matrices(self, th: np.ndarray):
+        """A, B (inputs: drive, w_0..), C (rows: self.outputs), D of the augmented model."""
+        first = self.lti[(self.inputs[0], self.outputs[0])].matrices(th)
+        A = first[0]
+        B = np.hstack([self.lti[(i, self.outputs[0])].matrices(th)[1] for i in self.inputs])
+        C = np.vstack([self.lti[(self.inputs[0], o)].matrices(th)[2] for o in self.outputs])
+        D = np.array([[self.lti[(i, o)].matrices(th)[3][0, 0] for i in self.inputs] for o in self.outputs])
+        return A, B, C, D
+
+    def _run(self, values, u, term, coefs, active):
+        th = self.theta(values)
+        A, B, C, D = self._matrices(th)
+        Phi, Gam, G1 = foh(A, B, self.dt)
+        Dd = D + C @ G1
+        u = np.ascontiguousarray(u, float)
+        Y = np.empty((u.size, len(self.outputs)))
+        a_rows = np.array([self.outputs.index(f"diag.a{k}") if self.partners[k] else -1 for k in range(self.n)],
+                          np.int64)
+        mats = [polynomial_term(term, self.partners[k])(coefs[k, 0], coefs[k, 1]) for k in range(self.n)]
+        P = np.zeros((self.n, max(m.shape[0] for m in mats), max(m.shape[1] for m in mats)))
+        for k, m in enumerate(mats):
+            P[k, :m.shape[0], :m.shape[1]] = m
+        ok = _step(np.ascontiguousarray(Phi), np.ascontiguousarray(Gam), np.ascontiguousarray(C),
+                   np.ascontiguousarray(Dd), np.ascontiguousarray(G1), u, self.n, a_rows, P, active, Y)
+        return Y, ok
+
+
+_TERMS: dict = {}
+
+
+def polynomial_term(term: Callable, partner: bool):
+    """``term(c, r2, x, a)`` (``a`` None without a partner) as a polynomial in x and a whose
+    coefficients are functions of (c, r2): a function (c, r2) → P with
+    term = Σ P[i, j]·x^i·a^j, made once per process and formula.  A term that is not a
+    polynomial in x and a raises :class:`NotConverged` (the caller then integrates)."""
+    c, r2, x, a = sp.symbols("c r2 x a", real=True)
+    expr = sp.expand(sp.sympify(term(c, r2, x, a if partner else None)))
+    key = sp.srepr(expr)
+    if key not in _TERMS:
+        try:
+            poly = sp.Poly(expr, x, a)
+        except sp.PolynomialError as exc:
+            raise NotConverged(f"the term {expr} is not a polynomial in the element's variables") from exc
+        if any(v.free_symbols & {x, a} for v in poly.coeffs()):
+            raise NotConverged(f"the term {expr} is not a polynomial in the element's variables")
+        I, J = poly.degree(x) + 1, poly.degree(a) + 1
+        entries = [[poly.coeff_monomial(x ** i * a ** j) for j in range(J)] for i in range(I)]
+        f = sp.lambdify((c, r2), entries, modules="numpy")
+        _TERMS[key] = lambda cv, r2v, f=f: np.array(f(cv, r2v), float)
+    return _TERMS[key]
+
+
+@njit(cache=True)
+def _poly(P, k, x, a):
+    """(f, ∂f/∂x, ∂f/∂a) of f = Σ P[k, i, j]·x^i·a^j."""
+    f = fx = fa = 0.0
+    xi = 1.0
+    for i in range(P.shape[1]):
+        aj = 1.0
+        for j in range(P.shape[2]):
+            p = P[k, i, j]
+            if p != 0.0:
+                f += p * xi * aj
+                if i > 0:
+                    fx += i * p * x ** (i - 1) * aj
+                if j > 0:
+                    fa += j * p * xi * a ** (j - 1)
+            aj *= a
+        xi *= x
+    return f, fx, fa
+
+
+@njit(cache=True)
+def _solve_in_place(J, g, m):
+    """g ← J⁻¹g by Gaussian elimination with partial pivoting (m is small); J is overwritten."""
+    for c in range(m):
+        p = c
+        for r in range(c + 1, m):
+            if abs(J[r, c]) > abs(J[p, c]):
+                p = r
+        if p != c:
+            for l in range(m):
+                J[c, l], J[p, l] = J[p, l], J[c, l]
+            g[c], g[p] = g[p], g[c]
+        for r in range(c + 1, m):
+            f = J[r, c] / J[c, c]
+            for l in range(c, m):
+                J[r, l] -= f * J[c, l]
+            g[r] -= f * g[c]
+    for c in range(m - 1, -1, -1):
+        acc = g[c]
+        for l in range(c + 1, m):
+            acc -= J[c, l] * g[l]
+        g[c] = acc / J[c, c]
+
+
+@njit(cache=True)
+def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, active, Y):
+    """Sample-by-sample first-order-hold stepping of the augmented model (inputs: drive, then
+    the n_el nonlinear terms; output rows: output, element variables, partners); at each
+    sample Newton's method on w − term(x(w), a(w)) = 0 from the previous sample's w (w = 0
+    throughout unless ``active``).  False when a step does not converge."""
+    n = Phi.shape[0]
+    N = u.shape[0]
+    R = C.shape[0]
+    xi = np.zeros(n)
+    xn = np.zeros(n)
+    w = np.zeros(n_el)
+    g = np.zeros(n_el)
+    J = np.zeros((n_el, n_el))
+    row = np.zeros(R)
+    scale = 1e-300                           # largest |w| so far: the convergence test's scale
+    for i in range(n):                       # at rest: x[0] = ξ[0] + Γ1·u_all[0] = 0
+        xi[i] = -G1[i, 0] * u[0]
+    for k in range(N):
+        for r in range(R):                   # every row without the terms' direct part
+            acc = Dd[r, 0] * u[k]
+            for i in range(n):
+                acc += C[r, i] * xi[i]
+            row[r] = acc
+        converged = not active
+        for it in range(30 if active else 0):
+            for j in range(n_el):
+                x = row[1 + j]
+                for l in range(n_el):
+                    x += Dd[1 + j, 1 + l] * w[l]
+                ar = a_rows[j]
+                a = 0.0
+                if ar >= 0:
+                    a = row[ar]
+                    for l in range(n_el):
+                        a += Dd[ar, 1 + l] * w[l]
+                v, dx, da = _poly(P, j, x, a)
+                g[j] = w[j] - v
+                scale = max(scale, abs(v))
+                for l in range(n_el):
+                    J[j, l] = (1.0 if j == l else 0.0) - dx * Dd[1 + j, 1 + l] - (da * Dd[ar, 1 + l] if ar >= 0 else 0.0)
+            _solve_in_place(J, g, n_el)
+            change = 0.0
+            for j in range(n_el):
+                w[j] -= g[j]
+                change = max(change, abs(g[j]))
+            if not np.isfinite(change):
+                return False
+            if change <= 1e-12 * scale:
+                converged = True
+                break
+        if not converged:
+            return False
+        for r in range(R):
+            acc = row[r]
+            for l in range(n_el):
+                acc += Dd[r, 1 + l] * w[l]
+            Y[k, r] = acc
+        for i in range(n):                   # ξ[k+1] = Φ ξ[k] + Γ u_all[k]
+            acc = Gam[i, 0] * u[k]
+            for l in range(n_el):
+                acc += Gam[i, 1 + l] * w[l]
+            for l2 in range(n):
+                acc += Phi[i, l2] * xi[l2]
+            xn[i] = acc
+        for i in range(n):
+            xi[i] = xn[i]
+    return True

@@ -127,7 +127,12 @@ class Report:
         free = ", ".join(f"{k} = {v:.5g}" + (" (AT BOUND)" if k in cal["at_bounds"] else "")
                          for k, v in cal["params"].items())
         lines.append(f"  calibrated ({cal['route']}): {free or 'no model parameter'}; sensor gain "
-                     f"{cal['sensor_gain']:.5g}, offset {cal['offset']:.4g}")
+                     f"{cal['sensor_gain']:.5g}, offset {cal['offset']:.4g}, output delay {cal.get('delay', 0.0):.3g} s")
+        if cal.get("outside_tolerance"):
+            lines.append("  outside their tolerance (an implausible device unless a structural cause explains it): "
+                         + ", ".join(f"{k} ×{v:.3g}" for k, v in cal["outside_tolerance"].items())
+                         + (f"; the plausible device's validation RMS {cal['rms_plausible']:.4g}"
+                            if cal.get("rms_plausible") is not None else ""))
         for k, why in cal["held"].items():
             lines.append(f"  held at the model's value: {k} ({why})")
         if cal["at_bounds"]:

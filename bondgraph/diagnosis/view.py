@@ -152,15 +152,17 @@ class View:
         return ctx.lti.state_space(th, ctx.cut).response(ctx.dt, U, rows=rows)
 
     def frequency_response(self, omega: np.ndarray, values: Mapping[str, float] | None = None) -> np.ndarray:
-        """The linear core's frequency response at ``omega`` (rad/s), sensor gain 1."""
+        """The linear core's frequency response at ``omega`` (rad/s), sensor gain 1, with the
+        measurement chain's delay of the output behind the drive (as :meth:`respond` sees it)."""
         ctx = self._ctx
         th = self.theta_values(values)
-        return ctx.lti.state_space(th, ctx.cut).frequency_response(omega)
+        omega = np.asarray(omega, float)
+        return ctx.lti.state_space(th, ctx.cut).frequency_response(omega) * np.exp(-1j * omega * ctx.delay * ctx.dt)
 
     def empirical_frf(self):
         """(ω rad/s, H, coherence) of the measured output over the input (Welch)."""
         from .calibration import empirical_frf
-        return empirical_frf(self._ctx.u, self._ctx.y, self._ctx.fs)
+        return empirical_frf(self._ctx.u_recorded, self._ctx.y, self._ctx.fs)
 
     def score(self, raw: np.ndarray) -> tuple[float, float, float, float]:
         """(sensor gain, offset, RMS fit part, RMS validation part) of a raw prediction."""

@@ -3,8 +3,8 @@
 Ghafarirad & Taghvaeipour, C. R. Mécanique 347 (2019)).  When the rest of the model is
 linear, or a drive transform of its linear core (hysteresis or creep on the drive named
 before), they are simulated on the exact linear route as a Lur'e system
-(:meth:`bondgraph.diagnosis.View.lure`), else, or when that iteration does not converge (a
-strong nonlinear resonance), with the compiled integrator."""
+(:meth:`bondgraph.diagnosis.View.lure`), else, or for parameter values that make that
+route diverge, with the compiled integrator."""
 from __future__ import annotations
 
 from abc import abstractmethod
@@ -43,7 +43,8 @@ class _Centred(Candidate):
     @staticmethod
     @abstractmethod
     def term(c, r2, x, a):
-        """The term added to the law (sympy or numpy arithmetic alike)."""
+        """The term added to the law (sympy arithmetic: it is compiled; ``a`` is None without a
+        partner)."""
 
     def partner(self, model, el) -> str | None:
         return None
@@ -69,7 +70,7 @@ class _Centred(Candidate):
         names = [f"{self.prefix}_{el}" for el in els]
         lure = view.lure(view.rewrite(), els, partners)
         if lure is not None:
-            series = lure.linear_responses(dict(view.values), lure.drive)
+            series = lure.linear_responses(dict(view.values), lure.drive, self.term)
             xs = {el: series[f"diag.x{k}"] for k, el in enumerate(els)}
             az = {el: series.get(f"diag.a{k}") for k, el in enumerate(els)}
         else:
@@ -82,15 +83,18 @@ class _Centred(Candidate):
         predict = None
         if lure is not None:
             def predict(values):
-                cs = [values[n] for n in names]
-                raw = lure.simulate(values, lure.drive, lambda k, x, a: self.term(cs[k], r2s[els[k]], x, a))
+                coefs = [(values[n], r2s[el]) for n, el in zip(names, els)]
+                try:
+                    raw = lure.simulate(values, lure.drive, self.term, coefs)
+                except NotConverged:   # integrate the rewritten model for these values instead
+                    try:
+                        return view.simulate(model, values)
+                    except SimulationError:   # it diverges: a fit as bad as no model at all
+                        return np.zeros(len(view.y))
                 return raw if lure.extra is None else raw + lure.extra
 
         def fitted(specs, nfev, start=None):
-            try:
-                return view.fit_model(model, specs, max_nfev=nfev, start=start, predict=predict)
-            except NotConverged:  # a strong nonlinear resonance: integrate the rewritten model
-                return view.fit_model(model, specs, max_nfev=nfev, start=start)
+            return view.fit_model(model, specs, max_nfev=nfev, start=start, predict=predict)
 
         def spec(f, free=False):
             return [Spec(n, f * refs[el][0], 0.0 if free else f * refs[el][0],
@@ -126,7 +130,8 @@ class StiffnessSoftening(_Centred):
 
     cause = "softening"
     label = "cubic softening of the stiffness elements"
-    role, prefix, upper = "stiffness", "soft.k3", 2.0
+    role, prefix, upper = "stiffness", "soft.k3", 0.5
+    grid = (0.003, 0.01, 0.03, 0.1, 0.3)
 
     @staticmethod
     def term(c, r2, x, a):
