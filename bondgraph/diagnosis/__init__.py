@@ -9,17 +9,24 @@ The engine, in order:
 1. **Prepare** (:mod:`.context`): resample irregular time stamps; find the drive's band;
    when every mode of the (linear) model is far above the data's Nyquist frequency, replace
    it by its quasi-static contribution (time-scale separation, :func:`bondgraph.lti.residualise`;
-   with none left, the static route); decimate while the band and the modes the data resolve
-   stay well below the new Nyquist frequency; estimate the noise floor where the drive has no
-   power; split into fit and validation blocks.
+   with none left, the static route); decimate while the drive's band and the band where the
+   output stands above its noise floor stay well below the new Nyquist frequency; estimate
+   the noise floor where the drive has no power; treat the drive as the band-limited signal it
+   was sampled from (its linear interpolation compensated); split into fit and validation
+   blocks.
 2. **Calibrate** (:mod:`.calibration`): the null is the best *linear* explanation: every
-   identifiable linear parameter, the sensor gain and offset.
+   identifiable linear parameter, the sensor gain and offset, and the output's delay behind
+   the drive when the data separate it.  When that needs values outside the parameters'
+   tolerance, the plausible device (within tolerance) is calibrated too.
 3. **Try every candidate** (:mod:`.candidate`, run in a :mod:`.pool` of workers): each
    extends the current model through a read-only :class:`View` and returns an
-   :class:`Extension`.
+   :class:`Extension`; linear structural candidates start from the plausible device.
 4. **Decide** (:mod:`.decision`): paired comparisons of validation errors with the
-   residuals' autocorrelation, against the calibrated model and against a flexible linear
-   reference, with the thresholds of ``bondgraph.config`` (section ``diagnosis``).
+   residuals' autocorrelation (Student's t on the effective number of batches), against the
+   current model refitted from where the candidate left its linear parameters (so that only
+   the effect is credited) and against a flexible linear reference, with the thresholds of
+   ``bondgraph.config`` (section ``diagnosis``); of equivalent passing candidates the one
+   with the fewest parameters is named.
 5. **Chain** (:mod:`.engine`): the named cause extends the model; the others are tried
    again on it until none passes (compound effects: e.g. hysteresis, then creep).
 6. **Report** (:mod:`.report`): every step, every candidate's verdict, why ``none``.

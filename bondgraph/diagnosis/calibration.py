@@ -7,11 +7,20 @@
    calibrated if what it does to the output is not already done by those kept before it (the
    model file's ``CALIBRATE`` patterns first, then by size); the others are held at the
    model's values and reported with the reason.
-2. **Bounds.** Within ×/÷ ``diagnosis.spread`` of the model's values and the parameter's
-   declared bounds; the sensor gain and offset are free.
+2. **Bounds.**  Within ×/÷ ``diagnosis.spread`` of the model's values and the parameter's
+   declared bounds; the sensor gain and offset are free.  The output's delay behind the drive
+   (the measurement chain's: sensor electronics, sampling skew) is solved within ±0.5 sample
+   when its effect is clearly apart from the parameters' (else, or when it ends on that bound,
+   it is held at 0 and reported).
 3. **Fit.** On the empirical frequency response first (multi-start, coherence-weighted,
    gain removed: free of the local minima lightly damped modes give a time-domain fit), then
-   on the time series by variable projection (gain and offset solved at every step).
+   on the time series by variable projection (gain and offset solved at every step); without
+   a frequency response, from the model's values and four random starts.
+4. **The plausible device.**  Parameters that end outside their tolerance (the model file's
+   ``TOLERANCE``, else ``diagnosis.tolerance``: manufacturing spread) make the null an
+   implausible device; the calibration within tolerance is then fitted too, and linear
+   structural causes must explain what the implausible values explain (an input stage or a
+   missing mode can hide behind a 7× capacitance).
 """
 from __future__ import annotations
 
@@ -326,6 +335,8 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
 def score(ctx: Context, raw: np.ndarray) -> tuple[float, float, float, float]:
     """(sensor gain, offset, RMS on the fit part, RMS on the validation part) of a raw prediction."""
     idx = ctx.ident.fit_idx
+    if not np.all(np.isfinite(raw)):
+        raise FloatingPointError("the prediction is not finite")
     A = np.column_stack([raw[idx], np.ones(idx.size)])
     (g, b), *_ = np.linalg.lstsq(A, ctx.y[idx], rcond=None)
     r = ctx.y - g * raw - b

@@ -69,12 +69,16 @@ def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray]
 
     def resid(z):
         Ai = columns(z, idx)
+        if not np.all(np.isfinite(Ai)):      # never hand LAPACK a NaN (it prints to stdout)
+            return np.full(idx.size, 1e3)
         c = bounded_lstsq(Ai, yi, lower, upper)
         r = (Ai @ c - yi) / scale
         return r if np.all(np.isfinite(r)) else np.full(idx.size, 1e3)
 
     def final(z):
         A = columns(z, None)
+        if not np.all(np.isfinite(A)):
+            raise FloatingPointError("the fitted model's prediction is not finite")
         return bounded_lstsq(A[idx], yi, lower, upper), A
 
     z0 = np.asarray(z0, float)
