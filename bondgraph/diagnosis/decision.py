@@ -73,8 +73,10 @@ def compare(ea: np.ndarray, eb: np.ndarray, blocks: list[slice]) -> Comparison:
     """Compare residual series ``eb`` with ``ea`` (both over every sample) on ``blocks``."""
     idx = np.concatenate([np.arange(s.start, s.stop) for s in blocks])
     offsets = list(np.cumsum([0] + [s.stop - s.start for s in blocks])[:-1])
-    a2, b2 = ea[idx] ** 2, eb[idx] ** 2
-    gain = math.sqrt(float(a2.mean()) / max(float(b2.mean()), 1e-300))
+    with np.errstate(over="ignore", invalid="ignore"):
+        a2, b2 = ea[idx] ** 2, eb[idx] ** 2
+        ratio = float(a2.mean()) / max(float(b2.mean()), 1e-300)
+    gain = math.sqrt(ratio) if math.isfinite(ratio) else 0.0
     L = batch_length(a2 - b2, blocks, offsets)
     A_k, B_k = [], []
     for s, o in zip(blocks, offsets):
@@ -85,8 +87,9 @@ def compare(ea: np.ndarray, eb: np.ndarray, blocks: list[slice]) -> Comparison:
     A_k, B_k = np.asarray(A_k), np.asarray(B_k)
     K = A_k.size
     A, B = float(A_k.mean()) if K else 0.0, float(B_k.mean()) if K else 0.0
-    if K < 2 or A <= 0 or B <= 0:
-        return Comparison(gain, 0.0, float(K))
+    if not (math.isfinite(A) and math.isfinite(B)) or A <= 0 or B <= 0 or K < 2:
+        worse = B > A or not math.isfinite(B)
+        return Comparison(gain, -math.inf if worse and K >= 2 else 0.0, float(K))
     z = _z(math.log(A / B), float(np.std(A_k / A - B_k / B, ddof=1)) / math.sqrt(K), K)
     return Comparison(gain, z, float(K))
 

@@ -54,6 +54,8 @@ def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: C
         res.evidence = {k: float(v) for k, v in cand.evidence(view).items()}
         ext = cand.fit(view)
         raw = ext.prediction if ext.prediction is not None else view.simulate(ext.model, ext.values)
+        if not np.all(np.isfinite(raw)):
+            raise FloatingPointError("the extended model's prediction is not finite")
         res.params = {k: float(ext.values[k]) for k in ext.new}
         res.n_params = len(ext.new)
         res.at_bounds = list(ext.at_bounds)
