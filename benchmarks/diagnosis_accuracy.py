@@ -5,6 +5,7 @@
     python benchmarks/diagnosis_accuracy.py --set bench --limit 20 --timeout 900
     python benchmarks/diagnosis_accuracy.py --seeds 2004,2010 --size bench
     python benchmarks/diagnosis_accuracy.py --set bench --resume  # continue an interrupted run
+    python benchmarks/diagnosis_accuracy.py --set bench --cache benchmarks/.data/records  # keep the records
     git archive REV | tar -x -C /tmp/old && python benchmarks/diagnosis_accuracy.py --engine /tmp/old
 
 Each record is drawn by ``truthgen.draw(seed, size)`` (the protocol is the package docstring of
@@ -96,6 +97,23 @@ def summary(results: list) -> str:
     return "\n".join(out)
 
 
+def cached_draw(seed: int, size: str, cache: str | None):
+    """``draw(seed, size)``, kept in (and read back from) ``cache`` when given."""
+    if not cache:
+        return draw(seed, size)
+    import pickle
+    os.makedirs(cache, exist_ok=True)
+    path = os.path.join(cache, f"{size}_{seed}.pkl")
+    if os.path.exists(path):
+        with open(path, "rb") as f:
+            return pickle.load(f)
+    rec = draw(seed, size)
+    with open(path + ".tmp", "wb") as f:
+        pickle.dump(rec, f)
+    os.replace(path + ".tmp", path)
+    return rec
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--set", default="ci", choices=sorted(SEEDS), help="seed set (default ci)")
@@ -108,6 +126,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", help="results JSON (default benchmarks/.data/diagnosis_accuracy_<set>.json)")
     ap.add_argument("--resume", action="store_true", help="keep the results already in --out and skip those seeds")
     ap.add_argument("--markdown", help="also write the report as markdown to this file")
+    ap.add_argument("--cache", help="keep generated records in this folder (pickles) and reuse them: the "
+                                    "generator is deterministic, so a rerun on another engine skips it")
     ap.add_argument("--engine", help="diagnose with another source tree of the project (e.g. 'git archive REV' "
                                      "unpacked): its bondgraph, library and models come first on PYTHONPATH")
     args = ap.parse_args(argv)
@@ -133,7 +153,7 @@ def main(argv=None) -> int:
             continue
         t0 = time.perf_counter()
         try:
-            rec = draw(seed, size)
+            rec = cached_draw(seed, size, args.cache)
         except RuntimeError as exc:          # the visibility rule refused the seed
             print(f"[{k}/{len(seeds)}] seed {seed}: not generated ({exc})", file=sys.stderr, flush=True)
             continue

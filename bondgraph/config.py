@@ -79,6 +79,8 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.max_chain": Default(3, "most causes named in one diagnosis (compound effects)"),
     "diagnosis.check_max_steps": Default(2_000_000, "integrator steps allowed to the second route (the extended "
                                          "model integrated as a check); beyond, the check is skipped"),
+    "diagnosis.candidate_seconds": Default(60.0, "a candidate's fits stop at their best point after this many seconds "
+                                                "(reported as not converged)"),
     "diagnosis.max_fit_points": Default(20000, "samples of the fit part used by the optimisers (evenly thinned)"),
 }
 

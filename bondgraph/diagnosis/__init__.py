@@ -22,7 +22,7 @@ The engine, in order:
    extends the current model through a read-only :class:`View` and returns an
    :class:`Extension`; linear structural candidates start from the plausible device.
 4. **Decide** (:mod:`.decision`): paired comparisons of validation errors with the
-   residuals' autocorrelation (Student's t on the effective number of batches), against the
+   residuals' autocorrelation (the effective number of independent batches), against the
    current model refitted from where the candidate left its linear parameters (so that only
    the effect is credited) and against a flexible linear reference, with the thresholds of
    ``bondgraph.config`` (section ``diagnosis``); of equivalent passing candidates the one

@@ -15,7 +15,8 @@
 3. **Fit.** On the empirical frequency response first (multi-start, coherence-weighted,
    gain removed: free of the local minima lightly damped modes give a time-domain fit), then
    on the time series by variable projection (gain and offset solved at every step); without
-   a frequency response, from the model's values and four random starts.
+   a frequency response, from the model's values and the best three of 48 random points
+   within ×/÷2 of them.
 4. **The plausible device.**  Parameters that end outside their tolerance (the model file's
    ``TOLERANCE``, else ``diagnosis.tolerance``: manufacturing spread) make the null an
    implausible device; the calibration within tolerance is then fitted too, and linear
@@ -252,14 +253,32 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, sign: float, z0: np.nd
 
     lb, ub = _z_bounds(specs, delay)
     first = z0 if z_frf is None else z_frf
-    if z_frf is None and z0.size:   # no frequency response to start from: a few random starts too
-        rng = np.random.default_rng(2)
-        starts = list(starts) + [np.clip(z0 + rng.normal(0, 0.5, z0.size), lb, ub) for _ in range(4)]
+    if z_frf is None and z0.size:   # no frequency response to start from: the best of a random sample
+        starts = list(starts) + _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
     sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * 2, [np.inf] * 2, max_nfev=40,
                         starts=([] if z_frf is None else [z0]) + list(starts))
     values = dict(nominal)
     values.update({s.name: s.from_z(zi) for s, zi in zip(specs, sol.z)})
     return values, (float(sol.z[-1]) if delay else 0.0), sol.columns[:, 0], sol, route
+
+
+def _sampled_starts(columns, y: np.ndarray, idx: np.ndarray, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
+                    n: int = 48, keep: int = 3, width: float = math.log(2.0)) -> list[np.ndarray]:
+    """The ``keep`` best of ``n`` points drawn uniformly within ×/÷2 of ``z0`` (in the bounds),
+    by the projected cost (gain and offset solved): starts for a time-domain fit whose cost has
+    many local minima (a lightly damped mode driven near resonance)."""
+    rng = np.random.default_rng(2)
+    yi = y[idx]
+    scored = []
+    for _ in range(n):
+        z = np.clip(z0 + rng.uniform(-width, width, z0.size), lb, ub)
+        A = columns(z, idx)
+        if not np.all(np.isfinite(A)):
+            continue
+        coef, *_ = np.linalg.lstsq(A, yi, rcond=None)
+        scored.append((float(np.sum((A @ coef - yi) ** 2)), z))
+    scored.sort(key=lambda p: p[0])
+    return [z for _, z in scored[:keep]]
 
 
 def tolerances(names: Sequence[str], tolerance: Mapping[str, float] | None) -> dict[str, float]:

@@ -19,6 +19,7 @@ from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State
 from .decision import compare, judge, reference_prediction, regress
 from .pool import Pool, single_threaded_blas
+from .projection import time_budget
 from .report import CandidateResult, Report, Step
 from .view import View
 
@@ -47,30 +48,35 @@ def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: C
     else:
         view = View(ctx, state, calibrated)
     try:
-        ok = cand.applies(view)
-        if ok is not True:
-            res.skipped = ok if isinstance(ok, str) and ok else "does not apply to this model"
-            return Outcome(res)
-        res.evidence = {k: float(v) for k, v in cand.evidence(view).items()}
-        ext = cand.fit(view)
-        raw = ext.prediction if ext.prediction is not None else view.simulate(ext.model, ext.values)
-        if not np.all(np.isfinite(raw)):
-            raise FloatingPointError("the extended model's prediction is not finite")
-        res.params = {k: float(ext.values[k]) for k in ext.new}
-        res.n_params = len(ext.new)
-        res.at_bounds = list(ext.at_bounds)
-        res.success, res.message = ext.success, ext.message
-        if cand.kind == LINEAR:
-            res.verdict = cand.implausible(view, ext)
-        ext.prediction = None
-        refit = view.refit_linear(ext.values)
-        return Outcome(res, ext, np.asarray(raw, float), refit)
+        with time_budget(config.get("diagnosis.candidate_seconds")):
+            return _fit_candidate(cand, view, res)
     except (BondGraphError, SimulationError, np.linalg.LinAlgError, ValueError, FloatingPointError,
             ZeroDivisionError) as exc:
         res.error = f"{type(exc).__name__}: {exc}"
         return Outcome(res)
     finally:
         res.seconds = time.time() - started
+
+
+def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome:
+    ok = cand.applies(view)
+    if ok is not True:
+        res.skipped = ok if isinstance(ok, str) and ok else "does not apply to this model"
+        return Outcome(res)
+    res.evidence = {k: float(v) for k, v in cand.evidence(view).items()}
+    ext = cand.fit(view)
+    raw = ext.prediction if ext.prediction is not None else view.simulate(ext.model, ext.values)
+    if not np.all(np.isfinite(raw)):
+        raise FloatingPointError("the extended model's prediction is not finite")
+    res.params = {k: float(ext.values[k]) for k in ext.new}
+    res.n_params = len(ext.new)
+    res.at_bounds = list(ext.at_bounds)
+    res.success, res.message = ext.success, ext.message
+    if cand.kind == LINEAR:
+        res.verdict = cand.implausible(view, ext)
+    ext.prediction = None
+    refit = view.refit_linear(ext.values)
+    return Outcome(res, ext, np.asarray(raw, float), refit)
 
 
 def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],

@@ -6,14 +6,36 @@ logarithm for the linear parameters of a model, whose sign is fixed by the model
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
+import time
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Callable, Iterator, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from ..identify import bounded_lstsq
+
+
+#: the time (time.monotonic) after which fits in this context stop at their best point so far
+_DEADLINE: contextvars.ContextVar[float | None] = contextvars.ContextVar("deadline", default=None)
+
+
+@contextlib.contextmanager
+def time_budget(seconds: float | None) -> Iterator[None]:
+    """Within the block, :func:`projected_fit` stops at the best point it has found once
+    ``seconds`` have passed (reported as not converged)."""
+    token = _DEADLINE.set(None if seconds is None else time.monotonic() + seconds)
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+class _OutOfTime(Exception):
+    pass
 
 
 @dataclass(frozen=True)
@@ -66,14 +88,23 @@ def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray]
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
 
     yi = y[idx]
+    deadline = _DEADLINE.get()
+    seen = {"cost": math.inf, "z": None}
 
     def resid(z):
+        if deadline is not None and seen["z"] is not None and time.monotonic() > deadline:
+            raise _OutOfTime
         Ai = columns(z, idx)
         if not np.all(np.isfinite(Ai)):      # never hand LAPACK a NaN (it prints to stdout)
             return np.full(idx.size, 1e3)
         c = bounded_lstsq(Ai, yi, lower, upper)
         r = (Ai @ c - yi) / scale
-        return r if np.all(np.isfinite(r)) else np.full(idx.size, 1e3)
+        if not np.all(np.isfinite(r)):
+            return np.full(idx.size, 1e3)
+        cost = 0.5 * float(r @ r)
+        if cost < seen["cost"]:
+            seen["cost"], seen["z"] = cost, np.array(z, float)
+        return r
 
     def final(z):
         A = columns(z, None)
@@ -87,13 +118,22 @@ def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray]
         r = (A[idx] @ c - yi) / scale
         return Projected(z0, c, A, 0.5 * float(r @ r), 1, True, "linear least squares", [])
     best = None
+    nfev, out_of_time = 0, False
     for start in [z0, *[np.asarray(s, float) for s in starts]]:
-        sol = least_squares(resid, np.clip(start, lb, ub), bounds=(lb, ub), max_nfev=max_nfev, diff_step=1e-4,
-                            x_scale=1.0)
+        try:
+            sol = least_squares(resid, np.clip(start, lb, ub), bounds=(lb, ub), max_nfev=max_nfev, diff_step=1e-4,
+                                x_scale=1.0)
+        except _OutOfTime:
+            out_of_time = True
+            break
+        nfev += int(sol.nfev)
         if best is None or sol.cost < best.cost:
             best = sol
-    c, A = final(best.x)
+    if out_of_time and (best is None or seen["cost"] < best.cost):
+        x, cost, success, message = seen["z"], seen["cost"], False, "stopped at its best point: time budget spent"
+    else:
+        x, cost, success, message = best.x, float(best.cost), bool(best.success), str(best.message)
+    c, A = final(x)
     width = np.where(np.isfinite(ub - lb), ub - lb, 1.0)
-    at = [i for i in range(best.x.size)
-          if best.x[i] - lb[i] < 1e-3 * width[i] or ub[i] - best.x[i] < 1e-3 * width[i]]
-    return Projected(best.x, c, A, float(best.cost), int(best.nfev), bool(best.success), str(best.message), at)
+    at = [i for i in range(x.size) if x[i] - lb[i] < 1e-3 * width[i] or ub[i] - x[i] < 1e-3 * width[i]]
+    return Projected(x, c, A, cost, nfev, success, message, at)
