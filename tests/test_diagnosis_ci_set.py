@@ -6,10 +6,10 @@ four device families, mechanisms structurally unlike the diagnosis' candidates, 
 parameters, drives, coloured noise, jittered time, a visibility rule).  The set was fixed before
 the engine was tuned and is never tuned on.  The protocol's target is >= 90 % right and at most
 1 false alarm in 15 null draws; what the engine gives today (benchmarks/README.md, "Diagnosis
-accuracy") is 9 of these 14 right (the first cause right on 10), one false alarm on the three
+accuracy") is 11 of these 14 right (the first cause right on 12), no false alarm on the three
 null records, every record answered in under 40 s.  This test guards that level: one record
-more may turn wrong (optimiser paths differ slightly between machines) but not two, no
-second false alarm, and every record is answered well inside the 2-minute goal.
+more may turn wrong (optimiser paths differ slightly between machines) but not two, at most
+one false alarm, and every record is answered well inside the 2-minute goal.
 """
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ def test_every_record_is_answered_in_minutes(results):
 def test_accuracy_holds_its_measured_level(results):
     right = sum(r["right"] for r in results)
     first = sum(r["first_right"] for r in results)
-    assert right >= 8 and first >= 9, _table(results)
+    assert right >= 10 and first >= 11, _table(results)
 
 
 def test_null_records_raise_at_most_one_alarm(results):
