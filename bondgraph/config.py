@@ -65,6 +65,8 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.min_z": Default(3.0, "a cause must lower the squared validation error by this many standard errors "
                                     "(effective sample size from the residuals' autocorrelation)"),
     "diagnosis.min_gain": Default(1.1, "a cause must lower the validation RMS by at least this factor"),
+    "diagnosis.min_gain_chain": Default(1.2, "... and by this factor in a chain step after the first (what the named "
+                                            "extension left holds its own imperfection)"),
     "diagnosis.min_gain_reference": Default(1.05, "a nonlinear or memory cause must beat the flexible linear "
                                                   "reference by this factor (both with the reference's freedom)"),
     "diagnosis.min_z_reference": Default(2.0, "... and by this many standard errors (a second-stage test, after "

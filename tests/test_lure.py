@@ -59,7 +59,7 @@ def test_stepped_lure_agrees_with_the_integrated_rewrite(element, term, partner,
     t, u = drive()
     lure = Lure(resonator(), "F", "x", [element], {element: partner}, t[1] - t[0])
     lin = lure.linear_responses({}, u, term)
-    amp = lin["diag.x0" if partner is None else "diag.a0"]
+    amp = lin[f"diag.x:{element}" if partner is None else f"diag.a:{element}"]
     coef = change * base / float(np.max(np.abs(amp))) ** 2
     r2 = 0.5 * float(np.mean(amp ** 2))
     y = lure.simulate({}, u, term, [(coef, r2)])
@@ -71,6 +71,26 @@ def test_stepped_lure_agrees_with_the_integrated_rewrite(element, term, partner,
     assert np.std(ref - linear) > 0.05 * np.std(linear)           # the term matters
     assert np.std(y - ref) < 5e-3 * np.std(ref)                     # and both routes agree
     assert np.std(lin["x"] - linear) < 1e-6 * np.std(linear)        # the linear part is exact
+
+
+def test_terms_named_before_are_held_while_a_new_one_is_fitted():
+    """A chain step after a structural cause: softening on the spring held, velocity-cubic
+    damping on the damper added; both routes agree."""
+    t, u = drive()
+    first = Lure(resonator(), "F", "x", ["k"], {"k": None}, t[1] - t[0])
+    q = first.linear_responses({}, u, softening)["diag.x:k"]
+    soft = (0.3 * K / float(np.max(np.abs(q))) ** 2, 0.5 * float(np.mean(q ** 2)))
+    lure = Lure(resonator(), "F", "x", ["c"], {"c": None}, t[1] - t[0], fixed=[("k", None, softening, *soft)])
+    v = lure.linear_responses({}, u, stanton)["diag.x:c"]          # the damper's velocity, softening held
+    damp = (3.0 * CD / float(np.max(np.abs(v))) ** 2, 0.5 * float(np.mean(v ** 2)))
+    y = lure.simulate({}, u, stanton, [damp])
+    rewritten = resonator()
+    modify_law(rewritten, "k", lambda x, old: old + softening(*soft, x, None))
+    modify_law(rewritten, "c", lambda x, old: old + stanton(*damp, x, None))
+    ref = integrated(rewritten, t, u)
+    assert np.std(y - ref) < 5e-3 * np.std(ref)
+    only_soft = first.simulate({}, u, softening, [soft])
+    assert np.std(only_soft - ref) > 0.05 * np.std(ref)             # the damping term mattered
 
 
 def test_a_diverging_term_is_reported_not_returned():

@@ -33,7 +33,10 @@ class Extension:
     computed it (else the engine simulates ``model``); ``drive``/``drive_expr``: the signal
     and expression the linear core now sees, for drive-side extensions (so that a further
     cause can act on it); ``at_bounds``: parameters that ended on a search bound;
-    ``success``/``message``: from the optimiser."""
+    ``success``/``message``: from the optimiser; ``terms``: the nonlinear terms added to
+    elements' laws, one (element, partner or None, term, c, r2) each (see
+    :class:`~bondgraph.diagnosis.lure.Lure`), so that a later cause can be fitted on the exact
+    route with them held."""
 
     model: Model
     values: dict[str, float]
@@ -44,6 +47,7 @@ class Extension:
     at_bounds: list[str] = field(default_factory=list)
     success: bool = True
     message: str = ""
+    terms: list = field(default_factory=list)
 
 
 class Candidate(ABC):

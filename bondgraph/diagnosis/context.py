@@ -40,6 +40,12 @@ class State:
     drive_expr: sp.Expr | None
     causes: list[str] = field(default_factory=list)
     linear: bool = True
+    #: nonlinear terms in elements' laws named so far (see :class:`Extension`), the series the
+    #: linear core sees under them (the drive, or its transform) and the output part outside
+    #: the core (e.g. an added parallel mode), sensor gain 1
+    terms: tuple = ()
+    core_drive: np.ndarray | None = None
+    core_extra: np.ndarray | None = None
 
     @property
     def prediction(self) -> np.ndarray:

@@ -18,7 +18,9 @@ squares.  What it gains over the calibrated model bounds what a linear mismatch 
 
 **Rules** (thresholds in :mod:`bondgraph.config`, section ``diagnosis``): a candidate passes
 when it lowers the validation error significantly (``min_z``) and by a useful factor
-(``min_gain``), its optimiser did not leave a new parameter on a search bound, and
+(``min_gain``; ``min_gain_chain`` after the first step of a chain, whose residual holds what
+the named extension, never quite the physics, left), its optimiser did not leave a new
+parameter on a search bound, and
 
 * a nonlinear or memory cause, given the reference's freedom too, beats the reference by
   ``min_gain_reference`` with z ≥ ``min_z_reference`` (a second-stage test: that it explains
@@ -121,9 +123,11 @@ class Verdict:
 
 
 def judge(kind: str, base: Comparison, versus_reference: Comparison | None, share: float | None,
-          at_bounds: list[str], implausible: str) -> Verdict:
-    """Apply the rules of the module docstring to one candidate."""
-    min_z, min_gain = config.get("diagnosis.min_z"), config.get("diagnosis.min_gain")
+          at_bounds: list[str], implausible: str, later: bool = False) -> Verdict:
+    """Apply the rules of the module docstring to one candidate (``later``: in a chain step
+    after the first, where ``diagnosis.min_gain_chain`` replaces ``diagnosis.min_gain``)."""
+    min_z = config.get("diagnosis.min_z")
+    min_gain = config.get("diagnosis.min_gain_chain" if later else "diagnosis.min_gain")
     if at_bounds:
         return Verdict(False, f"{', '.join(at_bounds)} on a search bound")
     if base.gain < min_gain:

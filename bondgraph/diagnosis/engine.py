@@ -115,7 +115,8 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
         explained_ref = before ** 2 - min(rms_ref, rms_state) ** 2
         r.share = (before ** 2 - r.rms_validation ** 2) / explained_ref if explained_ref > 0 else None
         implausible = r.verdict
-        v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], implausible)
+        v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], implausible,
+                  later=bool(state.causes))
         r.passed, r.verdict = v.passed, v.reason
         if not r.success and r.passed:
             r.verdict += " (optimiser not converged)"
@@ -165,12 +166,17 @@ def _why(winner, outcomes, rms_state, rms_ref, noise) -> str:
     return "none: " + "; ".join(parts)
 
 
-def advance(ctx: Context, state: State, oc: Outcome) -> State:
-    """The chain state after naming ``oc``'s cause."""
+def advance(ctx: Context, state: State, oc: Outcome, view: View) -> State:
+    """The chain state after naming ``oc``'s cause (``view``: the current state's)."""
     ext = oc.extension
     g, b, _, _ = score(ctx, oc.raw)
+    before = state.drive if state.drive is not None else state.core_drive
+    # what the linear core sees and the terms held on it, while the model stays a Lur'e system
+    core = ext.drive if ext.drive is not None else before if ext.terms and before is not None else None
+    terms = tuple(state.terms) + tuple(ext.terms) if core is not None else ()
+    extra = (state.core_extra if state.terms else view.extra) if terms else None
     return State(ext.model, dict(ext.values), oc.raw, g, b, ext.drive, ext.drive_expr,
-                 state.causes + [oc.result.cause], state.linear and ext.drive is not None)
+                 state.causes + [oc.result.cause], state.linear and ext.drive is not None, terms, core, extra)
 
 
 def load_candidates() -> list[Candidate]:
@@ -239,12 +245,13 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                 else:
                     say(_line(k + 1, n, len(pending), oc.result))
             ordered = [outcomes[i] for i in pending]
-            step, winner = assess(ctx, state, View(ctx, state, cal.free), ordered, first[0] if first else None)
+            view = View(ctx, state, cal.free)
+            step, winner = assess(ctx, state, view, ordered, first[0] if first else None)
             steps.append(step)
             say(f"step {k + 1}: {step.why}")
             if winner is None:
                 break
-            state = advance(ctx, state, winner)
+            state = advance(ctx, state, winner, view)
     causes = [s.cause for s in steps if s.cause != "none"]
     final_rms = rms((ctx.y - state.prediction)[ctx.ident.val_mask])
     report = Report(causes, cal.rms_validation / max(final_rms, 1e-300) if causes else 1.0, cal.rms_validation,

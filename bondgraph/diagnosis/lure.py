@@ -43,23 +43,31 @@ def _variable(model: Model, element: str) -> Quantity:
 
 class Lure:
     """``model`` (linear) with nonlinear terms on ``elements`` (see the module docstring);
-    ``partners[el]``: an element whose displacement the term of ``el`` uses, or None."""
+    ``partners[el]``: an element whose displacement the term of ``el`` uses, or None.
+    ``fixed``: terms already part of the model being extended, one (element, partner, term,
+    c, r2) each, held as they are while the new elements' terms are fitted."""
 
     def __init__(self, model: Model, input: str, output: str, elements: Sequence[str],
-                 partners: Mapping[str, str | None], dt: float):
+                 partners: Mapping[str, str | None], dt: float, fixed: Sequence[tuple] = ()):
+        self.fixed = [(el, p, term, float(c), float(r2)) for el, p, term, c, r2 in fixed]
+        partners = {**{el: p for el, p, *_ in self.fixed}, **partners}
+        elements = [el for el, *_ in self.fixed] + list(elements)
+        if len(set(elements)) < len(elements):
+            raise BondGraphError("a nonlinear term is already on one of these elements")
         aug = model.copy()
         self.n = len(elements)
+        self.elements = elements
         ws = []
         for k, el in enumerate(elements):
             w = aug.input(f"diag.w{k}")
             ws.append(f"diag.w{k}")
             modify_law(aug, el, lambda x, old, w=w: old + w)
-            aug.output(f"diag.x{k}", _variable(model, el))
+            aug.output(f"diag.x:{el}", _variable(model, el))
             if partners.get(el):
-                aug.output(f"diag.a{k}", Quantity("q", partners[el]))
+                aug.output(f"diag.a:{el}", Quantity("q", partners[el]))
         eqs = derive(aug)
-        self.outputs = [output] + [f"diag.x{k}" for k in range(self.n)] + \
-            [f"diag.a{k}" for k, el in enumerate(elements) if partners.get(el)]
+        self.outputs = [output] + [f"diag.x:{el}" for el in elements] + \
+            [f"diag.a:{el}" for el in elements if partners.get(el)]
         self.inputs = [input] + ws
         self.lti = {(i, o): LTI(eqs, i, o) for i in self.inputs for o in self.outputs}
         if not all(lti.exact for lti in self.lti.values()):
@@ -77,9 +85,13 @@ class Lure:
         return th
 
     def linear_responses(self, values: Mapping[str, float], u: np.ndarray, term: Callable) -> dict[str, np.ndarray]:
-        """The element variables (``diag.x<k>``, ``diag.a<k>``) and output of the linear model
-        (``term``: the one :meth:`simulate` will use; it is not applied here)."""
-        Y, _ = self._run(values, u, term, np.zeros((self.n, 2)), False)
+        """The element variables (``diag.x:<element>``, ``diag.a:<element>``: the partner's
+        displacement) and the output, with the fixed terms but none of the new ones (``term``:
+        the one :meth:`simulate` will use)."""
+        new = self.n - len(self.fixed)
+        Y, ok = self._run(values, u, term, np.zeros((new, 2)), len(self.fixed) > 0, active_new=False)
+        if not ok:
+            raise NotConverged("the model's own nonlinear terms make it diverge")
         return {o: Y[:, r] for r, o in enumerate(self.outputs)}
 
     def simulate(self, values: Mapping[str, float], u: np.ndarray,
@@ -87,7 +99,7 @@ class Lure:
         """Raw output for the drive samples ``u`` with w_k = term(c_k, r2_k, x_k, a_k),
         ``coefs[k] = (c_k, r2_k)``; ``term`` is written in arithmetic that works on sympy
         symbols and is a polynomial in x and a (see :func:`polynomial_term`)."""
-        Y, ok = self._run(values, u, term, np.asarray(coefs, float).reshape(self.n, 2), True)
+        Y, ok = self._run(values, u, term, np.asarray(coefs, float).reshape(self.n - len(self.fixed), 2), True)
         if not ok:
             raise NotConverged("the nonlinear term makes the model diverge (an implicit step did not converge)")
         return Y[:, 0]
@@ -101,16 +113,18 @@ class Lure:
         D = np.array([[self.lti[(i, o)].matrices(th)[3][0, 0] for i in self.inputs] for o in self.outputs])
         return A, B, C, D
 
-    def _run(self, values, u, term, coefs, active):
+    def _run(self, values, u, term, coefs, active, active_new=True):
         th = self.theta(values)
         A, B, C, D = self._matrices(th)
         Phi, Gam, G1 = foh(A, B, self.dt)
         Dd = D + C @ G1
         u = np.ascontiguousarray(u, float)
         Y = np.empty((u.size, len(self.outputs)))
-        a_rows = np.array([self.outputs.index(f"diag.a{k}") if self.partners[k] else -1 for k in range(self.n)],
-                          np.int64)
-        mats = [polynomial_term(term, self.partners[k])(coefs[k, 0], coefs[k, 1]) for k in range(self.n)]
+        a_rows = np.array([self.outputs.index(f"diag.a:{el}") if self.partners[k] else -1
+                           for k, el in enumerate(self.elements)], np.int64)
+        terms = [(t, c, r2) for _, _, t, c, r2 in self.fixed] + \
+            [(term, (c if active_new else 0.0), r2) for c, r2 in coefs]
+        mats = [polynomial_term(t, self.partners[k])(c, r2) for k, (t, c, r2) in enumerate(terms)]
         P = np.zeros((self.n, max(m.shape[0] for m in mats), max(m.shape[1] for m in mats)))
         for k, m in enumerate(mats):
             P[k, :m.shape[0], :m.shape[1]] = m

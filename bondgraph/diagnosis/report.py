@@ -111,7 +111,8 @@ class Report:
                 "extended_rms_integrated": self.extended_rms_integrated,
                 "calibration": self.calibration, "data": self.data, "notes": self.notes,
                 "criterion": {k.split(".", 1)[1]: config.get(k) for k in
-                              ("diagnosis.min_z", "diagnosis.min_gain", "diagnosis.min_gain_reference",
+                              ("diagnosis.min_z", "diagnosis.min_gain", "diagnosis.min_gain_chain",
+                               "diagnosis.min_gain_reference",
                                "diagnosis.min_z_reference",
                                "diagnosis.linear_share", "diagnosis.spread")},
                 "seconds": round(self.seconds, 1), "equations": self.equations}

@@ -72,6 +72,9 @@ class View:
         self.drive = _frozen(state.drive)
         self.drive_expr = state.drive_expr
         self.structural = not state.linear
+        #: nonlinear terms in elements' laws named so far: (element, partner, term, c, r2)
+        self.terms = tuple(state.terms)
+        self._core_drive, self._core_extra = state.core_drive, state.core_extra
         self.causes = tuple(state.causes)
         self.prediction = _frozen(state.prediction)
         self.residual = _frozen(ctx.y - state.prediction)
@@ -337,20 +340,25 @@ class View:
     def lure(self, model: Model, elements: Sequence[str], partners: Mapping[str, str | None]):
         """A :class:`~bondgraph.diagnosis.lure.Lure` system for nonlinear terms on ``elements``,
         on this record's grid: of the linear core when the current model is a drive transform of
-        it (:attr:`on_core`: e.g. after hysteresis on the drive), else of ``model``.  Its
-        ``drive`` is the series to feed it and ``extra`` the output part outside it (or None);
-        None when that model is not linear."""
+        it (:attr:`on_core`: e.g. after hysteresis on the drive) or the core with the terms named
+        so far (held), else of ``model``.  Its ``drive`` is the series to feed it and ``extra``
+        the output part outside it (or None); None when that model is not linear."""
         from ..errors import BondGraphError
         from .lure import Lure
         if not self.exact or self.reduced:
             return None
         try:
-            if self.on_core:
+            if self.terms and self._core_drive is not None:
+                lure = Lure(self.core(), self.input, self.output, elements, partners, self._ctx.dt, self.terms)
+                lure.drive, lure.extra = np.asarray(self._core_drive), self._core_extra
+            elif self.on_core:
                 lure = Lure(self.core(), self.input, self.output, elements, partners, self._ctx.dt)
                 lure.drive, lure.extra = np.asarray(self.drive), self.extra
-            else:
+            elif not self.structural:
                 lure = Lure(model, self.input, self.output, elements, partners, self._ctx.dt)
                 lure.drive, lure.extra = np.asarray(self.u), None
+            else:
+                return None
         except BondGraphError:
             return None
         return lure

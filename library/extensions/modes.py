@@ -122,6 +122,8 @@ class OutputMode(Candidate):
             return "no element is tagged 'inertia'"
         if view.reduced:
             return "the inertia's dynamics are faster than the data resolve"
+        if view.drive is None:
+            return NOT_A_DRIVE
         return True if view.exact else "needs a model linear in its states"
 
     def build(self, view, model, omega, zeta, m2):

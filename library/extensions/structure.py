@@ -55,8 +55,9 @@ class _Centred(Candidate):
         (and the partner's ``a``) in the current model."""
 
     def build(self, view, coefs: dict, r2s: dict):
+        """The current model with the term on each element of ``coefs``."""
         model = view.rewrite()
-        for el in view.model.with_role(self.role):
+        for el in coefs:
             c = model.parameter(f"{self.prefix}_{el}", coefs[el], "", f"{self.label}: {el}", bounds=(0, 1e40))
             r2 = model.parameter(f"{self.prefix}_r2_{el}", r2s[el], "", f"centring amplitude² of {el}")
             p = self.partner(model, el)
@@ -71,14 +72,31 @@ class _Centred(Candidate):
         lure = view.lure(view.rewrite(), els, partners)
         if lure is not None:
             series = lure.linear_responses(dict(view.values), lure.drive, self.term)
-            xs = {el: series[f"diag.x{k}"] for k, el in enumerate(els)}
-            az = {el: series.get(f"diag.a{k}") for k, el in enumerate(els)}
+            xs = {el: series[f"diag.x:{el}"] for el in els}
+            az = {el: series.get(f"diag.a:{el}") for el in els}
         else:
             st = view.states()
             xs = {el: st[view.state_of(el)] if self.role == "stiffness" else st["output rate"] for el in els}
             az = {el: st[view.state_of(partners[el])] if partners[el] else None for el in els}
         refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
         r2s = {el: refs[el][1] for el in els}
+        if lure is not None and len(els) > 1:
+            base = series[view.output]
+            effect = {}
+            for el in els:   # what the term does at the top of the scan, element by element
+                effect[el] = np.inf
+                for f in (self.grid[-1], 0.1 * self.grid[-1]):
+                    coefs = [(f * refs[e][0] if e == el else 0.0, r2s[e]) for e in els]
+                    try:
+                        raw = lure.simulate(dict(view.values), lure.drive, self.term, coefs)
+                    except NotConverged:
+                        continue
+                    effect[el] = float(np.std(raw - base))
+                    break
+            floor = 0.05 * float(np.std(view.residual)) / max(abs(view.gain), 1e-300)
+            held = [el for el in els if effect[el] < floor and effect[el] < max(effect.values())]
+        else:
+            held = []
         model = self.build(view, {el: 0.0 for el in els}, r2s)
         predict = None
         if lure is not None:
@@ -96,8 +114,9 @@ class _Centred(Candidate):
         def fitted(specs, nfev, start=None):
             return view.fit_model(model, specs, max_nfev=nfev, start=start, predict=predict)
 
-        def spec(f, free=False):
-            return [Spec(n, f * refs[el][0], 0.0 if free else f * refs[el][0],
+        def spec(f, free=False):   # elements whose term cannot matter are held at 0
+            return [Spec(n, 0.0, 0.0, 0.0, scale=refs[el][0]) if el in held else
+                    Spec(n, f * refs[el][0], 0.0 if free else f * refs[el][0],
                          self.upper * refs[el][0] if free else f * refs[el][0], scale=refs[el][0])
                     for n, el in zip(names, els)]
 
@@ -118,8 +137,11 @@ class _Centred(Candidate):
             raise SimulationError(f"{self.cause}: the extended model could not be simulated")
         start = {k: v for k, v in best[2].items() if k not in names}
         values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
-        return Extension(self.build(view, {el: values[n] for n, el in zip(names, els)}, r2s), values, names,
-                         raw, None, None, at, ok, msg)
+        kept = [(n, el) for n, el in zip(names, els) if el not in held]
+        at = [n for n in at if values[n] > 0]   # a coefficient of 0 is no such effect, not a search limit
+        terms = [(el, partners[el], self.term, values[n], r2s[el]) for n, el in kept]
+        return Extension(self.build(view, {el: values[n] for n, el in kept}, r2s), values, [n for n, _ in kept],
+                         raw, None, None, at, ok, msg, terms=terms)
 
 
 class StiffnessSoftening(_Centred):
@@ -150,7 +172,7 @@ class NonlinearDamping(_Centred):
 
     cause = "nonlinear-damping"
     label = "amplitude-dependent (Stanton) damping of the damping elements"
-    role, prefix, upper = "damping", "nld.mu1", 50.0
+    role, prefix, upper = "damping", "nld.mu1", 10.0
 
     def __init__(self, velocity: bool = False):
         self.velocity = velocity
