@@ -74,6 +74,13 @@ class Candidate(ABC):
     def fit(self, view) -> Extension:
         """Fit the extension to the data seen through ``view``."""
 
+    def without_memory(self, view) -> np.ndarray | None:
+        """For a memory effect: the raw prediction (sensor gain 1) of the same freedom without
+        memory (e.g. a static curve with the operator's thresholds), or None.  The engine
+        names the memory effect only if it beats this as a nonlinear cause must beat the
+        flexible linear reference: its loops must explain something no static curve does."""
+        return None
+
     def implausible(self, view, ext: Extension) -> str:
         """Why the fitted extension is not physically plausible ('' if it is); checked for
         linear structural causes, which could otherwise absorb any linear mismatch."""

@@ -85,11 +85,15 @@ class Context:
         th0 = _theta(self.eqs)
         self.cut = None
         self.slow_hz: list[float] = []
+        #: the lightly damped ones among them (damping ratio < 0.5): the model's resonances
+        self.resonance_hz: list[float] = []
         if lti.exact:
             data, fs = self._decimate(lti, th0, data, fs, output_band(y, fs, noise_density))
             self.cut = config.get("diagnosis.fast_factor") * math.pi * fs
             ss = lti.state_space(th0, self.cut)
             self.slow_hz = sorted({round(abs(p) / (2 * math.pi), 6) for p in ss.poles()})
+            self.resonance_hz = sorted({round(abs(p) / (2 * math.pi), 6) for p in ss.poles()
+                                        if p.imag != 0 and abs(p.real) < 0.5 * abs(p)})
             self.n_states, self.n_fast = lti.n, ss.fast
             if ss.fast:
                 fastest_kept = max(self.slow_hz, default=0.0)

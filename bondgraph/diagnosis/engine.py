@@ -17,7 +17,7 @@ from ..simulate import SimulationError
 from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State
-from .decision import compare, judge, reference_prediction, regress
+from .decision import Verdict, compare, judge, reference_prediction, regress
 from .pool import Pool, single_threaded_blas
 from .projection import time_budget
 from .report import CandidateResult, Report, Step
@@ -33,6 +33,8 @@ class Outcome:
     raw: np.ndarray | None = None
     #: the current model with its linear parameters refitted from where the candidate left them
     linear_refit: np.ndarray | None = None
+    #: the same freedom without memory (for a memory effect), raw
+    static: np.ndarray | None = None
 
 
 def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate,
@@ -76,7 +78,8 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
         res.verdict = cand.implausible(view, ext)
     ext.prediction = None
     refit = view.refit_linear(ext.values)
-    return Outcome(res, ext, np.asarray(raw, float), refit)
+    static = cand.without_memory(view)
+    return Outcome(res, ext, np.asarray(raw, float), refit, None if static is None else np.asarray(static, float))
 
 
 def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
@@ -117,6 +120,13 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
         implausible = r.verdict
         v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], implausible,
                   later=bool(state.causes))
+        if v.passed and oc.static is not None and np.all(np.isfinite(oc.static)):
+            gs, bs, _, _ = score(ctx, oc.static)
+            vs = compare(y - (gs * oc.static + bs), e, ctx.blocks)
+            r.gain_static = vs.gain
+            if vs.gain < config.get("diagnosis.min_gain_reference") or vs.z < config.get("diagnosis.min_z_reference"):
+                v = Verdict(False, f"its loops explain no more than a static curve (gain {vs.gain:.3g}, "
+                                   f"z = {vs.z:.2g})")
         r.passed, r.verdict = v.passed, v.reason
         if not r.success and r.passed:
             r.verdict += " (optimiser not converged)"

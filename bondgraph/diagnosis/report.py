@@ -37,6 +37,8 @@ class CandidateResult:
     #: "plausible" when fitted from, and compared with, the plausible device (the calibration
     #: within tolerance) instead of the null
     against: str = ""
+    #: for a memory effect, its gain over the same freedom without memory (a static curve)
+    gain_static: float | None = None
 
     def as_json(self) -> dict:
         out = {"cause": self.cause, "label": self.label, "kind": self.kind, "gain": self.gain,
@@ -47,6 +49,8 @@ class CandidateResult:
                "passed": self.passed, "verdict": self.verdict, "seconds": round(self.seconds, 2)}
         if self.against:
             out["against"] = self.against
+        if self.gain_static is not None:
+            out["gain_static"] = self.gain_static
         if self.skipped:
             out["skipped"] = self.skipped
         if self.error:

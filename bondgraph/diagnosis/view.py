@@ -81,6 +81,8 @@ class View:
         self.gain = state.gain
         #: frequencies (Hz) of the modes of the calibrated nominal model the data resolve
         self.modes_hz = tuple(ctx.slow_hz)
+        #: ... and those of its resonances (complex poles with damping ratio < 0.5)
+        self.resonances_hz = tuple(ctx.resonance_hz)
         #: the part of the current output that does not pass through the linear core (e.g. an
         #: added parallel mode), sensor gain 1; drive-side fits keep it
         self.extra = None

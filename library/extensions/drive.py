@@ -72,6 +72,18 @@ class InputHysteresis(_DriveCandidate):
         view.with_drive(model, h)
         return self.extension(view, fit, model, {f"H.w{i + 1}": float(w) for i, w in enumerate(fit.coef)}, h)
 
+    def without_memory(self, view):
+        """A static curve of the drive with as many pieces: odd and even ramps about the drive's
+        centre, knees spread over its half-range."""
+        d = np.asarray(view.drive)
+        c, half = 0.5 * (d.max() + d.min()), 0.5 * float(np.ptp(d))
+        knees = np.linspace(0.0, half, self.n_plays // 2, endpoint=False)[1:]
+        dev = d - c
+        basis = [dev, np.abs(dev)] + [np.sign(dev) * np.maximum(np.abs(dev) - k, 0.0) for k in knees] + \
+            [np.maximum(np.abs(dev) - k, 0.0) for k in knees]
+        fit = view.fit_drive(basis, [-np.inf] * len(basis), [np.inf] * len(basis), identity=False)
+        return fit.prediction
+
 
 class InputBoucWen(_DriveCandidate):
     """Rate-independent hysteresis with a differential (Bouc–Wen) state on the drive,
@@ -292,7 +304,9 @@ class InputRC(_DriveCandidate):
 class InputRLC(_DriveCandidate):
     """A series R–L into the actuator's capacitance on the drive: u = d/(LCs² + RCs + 1), the
     electrical stage of a long cable or an inductive amplifier output (its resonance
-    ω = 1/√(LC), damping ratio ζ = (R/2)·√(C/L))."""
+    ω = 1/√(LC), damping ratio ζ = (R/2)·√(C/L)).  The resistance in series (the amplifier's
+    output, the leads) damps it: a resonance sharper than ``min_damping`` is a mechanical mode
+    seen through the same second-order shape, not an input stage."""
 
     cause = "electrical-rc"
     label = "series R-L with a capacitance on the drive (RLC stage)"
@@ -335,8 +349,15 @@ class InputRLC(_DriveCandidate):
         fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.extra
         return self.extension(view, fit, model, {"rlc.R": R_val, "rlc.L": L_val}, expr)
 
+    #: an electrical stage's resistance (amplifier output, leads) damps it at least this much
+    min_damping = 0.1
+
     def implausible(self, view, ext):
         om = 1 / math.sqrt(ext.values["rlc.L"] * self.cap)
         if om / (2 * math.pi) > 0.45 * view.fs:
             return f"its resonance ({om / (2 * math.pi):.3g} Hz) is above the data's band"
+        zeta = ext.values["rlc.R"] / 2 * math.sqrt(self.cap / ext.values["rlc.L"])
+        if zeta < self.min_damping:
+            return (f"its resonance is as sharp as a mechanical mode's (damping ratio {zeta:.2g} < "
+                    f"{self.min_damping:g}): not an electrical stage")
         return ""

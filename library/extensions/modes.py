@@ -43,7 +43,7 @@ def mode_implausible(view, omega: float, zeta: float) -> str:
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
     if not near.any() or P[near].max() < 1e-6 * P.max():
         return f"the drive does not excite {f:.4g} Hz"
-    for fm in view.modes_hz:
+    for fm in view.resonances_hz:
         if fm > 0 and abs(f / fm - 1) < 0.15:
             return f"it duplicates the model's own mode at {fm:.4g} Hz (a recalibration, not a missing mode)"
     if zeta > 0.3:
