@@ -141,7 +141,8 @@ class InputCreep(_DriveCandidate):
     Cells are C_n = c_n, R_n = τ_n/c_n on a 0-junction, starting in equilibrium with the drive.
     Creep is slower than the model's own dynamics and than the drive's main period (a faster
     lag is a phase lag, not creep): the spectrum starts at 10/ω of the slowest mode and at a
-    quarter of the main period.  It is small: piezoelectric stacks creep by 1–2 % of their
+    quarter of the main period (or at 1 % of the record, for drives that hold, whose main
+    period is long).  It is small: piezoelectric stacks creep by 1–2 % of their
     stroke per decade of time, so more than ``max_ratio`` of the elastic response within the
     record (Σ c_n·(1 − e^(−T/τ_n))) is not creep."""
 
@@ -152,9 +153,10 @@ class InputCreep(_DriveCandidate):
 
     def taus(self, view) -> np.ndarray:
         slow = [f for f in view.modes_hz if f > 0]
+        span = float(view.t[-1] - view.t[0])
         lo = max(5 * view.dt, 10.0 / (2 * math.pi * min(slow)) if slow else 0.0,
-                 0.25 / view.main_hz if view.main_hz > 0 else 0.0)
-        hi = 3 * float(view.t[-1] - view.t[0])
+                 min(0.25 / view.main_hz if view.main_hz > 0 else 0.0, 0.01 * span))
+        hi = 3 * span
         n = max(2, int(round(math.log10(hi / lo) * 2)) + 1)
         return np.geomspace(lo, hi, n)
 
