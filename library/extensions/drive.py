@@ -27,6 +27,13 @@ def drive_scale(view) -> float:
     return float(np.max(np.abs(view.drive))) or 1.0
 
 
+def dwell_levels(d: np.ndarray, bins: int = 100) -> int:
+    """How many of ``bins`` equal slices of the drive's range hold at least 0.2 % of its
+    samples: ~100 for sines, triangles and chirps, about the number of held levels for steps."""
+    h, _ = np.histogram(d, bins=bins)
+    return int(np.count_nonzero(h >= 0.002 * h.sum()))
+
+
 def loop_area(r: np.ndarray, u: np.ndarray) -> float:
     """|∮ r du| normalised by the bounding box and the number of cycles: 0 for a
     single-valued residual, ~0.3 for a fat loop."""
@@ -74,8 +81,12 @@ class InputHysteresis(_DriveCandidate):
 
     def without_memory(self, view):
         """A static curve of the drive with as many pieces: odd and even ramps about the drive's
-        centre, knees spread over its half-range."""
+        centre, knees spread over its half-range.  None when the drive dwells at too few levels
+        (steps with holds): a curve with this many pieces then passes through every level it
+        holds, whatever the history that led there, and cannot tell memory from shape."""
         d = np.asarray(view.drive)
+        if dwell_levels(d) <= 2 * self.n_plays:
+            return None
         c, half = 0.5 * (d.max() + d.min()), 0.5 * float(np.ptp(d))
         knees = np.linspace(0.0, half, self.n_plays // 2, endpoint=False)[1:]
         dev = d - c
