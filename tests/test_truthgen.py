@@ -99,6 +99,17 @@ def test_draw_is_deterministic_per_seed():
     assert not np.array_equal(a.x[:100], c.x[:100])
 
 
+@pytest.mark.parametrize("kind", drives.KINDS)
+def test_no_drive_is_silent(kind):
+    """Every drawn drive moves within its record, short records with long burst periods included
+    (a silent burst drive once left the generator dividing by a zero stroke)."""
+    r = drives.DriveRange(-150.0, 150.0, True, (1.0, 50.0), f_res=800.0)
+    t = np.linspace(0.0, 1.8, 3601)
+    for seed in range(100):
+        spec = drives.draw(kind, r, 1.8, 2000.0, np.random.default_rng(seed))
+        assert np.ptp(drives.signal(spec, t)) > 0, (kind, seed, spec)
+
+
 def test_ci_records_follow_the_visibility_rule(ci_records):
     for seed, rec in ci_records.items():
         assert set(rec.causes) == set(design(seed)[1]), seed

@@ -176,6 +176,8 @@ def draw(kind: str, r: DriveRange, T: float, fs: float, rng: np.random.Generator
             t0 += period * rng.uniform(2, 10)           # plateau at that level (0: a hold)
             env_t.append(t0)
             env_a.append(level)
+        if not np.any(np.interp(np.linspace(0.0, T, 1001), env_t, env_a) > 0):
+            env_a[1] = env_a[2] = full                  # a silent record: its first burst at full level
         spec.update(kind="bursts", freq=freq, centre=centre, env_t=env_t, env_a=env_a,
                     ramp=min(2 * period, T / 10))
     elif kind == "stepped-sine":
