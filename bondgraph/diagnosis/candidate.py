@@ -78,7 +78,8 @@ class Candidate(ABC):
         """For a memory effect: the raw prediction (sensor gain 1) of the same freedom without
         memory (e.g. a static curve with the operator's thresholds), or None.  The engine
         names the memory effect only if it beats this as a nonlinear cause must beat the
-        flexible linear reference: its loops must explain something no static curve does."""
+        flexible linear reference, both with that reference's freedom: its loops must explain
+        something that no static curve, and no linear lag, does."""
         return None
 
     def implausible(self, view, ext: Extension) -> str:

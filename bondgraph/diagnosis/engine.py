@@ -121,8 +121,9 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
         v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], implausible,
                   later=bool(state.causes))
         if v.passed and oc.static is not None and np.all(np.isfinite(oc.static)):
-            gs, bs, _, _ = score(ctx, oc.static)
-            vs = compare(y - (gs * oc.static + bs), e, ctx.blocks)
+            # both with the reference's freedom: loops that only mimic a linear lag are no memory
+            e_static = y - regress(np.column_stack([oc.static, ref_cols]), y, idx)
+            vs = compare(e_static, e_both, ctx.blocks)
             r.gain_static = vs.gain
             if vs.gain < config.get("diagnosis.min_gain_reference") or vs.z < config.get("diagnosis.min_z_reference"):
                 v = Verdict(False, f"its loops explain no more than a static curve (gain {vs.gain:.3g}, "

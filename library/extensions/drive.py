@@ -34,6 +34,24 @@ def dwell_levels(d: np.ndarray, bins: int = 100) -> int:
     return int(np.count_nonzero(h >= 0.002 * h.sum()))
 
 
+def static_curve(view, pieces: int):
+    """The best static curve of the drive with ``pieces`` parameters, through the linear core:
+    odd and even ramps about the drive's centre, knees spread over its half-range; the twin a
+    memory effect must beat.  None when the drive dwells at too few levels (steps with holds):
+    a curve with this many pieces then passes through every level it holds, whatever the
+    history that led there, and cannot tell memory from shape."""
+    d = np.asarray(view.drive)
+    if dwell_levels(d) <= 2 * pieces:
+        return None
+    c, half = 0.5 * (d.max() + d.min()), 0.5 * float(np.ptp(d))
+    knees = np.linspace(0.0, half, pieces // 2, endpoint=False)[1:]
+    dev = d - c
+    basis = [dev, np.abs(dev)] + [np.sign(dev) * np.maximum(np.abs(dev) - k, 0.0) for k in knees] + \
+        [np.maximum(np.abs(dev) - k, 0.0) for k in knees]
+    fit = view.fit_drive(basis, [-np.inf] * len(basis), [np.inf] * len(basis), identity=False)
+    return fit.prediction
+
+
 def loop_area(r: np.ndarray, u: np.ndarray) -> float:
     """|∮ r du| normalised by the bounding box and the number of cycles: 0 for a
     single-valued residual, ~0.3 for a fat loop."""
@@ -80,20 +98,7 @@ class InputHysteresis(_DriveCandidate):
         return self.extension(view, fit, model, {f"H.w{i + 1}": float(w) for i, w in enumerate(fit.coef)}, h)
 
     def without_memory(self, view):
-        """A static curve of the drive with as many pieces: odd and even ramps about the drive's
-        centre, knees spread over its half-range.  None when the drive dwells at too few levels
-        (steps with holds): a curve with this many pieces then passes through every level it
-        holds, whatever the history that led there, and cannot tell memory from shape."""
-        d = np.asarray(view.drive)
-        if dwell_levels(d) <= 2 * self.n_plays:
-            return None
-        c, half = 0.5 * (d.max() + d.min()), 0.5 * float(np.ptp(d))
-        knees = np.linspace(0.0, half, self.n_plays // 2, endpoint=False)[1:]
-        dev = d - c
-        basis = [dev, np.abs(dev)] + [np.sign(dev) * np.maximum(np.abs(dev) - k, 0.0) for k in knees] + \
-            [np.maximum(np.abs(dev) - k, 0.0) for k in knees]
-        fit = view.fit_drive(basis, [-np.inf] * len(basis), [np.inf] * len(basis), identity=False)
-        return fit.prediction
+        return static_curve(view, self.n_plays)
 
 
 class InputBoucWen(_DriveCandidate):
@@ -110,6 +115,11 @@ class InputBoucWen(_DriveCandidate):
         if view.drive is None or view.drive_expr != view.input_symbol:
             return "needs the raw drive's rate (another drive-side effect was added first)"
         return True
+
+    def without_memory(self, view):
+        """The Prandtl–Ishlinskii candidate's static twin: a Bouc–Wen loop that does not beat a
+        static curve of that freedom is a shape, not memory."""
+        return static_curve(view, InputHysteresis.n_plays)
 
     @staticmethod
     def shape(z):
