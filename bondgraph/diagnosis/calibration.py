@@ -10,7 +10,8 @@
 2. **Bounds.**  Within ×/÷ ``diagnosis.spread`` of the model's values and the parameter's
    declared bounds; the sensor gain and offset are free.  The output's delay behind the drive
    (the measurement chain's: sensor electronics, sampling skew) is solved within ±0.5 sample
-   when its effect is clearly apart from the parameters' (else, or when it ends on that bound,
+   of the recorded rate (a decimated record's delay range shrinks with it: a wider one trades
+   against the model's own dynamics on narrow-band drives) when its effect is clearly apart from the parameters' (else, or when it ends on that bound,
    it is held at 0 and reported).
 3. **Fit.** On the empirical frequency response first (multi-start, coherence-weighted,
    gain removed: free of the local minima lightly damped modes give a time-domain fit), then
@@ -142,12 +143,14 @@ def select(S: np.ndarray, names: Sequence[str], priority: Sequence[str], tol: fl
 
 
 def _delay_identifiable(ctx: Context, S: np.ndarray, names: Sequence[str], free: Sequence[str], nominal: dict,
-                        raw0: np.ndarray, scale: float, step: float = 0.1) -> bool:
-    """Whether the output's delay behind the drive (per sample) does something to the output
-    that the calibrated parameters and the sensor gain do not (the pivot rule of
-    :func:`select`, the delay taken last)."""
+                        raw0: np.ndarray, scale: float) -> bool:
+    """Whether the output's delay behind the drive (per sample of the recorded rate) does
+    something to the output that the calibrated parameters and the sensor gain do not (the
+    pivot rule of :func:`select`, the delay taken last)."""
     idx = ctx.ident.fit_idx
-    col = ((ctx.ident.predict(nominal, drive=ctx.drive_with_delay(step)) - raw0)[idx] / step)[:, None]
+    step = 0.2 * max_delay(ctx)
+    per_sample = max_delay(ctx) / MAX_DELAY
+    col = ((ctx.ident.predict(nominal, drive=ctx.drive_with_delay(step)) - raw0)[idx] * (per_sample / step))[:, None]
     Q, _ = np.linalg.qr(np.column_stack([raw0[idx], np.ones(idx.size)]))
     col = col - Q @ (Q.T @ col)
     kept = S[:, [names.index(n) for n in free]]
@@ -202,8 +205,13 @@ def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarra
     return None if best is None else best.x
 
 
-#: the measured output's delay behind the drive is sought within ± this many samples
+#: the measured output's delay behind the drive is sought within ± this many samples (recorded rate)
 MAX_DELAY = 0.5
+
+
+def max_delay(ctx: Context) -> float:
+    """:data:`MAX_DELAY` in samples of the (possibly decimated) record the diagnosis works on."""
+    return MAX_DELAY * ctx.fs / ctx.source_rate
 
 
 def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, z0: np.ndarray, delay: bool):
@@ -219,13 +227,13 @@ def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, z0:
         Hm = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w)
         return Hm * np.exp(-1j * w * z[-1] * ctx.dt) if delay else Hm
 
-    lb, ub = _z_bounds(specs, delay)
+    lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
     return fit_frf(frf_of, z0, lb, ub, w, sign * H, coh)
 
 
-def _z_bounds(specs: list[Param], delay: bool):
-    lb = [s.z_bounds()[0] for s in specs] + ([-MAX_DELAY] if delay else [])
-    ub = [s.z_bounds()[1] for s in specs] + ([MAX_DELAY] if delay else [])
+def _z_bounds(specs: list[Param], delay: float | None):
+    lb = [s.z_bounds()[0] for s in specs] + ([-delay] if delay else [])
+    ub = [s.z_bounds()[1] for s in specs] + ([delay] if delay else [])
     return np.array(lb, float), np.array(ub, float)
 
 
@@ -251,7 +259,7 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, sign: float, z0: np.nd
         raw = raw if rows is None else raw[rows]
         return np.column_stack([raw, np.ones(raw.size)])
 
-    lb, ub = _z_bounds(specs, delay)
+    lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
     first = z0 if z_frf is None else z_frf
     if z_frf is None and z0.size:   # no frequency response to start from: the best of a random sample
         starts = list(starts) + _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
@@ -322,8 +330,8 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     if ctx.lti is not None and not with_delay:
         held["output delay"] = "not separable from the calibrated parameters"
     values, delay, raw, sol, route = _fit(ctx, specs, nominal, sign, z0, delay=with_delay)
-    if with_delay and abs(delay) >= 0.99 * MAX_DELAY:   # a model error the delay mimics: not a delay
-        held["output delay"] = f"it went to its search bound (±{MAX_DELAY:g} samples): a model error, not a delay"
+    if with_delay and abs(delay) >= 0.99 * max_delay(ctx):   # a model error the delay mimics: not a delay
+        held["output delay"] = f"it went to its search bound (±{MAX_DELAY:g} recorded samples): a model error, not a delay"
         values, delay, raw, sol, route = _fit(ctx, specs, nominal, sign, z0)
     ctx.set_delay(delay)
     gain, offset, rf, rv = score(ctx, raw)
