@@ -37,7 +37,7 @@ CALIBRATE = ["a", "K", "c"]
 
 #: plausible spread of a real device around these values (×/÷ factor; others: the setting
 #: diagnosis.tolerance, 2 for material constants): damping is known to an order of magnitude
-#: at best, the layer thickness (the capacitance goes with its square) and amplification to 30 %
+#: at best, the layer thickness (the capacitance goes with its square) to 30 %
 TOLERANCE = {"c": 15.0, "l": 1.3}
 
 def build(p):

@@ -10,9 +10,9 @@
 2. **Bounds.**  Within ×/÷ ``diagnosis.spread`` of the model's values and the parameter's
    declared bounds; the sensor gain and offset are free.  The output's delay behind the drive
    (the measurement chain's: sensor electronics, sampling skew) is solved within ±0.5 sample
-   of the recorded rate (a decimated record's delay range shrinks with it: a wider one trades
-   against the model's own dynamics on narrow-band drives) when its effect is clearly apart from the parameters' (else, or when it ends on that bound,
-   it is held at 0 and reported).
+   of the recorded rate (also on a decimated record: a wider range trades against the model's
+   own dynamics on narrow-band drives) when its effect is clearly apart from the parameters'
+   (else, or when it ends on that bound, it is held at 0 and reported).
 3. **Fit.** On the empirical frequency response first (multi-start, coherence-weighted,
    gain removed: free of the local minima lightly damped modes give a time-domain fit), then
    on the time series by variable projection (gain and offset solved at every step); without
@@ -148,9 +148,9 @@ def _delay_identifiable(ctx: Context, S: np.ndarray, names: Sequence[str], free:
     something to the output that the calibrated parameters and the sensor gain do not (the
     pivot rule of :func:`select`, the delay taken last)."""
     idx = ctx.ident.fit_idx
-    step = 0.2 * max_delay(ctx)
-    per_sample = max_delay(ctx) / MAX_DELAY
-    col = ((ctx.ident.predict(nominal, drive=ctx.drive_with_delay(step)) - raw0)[idx] * (per_sample / step))[:, None]
+    step = 0.1                                   # recorded samples
+    shifted = ctx.ident.predict(nominal, drive=ctx.drive_with_delay(step * ctx.fs / ctx.source_rate))
+    col = ((shifted - raw0)[idx] / step)[:, None]
     Q, _ = np.linalg.qr(np.column_stack([raw0[idx], np.ones(idx.size)]))
     col = col - Q @ (Q.T @ col)
     kept = S[:, [names.index(n) for n in free]]
