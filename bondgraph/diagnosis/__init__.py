@@ -37,10 +37,11 @@ public names (:class:`Candidate`, :class:`Extension`, :class:`View`, :mod:`.filt
 :mod:`.rewrite`) and the framework's public API.
 """
 from . import filters, rewrite
+from .additive import AdditiveDrive, Term
 from .candidate import LINEAR, NONLINEAR, Candidate, Extension
 from .engine import diagnose, load_candidates, model_file_options
 from .report import CandidateResult, Report, Step
 from .view import DriveFit, View
 
-__all__ = ["diagnose", "load_candidates", "model_file_options", "Candidate", "Extension", "View", "DriveFit", "Report", "Step",
+__all__ = ["AdditiveDrive", "Term", "diagnose", "load_candidates", "model_file_options", "Candidate", "Extension", "View", "DriveFit", "Report", "Step",
            "CandidateResult", "LINEAR", "NONLINEAR", "filters", "rewrite"]

@@ -36,7 +36,9 @@ class Extension:
     ``success``/``message``: from the optimiser; ``terms``: the nonlinear terms added to
     elements' laws, one (element, partner or None, term, c, r2) each (see
     :class:`~bondgraph.diagnosis.lure.Lure`), so that a later cause can be fitted on the exact
-    route with them held."""
+    route with them held; ``additive``: the drive as a sum of effects after an additive
+    drive-side fit (:attr:`DriveFit.additive <bondgraph.diagnosis.view.DriveFit>`), so that a
+    later additive cause refits its weights."""
 
     model: Model
     values: dict[str, float]
@@ -48,6 +50,7 @@ class Extension:
     success: bool = True
     message: str = ""
     terms: list = field(default_factory=list)
+    additive: object | None = None
 
 
 class Candidate(ABC):

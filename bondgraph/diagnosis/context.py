@@ -46,6 +46,9 @@ class State:
     terms: tuple = ()
     core_drive: np.ndarray | None = None
     core_extra: np.ndarray | None = None
+    #: the drive as a sum of effects (:class:`~bondgraph.diagnosis.additive.AdditiveDrive`),
+    #: when the extensions named so far were additive
+    additive: object | None = None
 
     @property
     def prediction(self) -> np.ndarray:

@@ -77,7 +77,7 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
     if cand.kind == LINEAR:
         res.verdict = cand.implausible(view, ext)
     ext.prediction = None
-    refit = view.refit_linear(ext.values)
+    refit = view.refit_linear(ext.values, additive=ext.additive is not None)
     static = cand.without_memory(view)
     return Outcome(res, ext, np.asarray(raw, float), refit, None if static is None else np.asarray(static, float))
 
@@ -187,7 +187,8 @@ def advance(ctx: Context, state: State, oc: Outcome, view: View) -> State:
     terms = tuple(state.terms) + tuple(ext.terms) if core is not None else ()
     extra = (state.core_extra if state.terms else view.extra) if terms else None
     return State(ext.model, dict(ext.values), oc.raw, g, b, ext.drive, ext.drive_expr,
-                 state.causes + [oc.result.cause], state.linear and ext.drive is not None, terms, core, extra)
+                 state.causes + [oc.result.cause], state.linear and ext.drive is not None, terms, core, extra,
+                 ext.additive if ext.drive is not None else None)
 
 
 def load_candidates() -> list[Candidate]:

@@ -14,6 +14,7 @@ from ..graph import Model
 from ..identify import Identification, Spec
 from ..lti import LTI
 from .calibration import score
+from .additive import AdditiveDrive, Term
 from .context import Context, State
 from .projection import Param, projected_fit
 
@@ -42,6 +43,8 @@ class DriveFit:
     success: bool
     message: str
     at_bounds: list[str]
+    #: the drive as a sum of effects after an additive fit (``names`` given), else None
+    additive: AdditiveDrive | None = None
 
 
 class View:
@@ -71,6 +74,10 @@ class View:
         self.linear = tuple(calibrated)
         self.drive = _frozen(state.drive)
         self.drive_expr = state.drive_expr
+        #: the drive as a sum of effects of a base drive (:mod:`.additive`); None when the
+        #: current model is not a drive transform of its linear core
+        self.additive = state.additive if state.additive is not None else \
+            AdditiveDrive(self.drive, state.drive_expr) if state.drive is not None else None
         self.structural = not state.linear
         #: nonlinear terms in elements' laws named so far: (element, partner, term, c, r2)
         self.terms = tuple(state.terms)
@@ -191,16 +198,33 @@ class View:
                   direct: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
                   identity: bool = True, z0: Sequence[float] = (), z_bounds: Sequence[tuple[float, float]] = (),
                   z_names: Sequence[str] = (), refit: bool = True, max_nfev: int = 30,
-                  starts: Sequence[Sequence[float]] = (), start: Mapping[str, float] | None = None) -> DriveFit:
+                  starts: Sequence[Sequence[float]] = (), start: Mapping[str, float] | None = None,
+                  names: Sequence[str] | None = None) -> DriveFit:
         """Fit the drive-side extension u_eff = [d] + Σ θ_k·basis_k (d: the current drive) through
         the linear core, plus ``direct`` columns added to the output, by variable projection:
         the coefficients by bounded linear least squares (``lower``/``upper`` for the basis;
         direct ones free), jointly with nonlinear parameters ``z`` (``basis``/``direct`` may be
         functions of z) and, with ``refit``, the calibrated linear parameters (log space, from
-        ``start`` or the current values)."""
+        ``start`` or the current values).
+
+        With ``names`` (the parameters that will hold the basis weights) the extension is
+        *additive* (:mod:`bondgraph.diagnosis.additive`): the basis is of :attr:`additive`'s
+        base drive, d is that sum with the weights named before refitted too (within their
+        bounds), and ``identity=False`` replaces only the base drive's own term; the result's
+        ``additive`` is the new sum."""
         if self.drive is None:
             raise ValueError("the current model is not a drive transform of its linear core")
-        d = np.asarray(self.drive)
+        held = self.additive if names is not None else None
+        if held is not None:
+            keep = identity and held.identity
+            lead = ([np.asarray(held.base)] if keep else []) + [t.column for t in held.terms]
+            lead_lo = ([-np.inf] if keep else []) + [t.lower for t in held.terms]
+            lead_hi = ([np.inf] if keep else []) + [t.upper for t in held.terms]
+            identity = keep
+        else:
+            lead = [np.asarray(self.drive)] if identity else []
+            lead_lo, lead_hi = [-np.inf] * len(lead), [np.inf] * len(lead)
+        n_lead = len(lead)
         lin = self._linear_params(start) if refit else []
         nz = len(z0)
         call_b = callable(basis)
@@ -219,12 +243,12 @@ class View:
         extra = np.asarray(self.extra)
         has_extra = bool(np.any(extra))
 
-        first = [] if call_b else ([d] if identity else []) + fixed_b
+        first = [] if call_b else lead + fixed_b
         fixed_U = np.column_stack(first) if first else None
 
         def columns(z, rows):
             vals, b, dc = parts(z)
-            U = fixed_U if fixed_U is not None else np.column_stack(([d] if identity else []) + b)
+            U = fixed_U if fixed_U is not None else np.column_stack(lead + b)
             Y = self.respond(U, vals, rows)
             ex = extra if rows is None else extra[rows]
             if identity:
@@ -236,8 +260,8 @@ class View:
                 cols.insert(-1, ex[:, None])
             return np.column_stack(cols)
 
-        lo = ([-np.inf] if identity else []) + list(lower)
-        hi = ([np.inf] if identity else []) + list(upper)
+        lo = lead_lo + list(lower)
+        hi = lead_hi + list(upper)
         # the direct columns and the offset are free
         n_dir = len(direct(np.asarray(z0, float))) if call_d else len(fixed_d)
         n_free = n_dir + 1 + (1 if has_extra and not identity else 0)
@@ -254,27 +278,47 @@ class View:
         c = sol.coef
         gain = c[0] if identity else self.gain
         gain = gain if gain != 0 else 1.0
-        k0 = 1 if identity else 0
-        theta = c[k0:k0 + n_basis] / gain
-        phi = c[k0 + n_basis:k0 + n_basis + n_dir] / gain
-        drive = (d if identity else 0.0) + (sum(t * bk for t, bk in zip(theta, b)) if b else 0.0)
-        drive = np.asarray(drive, float) * np.ones(len(d))
+        weights = c[:n_lead] / gain
+        theta = c[n_lead:n_lead + n_basis] / gain
+        phi = c[n_lead + n_basis:n_lead + n_basis + n_dir] / gain
+        if identity:
+            weights[0] = 1.0
+        drive = sum(w * col for w, col in zip(weights, lead)) + \
+            (sum(t * bk for t, bk in zip(theta, b)) if b else 0.0)
+        drive = np.asarray(drive, float) * np.ones(len(self.drive))
         raw = self.respond([drive], vals)[:, 0] + (sum(p * dk for p, dk in zip(phi, dc)) if dc else 0.0)
         if has_extra:
-            raw = raw + (extra if identity else c[k0 + n_basis + n_dir] / gain * extra)
-        names = list(z_names) + [p.name for p in lin]
-        at = [names[i] if i < len(names) else f"z{i}" for i in sol.at_bounds]
-        return DriveFit(theta, phi, sol.z[:nz], {**self.values, **vals}, raw, drive, sol.success, sol.message, at)
+            raw = raw + (extra if identity else c[n_lead + n_basis + n_dir] / gain * extra)
+        znames = list(z_names) + [p.name for p in lin]
+        at = [znames[i] if i < len(znames) else f"z{i}" for i in sol.at_bounds]
+        values = {**self.values, **vals}
+        additive = None
+        if held is not None:
+            refitted = weights[1:] if identity else weights
+            values.update({t.name: float(w) for t, w in zip(held.terms, refitted)})
+            new = tuple(Term(n, np.asarray(col, float), float(a), float(bb))
+                        for n, col, a, bb in zip(names, b or [], lower, upper))
+            additive = AdditiveDrive(held.base, held.base_expr, identity, held.terms + new)
+        return DriveFit(theta, phi, sol.z[:nz], values, raw, drive, sol.success, sol.message, at, additive)
 
-    def refit_linear(self, start: Mapping[str, float]) -> np.ndarray | None:
+    def additive_expr(self, part: sp.Expr, identity: bool = True) -> sp.Expr:
+        """The drive expression after an additive extension (fitted with ``names``) adds
+        ``part``, an expression of :attr:`additive`'s ``base_expr``; with ``identity=False``
+        ``part`` replaces the base drive's own term."""
+        a = self.additive
+        expr = self.drive_expr + part
+        return expr - a.base_expr if a.identity and not identity else expr
+
+    def refit_linear(self, start: Mapping[str, float], additive: bool = False) -> np.ndarray | None:
         """Raw prediction of the current model with only its calibrated linear parameters
-        refitted, from ``start`` (where a candidate's joint fit left them): what that refit
-        alone explains, so that a candidate is credited only with what its effect adds.  None
-        when the current model is not a drive transform of its linear core or has no
-        calibrated parameter."""
-        if self.drive is None or not self.linear or not self.exact:
+        (and, with ``additive``, the weights of the additive drive's terms) refitted, from
+        ``start`` (where a candidate's joint fit left them): what that refit alone explains,
+        so that a candidate is credited only with what its effect adds.  None when the current
+        model is not a drive transform of its linear core or has nothing to refit."""
+        additive = additive and bool(self.additive and self.additive.terms)
+        if self.drive is None or not self.exact or not (self.linear or additive):
             return None
-        return self.fit_drive(start=start, max_nfev=20).prediction
+        return self.fit_drive(start=start, max_nfev=20, names=[] if additive else None).prediction
 
     def identification(self, model: Model, integrate: bool = False) -> Identification:
         """An :class:`Identification` of ``model`` on the same data and split (exact linear

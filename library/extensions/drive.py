@@ -11,12 +11,13 @@ field-dependent stiffness k_a(E)).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import sympy as sp
 
 from bondgraph import C, I, J0, J1, Quantity, R, Se
-from bondgraph.diagnosis import LINEAR, Candidate, Extension
+from bondgraph.diagnosis import LINEAR, Candidate, Extension, Term
 from bondgraph.diagnosis.filters import lowpass, resonator
 from library.hysteresis import PrandtlIshlinskii, bouc_wen_response, play_outputs, threshold_grid
 
@@ -24,7 +25,8 @@ NOT_A_DRIVE = "acts on the drive, and the model is no longer a transform of its 
 
 
 def drive_scale(view) -> float:
-    return float(np.max(np.abs(view.drive))) or 1.0
+    """Largest |base drive| (the drive the additive effects act on)."""
+    return float(np.max(np.abs(view.additive.base))) or 1.0
 
 
 def dwell_levels(d: np.ndarray, bins: int = 100) -> int:
@@ -37,10 +39,11 @@ def dwell_levels(d: np.ndarray, bins: int = 100) -> int:
 def static_curve(view, pieces: int):
     """The best static curve of the drive with ``pieces`` parameters, through the linear core:
     odd and even ramps about the drive's centre, knees spread over its half-range; the twin a
-    memory effect must beat.  None when the drive dwells at too few levels (steps with holds):
+    memory effect must beat (of the base drive, beside the effects named before, as the memory
+    effect is fitted).  None when the drive dwells at too few levels (steps with holds):
     a curve with this many pieces then passes through every level it holds, whatever the
     history that led there, and cannot tell memory from shape."""
-    d = np.asarray(view.drive)
+    d = np.asarray(view.additive.base)
     if dwell_levels(d) <= 2 * pieces:
         return None
     c, half = 0.5 * (d.max() + d.min()), 0.5 * float(np.ptp(d))
@@ -48,7 +51,8 @@ def static_curve(view, pieces: int):
     dev = d - c
     basis = [dev, np.abs(dev)] + [np.sign(dev) * np.maximum(np.abs(dev) - k, 0.0) for k in knees] + \
         [np.maximum(np.abs(dev) - k, 0.0) for k in knees]
-    fit = view.fit_drive(basis, [-np.inf] * len(basis), [np.inf] * len(basis), identity=False)
+    fit = view.fit_drive(basis, [-np.inf] * len(basis), [np.inf] * len(basis), identity=False,
+                         names=[f"static.k{i}" for i in range(len(basis))])
     return fit.prediction
 
 
@@ -69,13 +73,14 @@ class _DriveCandidate(Candidate):
     def extension(self, view, fit, model, new: dict, drive_expr) -> Extension:
         values = {**fit.values, **new}
         return Extension(model, values, list(new), fit.prediction, fit.drive, drive_expr, fit.at_bounds,
-                         fit.success, fit.message)
+                         fit.success, fit.message, additive=fit.additive)
 
 
 class InputHysteresis(_DriveCandidate):
     """Rate-independent hysteresis of the drive, u = H[d]: a Prandtl–Ishlinskii operator (play
     form, ``n_plays`` thresholds over the drive's range), as Ghafarirad et al. model the
-    bimorph and as polarization hysteresis acts at quasi-static rates."""
+    bimorph and as polarization hysteresis acts at quasi-static rates.  Additive: it replaces
+    the base drive's own term (its r = 0 play is the drive) beside the effects named before."""
 
     cause = "hysteresis"
     label = "Prandtl-Ishlinskii operator on the drive"
@@ -87,15 +92,29 @@ class InputHysteresis(_DriveCandidate):
         return {"loop_area": loop_area(view.residual[m], view.drive[m])}
 
     def fit(self, view):
-        r = threshold_grid(view.drive, self.n_plays)
-        plays = play_outputs(view.drive, r)
+        base = view.additive.base
+        r = threshold_grid(base, self.n_plays)
+        names = [f"H.w{i + 1}" for i in range(len(r))]
+        b0, reach = float(base[0]), float(r[-1]) or 1.0
+
+        def plays(z):
+            return list(play_outputs(base, r, b0 + z[0] * reach).T)
+
         # the r = 0 play is the drive itself (w ≥ 0); the others may have either sign, so loops
-        # of both orientations (displacement lagging or leading the drive) are representable
-        fit = view.fit_drive(list(plays.T), [0.0] + [-np.inf] * (len(r) - 1), [np.inf] * len(r), identity=False)
+        # of both orientations (displacement lagging or leading the drive) are representable.
+        # The record starts where the device's history left it: the level it came from (prior,
+        # within the widest play's reach of the first input; beyond it every play is on its
+        # branch, so the bound is no limit) is fitted, from either branch and from rest.
+        fit = view.fit_drive(plays, [0.0] + [-np.inf] * (len(r) - 1), [np.inf] * len(r), identity=False,
+                             z0=[0.0], z_bounds=[(-1.0, 1.0)], z_names=["H.prior"], starts=[[-0.9], [0.9]],
+                             names=names)
+        fit.at_bounds = [n for n in fit.at_bounds if n != "H.prior"]
+        prior = b0 + float(fit.z[0]) * reach
         model = view.rewrite()
-        h = model.operator("H", PrandtlIshlinskii(r, fit.coef), view.drive_expr)
-        view.with_drive(model, h)
-        return self.extension(view, fit, model, {f"H.w{i + 1}": float(w) for i, w in enumerate(fit.coef)}, h)
+        h = model.operator("H", PrandtlIshlinskii(r, fit.coef, prior), view.additive.base_expr)
+        expr = view.additive_expr(h, identity=False)
+        view.with_drive(model, expr)
+        return self.extension(view, fit, model, {**dict(zip(names, map(float, fit.coef))), "H.prior": prior}, expr)
 
     def without_memory(self, view):
         return static_curve(view, self.n_plays)
@@ -105,15 +124,16 @@ class InputBoucWen(_DriveCandidate):
     """Rate-independent hysteresis with a differential (Bouc–Wen) state on the drive,
     u = V + κ·V_r·z, dz/dt = v̇ − β·|v̇|·z − γ·v̇·|z| (v = V/V_r, exponent 1): the DE-based
     polarization model of Rodriguez-Fortun et al. (eq. 9), whose minor loops drift as
-    Bouc–Wen loops do.  β = s(1 + tanh ρ)/2, γ = s(1 − tanh ρ)/2."""
+    Bouc–Wen loops do.  β = s(1 + tanh ρ)/2, γ = s(1 − tanh ρ)/2; z(0) is fitted (the state
+    the device's history left).  Additive: κ·V_r·z adds to the effects named before."""
 
     cause = "hysteresis"
     label = "Bouc-Wen state on the drive"
     cost = 2
 
     def applies(self, view):
-        if view.drive is None or view.drive_expr != view.input_symbol:
-            return "needs the raw drive's rate (another drive-side effect was added first)"
+        if view.drive is None or view.additive.base_expr != view.input_symbol:
+            return "needs the raw drive's rate (a drive-side stage was added first)"
         return True
 
     def without_memory(self, view):
@@ -128,26 +148,32 @@ class InputBoucWen(_DriveCandidate):
 
     def fit(self, view):
         Vr = drive_scale(view)
-        v = np.asarray(view.drive) / Vr
+        v = np.asarray(view.additive.base) / Vr
 
         def basis(z):
             beta, gamma = self.shape(z)
-            return [Vr * bouc_wen_response(v, beta, gamma, 1.0)]
+            return [Vr * bouc_wen_response(v, beta, gamma, 1.0, z[2] / (beta + gamma))]
 
-        fit = view.fit_drive(basis, [-np.inf], [np.inf], z0=[math.log(3.0), 0.0],
-                             z_bounds=[(math.log(0.05), math.log(500.0)), (-6.0, 6.0)],
-                             z_names=["bw.s", "bw.rho"], starts=[[math.log(30.0), 0.0]])
+        # z starts where the device's history left it: a fraction of its saturation 1/(β + γ)
+        # (at ±1 it is saturated, so that bound is no limit), fitted from rest and both branches
+        fit = view.fit_drive(basis, [-np.inf], [np.inf], z0=[math.log(3.0), 0.0, 0.0],
+                             z_bounds=[(math.log(0.05), math.log(500.0)), (-6.0, 6.0), (-1.0, 1.0)],
+                             z_names=["bw.s", "bw.rho", "bw.z0"], names=["bw.kappa"],
+                             starts=[[math.log(30.0), 0.0, 0.0], [math.log(3.0), 0.0, 0.9],
+                                     [math.log(3.0), 0.0, -0.9]])
+        fit.at_bounds = [n for n in fit.at_bounds if n != "bw.z0"]
         beta, gamma = self.shape(fit.z)
+        z_start = float(fit.z[2]) / (beta + gamma)
         model = view.rewrite()
         V = view.input_symbol
         kappa = model.parameter("bw.kappa", float(fit.coef[0]), "", "weight of the Bouc-Wen state in the drive")
         b = model.parameter("bw.beta", beta, "", "Bouc-Wen beta")
         g = model.parameter("bw.gamma", gamma, "", "Bouc-Wen gamma")
         vr = model.parameter("bw.Vr", Vr, "", "reference drive (largest |drive| of the data)")
-        z = model.state("bw.z", 0, unit="", doc="Bouc-Wen hysteretic variable (units of V/V_r)")
+        z = model.state("bw.z", z_start, unit="", doc="Bouc-Wen hysteretic variable (units of V/V_r)")
         vdot = model.input_rate(view.input) / vr
         model.set_rate("bw.z", vdot - b * sp.Abs(vdot) * z - g * vdot * sp.Abs(z))
-        expr = V + kappa * vr * z
+        expr = view.additive_expr(kappa * vr * z)
         view.with_drive(model, expr)
         return self.extension(view, fit, model, {"bw.kappa": float(fit.coef[0]), "bw.beta": beta, "bw.gamma": gamma},
                               expr)
@@ -183,11 +209,16 @@ class InputCreep(_DriveCandidate):
 
     def fit(self, view):
         taus = self.taus(view)
-        d = np.asarray(view.drive)
-        fit = view.fit_drive([lowpass(d, tau, view.dt) for tau in taus], [0.0] * len(taus), [np.inf] * len(taus))
+        d = np.asarray(view.additive.base)
+        cells = [lowpass(d, tau, view.dt) for tau in taus]
+        fit = view.fit_drive(cells, [0.0] * len(taus), [np.inf] * len(taus),
+                             names=[f"creep.cell{i}" for i in range(len(taus))])
         keep = [i for i in range(len(taus)) if fit.coef[i] > 1e-6 * max(float(np.max(fit.coef)), 1e-300)]
+        # only the cells that creep are kept, as terms named by their ratio parameters
+        fit.additive = replace(fit.additive, terms=fit.additive.terms[:-len(taus)] + tuple(
+            Term(f"creep.c{k}", cells[i], 0.0, np.inf) for k, i in enumerate(keep, 1)))
         model = view.rewrite()
-        D = view.drive_expr
+        D = view.additive.base_expr
         d0 = float(d[0])
         model.add(Se("creep.src", D), J0("creep.node"))
         model.bond("creep.src", "creep.node")
@@ -202,11 +233,22 @@ class InputCreep(_DriveCandidate):
             model.bond(f"creep.cell{k}", f"creep.R{k}")
             new[f"creep.c{k}"], new[f"creep.tau{k}"] = float(fit.coef[i]), float(taus[i])
             qs.append(Quantity("q", f"creep.C{k}"))
-        expr = D + sum(qs)
+        expr = view.additive_expr(sum(qs))
         view.with_drive(model, expr)
         ext = self.extension(view, fit, model, new, expr)
         ext.values.update(new)
         return ext
+
+    @staticmethod
+    def elastic_slope(ext) -> float:
+        """Drive units per base-drive unit of the effects beside the creep (1 for the base
+        drive alone; the loading slope of a hysteresis operator named before): what the
+        creep ratios are relative to."""
+        a = ext.additive
+        rest = replace(a, terms=tuple(t for t in a.terms if not t.name.startswith("creep."))).series(ext.values)
+        b = a.base - np.mean(a.base)
+        slope = float(b @ (rest - np.mean(rest))) / max(float(b @ b), 1e-300)
+        return slope if slope > 0 else 1.0
 
     def implausible(self, view, ext):
         cs = [v for k, v in ext.values.items() if k.startswith("creep.c") and k in ext.new]
@@ -214,7 +256,7 @@ class InputCreep(_DriveCandidate):
         if not cs:
             return "no creep cell has a positive ratio"
         span = float(view.t[-1] - view.t[0])
-        within = sum(c * (1 - math.exp(-span / tau)) for c, tau in zip(cs, taus))
+        within = sum(c * (1 - math.exp(-span / tau)) for c, tau in zip(cs, taus)) / self.elastic_slope(ext)
         if within > self.max_ratio:
             return (f"it creeps by {within:.2g} of the elastic response within the record (more than "
                     f"{self.max_ratio:g})")
@@ -241,16 +283,16 @@ class _InputPolynomial(_DriveCandidate):
 
     def fit(self, view):
         Vr = drive_scale(view)
-        d = np.asarray(view.drive)
-        fit = view.fit_drive([self.sign * d ** 3 / Vr ** 2, self.sign * d ** 5 / Vr ** 4], [0.0, 0.0],
-                             [np.inf, np.inf])
-        model = view.rewrite()
+        d = np.asarray(view.additive.base)
         p = self.prefix
+        fit = view.fit_drive([self.sign * d ** 3 / Vr ** 2, self.sign * d ** 5 / Vr ** 4], [0.0, 0.0],
+                             [np.inf, np.inf], names=[f"{p}.a3", f"{p}.a5"])
+        model = view.rewrite()
         a3 = model.parameter(f"{p}.a3", float(fit.coef[0]), "", "cubic drive coefficient", bounds=(0, 1e6))
         a5 = model.parameter(f"{p}.a5", float(fit.coef[1]), "", "quintic drive coefficient", bounds=(0, 1e6))
         vr = model.parameter(f"{p}.Vr", Vr, "", "reference drive (largest |drive| of the data)")
-        D = view.drive_expr
-        expr = D + self.sign * (a3 * D ** 3 / vr ** 2 + a5 * D ** 5 / vr ** 4)
+        D = view.additive.base_expr
+        expr = view.additive_expr(self.sign * (a3 * D ** 3 / vr ** 2 + a5 * D ** 5 / vr ** 4))
         view.with_drive(model, expr)
         return self.extension(view, fit, model, {f"{p}.a3": float(fit.coef[0]), f"{p}.a5": float(fit.coef[1])},
                               expr)

@@ -23,16 +23,20 @@ def _play_matrix(v, r, h):
     return out
 
 
-def play_outputs(v, thresholds) -> np.ndarray:
-    """Outputs of plays with the given thresholds for a sampled input, from rest at v[0].
+def play_outputs(v, thresholds, prior: float | None = None) -> np.ndarray:
+    """Outputs of plays with the given thresholds for a sampled input, from rest at v[0]
+    (after a monotone approach from ``prior``, as :class:`PrandtlIshlinskii` with that
+    ``prior`` starts; from 0 without it).
 
-    Returns an (n_samples, n_plays) array in units of v (initial-memory convention of the module).
+    Returns an (n_samples, n_plays) array in units of v.
     """
     v = np.ascontiguousarray(v, dtype=np.float64).ravel()
     r = np.ascontiguousarray(_vector("thresholds", thresholds, nonneg=True))
     if v.size == 0:
         raise ParameterError("input sequence is empty")
-    return _play_matrix(v, r, _virgin_plays(v[0], r))
+    h = _virgin_plays(v[0], r) if prior is None else \
+        np.ascontiguousarray(np.clip(float(prior), v[0] - r, v[0] + r), dtype=np.float64)
+    return _play_matrix(v, r, h)
 
 
 def threshold_grid(v, n: int) -> np.ndarray:

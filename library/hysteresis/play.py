@@ -79,9 +79,29 @@ class PrandtlIshlinskii(_PlayBank):
 
     ``thresholds`` r_i >= 0 in units of v, ``weights`` w_i in units of y/v;
     prm = [r_1..r_n, w_1..w_n], memory = the n play outputs (units of v).
+
+    ``prior`` (units of v, optional): the input level the device was last driven to before
+    the first input; the plays start as after a monotone approach from it,
+    h_i = clip(prior, v0 − r_i, v0 + r_i) (a device last driven to its maximum starts on the
+    descending branch).  It is then a parameter too (prm = [r, w, prior]); without it the
+    plays start as after an approach from 0.
     """
 
     kind = "pi"
+
+    def __init__(self, thresholds, weights, prior: float | None = None):
+        super().__init__(thresholds, weights)
+        if prior is not None:
+            self.prior = np.asarray(prior, dtype=np.float64).reshape(1)
+            self.vectors = ("thresholds", "weights", "prior")
+            self.parameter_names = self.parameter_names + ("prior",)
+
+    def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
+        """Play outputs after a monotone approach from ``prior`` (or 0) to ``v0``, units of v."""
+        n = self.n_memory
+        prior = float(prm[2 * n]) if len(prm) > 2 * n else 0.0
+        r = np.asarray(prm[:n], dtype=np.float64)
+        return np.ascontiguousarray(np.clip(prior, v0 - r, v0 + r), dtype=np.float64)
 
     @staticmethod
     def output(v, mem, prm):
