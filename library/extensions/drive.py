@@ -56,6 +56,15 @@ def static_curve(view, pieces: int):
     return fit.prediction
 
 
+def best_on_grid(view, basis_of, grid, **fit_args) -> float:
+    """The point of ``grid`` whose basis ``basis_of(point)`` fits the fit part best with the
+    linear parameters held (one linear solve each): for a scalar of a basis that a local
+    optimiser would find only from the right start (where the device's history left it)."""
+    def cost(point):
+        return view.score(view.fit_drive(basis_of(point), refit=False, **fit_args).prediction)[2]
+    return float(min(grid, key=cost))
+
+
 def loop_area(r: np.ndarray, u: np.ndarray) -> float:
     """|∮ r du| normalised by the bounding box and the number of cycles: 0 for a
     single-valued residual, ~0.3 for a fat loop."""
@@ -96,20 +105,15 @@ class InputHysteresis(_DriveCandidate):
         r = threshold_grid(base, self.n_plays)
         names = [f"H.w{i + 1}" for i in range(len(r))]
         b0, reach = float(base[0]), float(r[-1]) or 1.0
-
-        def plays(z):
-            return list(play_outputs(base, r, b0 + z[0] * reach).T)
-
+        bounds = dict(lower=[0.0] + [-np.inf] * (len(r) - 1), upper=[np.inf] * len(r), identity=False, names=names)
         # the r = 0 play is the drive itself (w ≥ 0); the others may have either sign, so loops
         # of both orientations (displacement lagging or leading the drive) are representable.
-        # The record starts where the device's history left it: the level it came from (prior,
-        # within the widest play's reach of the first input; beyond it every play is on its
-        # branch, so the bound is no limit) is fitted, from either branch and from rest.
-        fit = view.fit_drive(plays, [0.0] + [-np.inf] * (len(r) - 1), [np.inf] * len(r), identity=False,
-                             z0=[0.0], z_bounds=[(-1.0, 1.0)], z_names=["H.prior"], starts=[[-0.9], [0.9]],
-                             names=names)
-        fit.at_bounds = [n for n in fit.at_bounds if n != "H.prior"]
-        prior = b0 + float(fit.z[0]) * reach
+        # The record starts where the device's history left it: the level the plays came from
+        # (prior) is chosen on a grid over the widest play's reach of the first input (beyond
+        # it every play is on its branch), with the old convention (from 0) among the points.
+        priors = np.r_[b0 + np.linspace(-1.0, 1.0, 9) * reach, 0.0]
+        prior = best_on_grid(view, lambda p: list(play_outputs(base, r, p).T), priors, **bounds)
+        fit = view.fit_drive(list(play_outputs(base, r, prior).T), **bounds)
         model = view.rewrite()
         h = model.operator("H", PrandtlIshlinskii(r, fit.coef, prior), view.additive.base_expr)
         expr = view.additive_expr(h, identity=False)
@@ -185,7 +189,9 @@ class InputCreep(_DriveCandidate):
     d0·[1 + Σ c_n(1 − e^(−t/τ_n))]; the c_n ≥ 0 of a fixed relaxation spectrum (two time
     constants per decade, from well above the model's own time constants to three record
     lengths) are solved exactly, so log-time creep is represented as well as a few cells.
-    Cells are C_n = c_n, R_n = τ_n/c_n on a 0-junction, starting in equilibrium with the drive.
+    Cells are C_n = c_n, R_n = τ_n/c_n on a 0-junction, starting in equilibrium with the level
+    the device's history left them at (``creep.prior``, drive units; fitted on a grid).
+    Additive: the cells act on the base drive beside the effects named before.
     Creep is slower than the model's own dynamics and than the drive's main period (a faster
     lag is a phase lag, not creep): the spectrum starts at 10/ω of the slowest mode and at a
     quarter of the main period (or at 1 % of the record, for drives that hold, whose main
@@ -210,16 +216,27 @@ class InputCreep(_DriveCandidate):
     def fit(self, view):
         taus = self.taus(view)
         d = np.asarray(view.additive.base)
-        cells = [lowpass(d, tau, view.dt) for tau in taus]
-        fit = view.fit_drive(cells, [0.0] * len(taus), [np.inf] * len(taus),
-                             names=[f"creep.cell{i}" for i in range(len(taus))])
+        d0 = float(d[0])
+        steady = [lowpass(d, tau, view.dt) for tau in taus]
+        decays = [np.exp(-np.arange(len(d)) * (view.dt / tau)) for tau in taus]
+
+        def cells_from(prior):   # cells in equilibrium with the level ``prior`` at the start
+            return [s + (prior - d0) * e for s, e in zip(steady, decays)]
+
+        bounds = dict(lower=[0.0] * len(taus), upper=[np.inf] * len(taus),
+                      names=[f"creep.cell{i}" for i in range(len(taus))])
+        # the record starts where the device's history left it: the level the cells had
+        # settled to (prior) is chosen on a grid over the drive's range, the first input among
+        # the points (cells in equilibrium with it)
+        prior = best_on_grid(view, cells_from, np.r_[d0, np.linspace(d.min(), d.max(), 7)], **bounds)
+        cells = cells_from(prior)
+        fit = view.fit_drive(cells, **bounds)
         keep = [i for i in range(len(taus)) if fit.coef[i] > 1e-6 * max(float(np.max(fit.coef)), 1e-300)]
         # only the cells that creep are kept, as terms named by their ratio parameters
         fit.additive = replace(fit.additive, terms=fit.additive.terms[:-len(taus)] + tuple(
             Term(f"creep.c{k}", cells[i], 0.0, np.inf) for k, i in enumerate(keep, 1)))
         model = view.rewrite()
         D = view.additive.base_expr
-        d0 = float(d[0])
         model.add(Se("creep.src", D), J0("creep.node"))
         model.bond("creep.src", "creep.node")
         new, qs = {}, []
@@ -227,12 +244,13 @@ class InputCreep(_DriveCandidate):
             c = model.parameter(f"creep.c{k}", float(fit.coef[i]), "", f"creep ratio of cell {k}", bounds=(0, 1e3))
             tau = model.parameter(f"creep.tau{k}", float(taus[i]), "s", f"creep time constant of cell {k}",
                                   bounds=(0, 1e6))
-            model.add(J1(f"creep.cell{k}"), C(f"creep.C{k}", c, q0=c * d0), R(f"creep.R{k}", tau / c))
+            model.add(J1(f"creep.cell{k}"), C(f"creep.C{k}", c, q0=c * prior), R(f"creep.R{k}", tau / c))
             model.bond("creep.node", f"creep.cell{k}")
             model.bond(f"creep.cell{k}", f"creep.C{k}")
             model.bond(f"creep.cell{k}", f"creep.R{k}")
             new[f"creep.c{k}"], new[f"creep.tau{k}"] = float(fit.coef[i]), float(taus[i])
             qs.append(Quantity("q", f"creep.C{k}"))
+        new["creep.prior"] = prior
         expr = view.additive_expr(sum(qs))
         view.with_drive(model, expr)
         ext = self.extension(view, fit, model, new, expr)
