@@ -366,3 +366,31 @@ def test_nnls_recovers_weights():
     # units do not matter: dipole-sized input, field-sized output
     np.testing.assert_allclose(fit_pi_weights(v * 1e-7, y * 1e6, r * 1e-7) / 1e13, w_true,
                                rtol=0, atol=1e-6)
+
+
+# --- the device's history: where the plays start ----------------------------------------------
+
+@settings(max_examples=30, deadline=None)
+@given(v=inputs, prior=st.floats(-3.0, 3.0, **finite))
+def test_prior_is_a_monotone_approach_from_it(v, prior):
+    """With ``prior`` the plays start as if the input had come to v[0] from ``prior``: the run
+    equals the run of the path prior → v[0] → ... from rest at ``prior``; play_outputs agrees;
+    without a prior the convention is an approach from 0."""
+    v = np.array(v)
+    op = PrandtlIshlinskii(R, W, prior)
+    assert op.parameter_names[-1] == "prior"
+    ramp = np.linspace(prior, v[0], 50)
+    from_prior = PrandtlIshlinskii(R, W, prior).run(np.r_[ramp, v[1:]])[len(ramp) - 1:]
+    np.testing.assert_allclose(op.run(v), from_prior, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(play_outputs(v, R, prior) @ np.array(W), op.run(v), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(PrandtlIshlinskii(R, W, 0.0).run(v), PrandtlIshlinskii(R, W).run(v), atol=1e-15)
+
+
+def test_a_device_last_driven_to_its_maximum_starts_on_the_descending_branch():
+    """From rest at 0 after the maximum 1, every play sits r above the input: the first
+    rise moves nothing but the r = 0 play until the input climbs by 2r."""
+    op = PrandtlIshlinskii(R, W, prior=1.0)
+    v = np.linspace(0.0, 0.2, 11)
+    expected = W[0] * v + sum(w * min(r, 1.0) for r, w in zip(R[1:], W[1:]))
+    np.testing.assert_allclose(op.run(v)[:3], expected[:3], atol=1e-12)
+    assert repr(op) == "PrandtlIshlinskii([0.0, 0.1, 0.25, 0.4, 0.6], [1.0, 0.5, 0.3, 0.2, 0.4], [1.0])"

@@ -28,7 +28,9 @@ The engine, in order:
    ``bondgraph.config`` (section ``diagnosis``); of equivalent passing candidates the one
    with the fewest parameters is named.
 5. **Chain** (:mod:`.engine`): the named cause extends the model; the others are tried
-   again on it until none passes (compound effects: e.g. hysteresis, then creep).
+   again on it until none passes (compound effects: e.g. hysteresis, then creep).  Drive-side
+   effects that act side by side are kept as one sum whose earlier weights are refitted with
+   every later effect (:mod:`.additive`), so a step is credited only with what it adds.
 6. **Report** (:mod:`.report`): every step, every candidate's verdict, why ``none``.
 
 Candidates are found through the entry point group ``bondgraph.diagnosis`` (``library``

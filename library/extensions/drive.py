@@ -86,10 +86,14 @@ class _DriveCandidate(Candidate):
 
 
 class InputHysteresis(_DriveCandidate):
-    """Rate-independent hysteresis of the drive, u = H[d]: a Prandtl–Ishlinskii operator (play
-    form, ``n_plays`` thresholds over the drive's range), as Ghafarirad et al. model the
-    bimorph and as polarization hysteresis acts at quasi-static rates.  Additive: it replaces
-    the base drive's own term (its r = 0 play is the drive) beside the effects named before."""
+    """Rate-independent hysteresis of the drive: a Prandtl–Ishlinskii operator (play form,
+    ``n_plays`` thresholds over the drive's range), as Ghafarirad et al. model the bimorph and
+    as polarization hysteresis acts at quasi-static rates, plus a memoryless even term
+    q·h·((d − c)/h)² about the drive's centre c (half range h): play sums alone only make
+    point-symmetric loops, and a stack's loops over part of its field range are not (the
+    asymmetric PI of Gu, Zhu & Su, IEEE Trans. Ind. Electron. 61(3) (2014) 1583–1595, adds
+    such a polynomial).  Additive: it replaces the base drive's own term (its r = 0 play is
+    the drive) beside the effects named before."""
 
     cause = "hysteresis"
     label = "Prandtl-Ishlinskii operator on the drive"
@@ -103,20 +107,31 @@ class InputHysteresis(_DriveCandidate):
     def fit(self, view):
         base = view.additive.base
         r = threshold_grid(base, self.n_plays)
-        names = [f"H.w{i + 1}" for i in range(len(r))]
+        names = [f"H.w{i + 1}" for i in range(len(r))] + ["H.q"]
         b0, reach = float(base[0]), float(r[-1]) or 1.0
-        bounds = dict(lower=[0.0] + [-np.inf] * (len(r) - 1), upper=[np.inf] * len(r), identity=False, names=names)
+        centre, half = 0.5 * (float(base.max()) + float(base.min())), 0.5 * float(np.ptp(base)) or 1.0
+        even = half * ((base - centre) / half) ** 2
+        bounds = dict(lower=[0.0] + [-np.inf] * len(r), upper=[np.inf] * (len(r) + 1), identity=False, names=names)
+
+        def basis(prior):
+            return list(play_outputs(base, r, prior).T) + [even]
+
         # the r = 0 play is the drive itself (w ≥ 0); the others may have either sign, so loops
         # of both orientations (displacement lagging or leading the drive) are representable.
         # The record starts where the device's history left it: the level the plays came from
         # (prior) is chosen on a grid over the widest play's reach of the first input (beyond
         # it every play is on its branch), with the old convention (from 0) among the points.
         priors = np.r_[b0 + np.linspace(-1.0, 1.0, 9) * reach, 0.0]
-        prior = best_on_grid(view, lambda p: list(play_outputs(base, r, p).T), priors, **bounds)
-        fit = view.fit_drive(list(play_outputs(base, r, prior).T), **bounds)
+        prior = best_on_grid(view, basis, priors, **bounds)
+        fit = view.fit_drive(basis(prior), **bounds)
+        w, q = fit.coef[:-1], float(fit.coef[-1])
         model = view.rewrite()
-        h = model.operator("H", PrandtlIshlinskii(r, fit.coef, prior), view.additive.base_expr)
-        expr = view.additive_expr(h, identity=False)
+        B = view.additive.base_expr
+        h = model.operator("H", PrandtlIshlinskii(r, w, prior), B)
+        qs = model.parameter("H.q", q, "", "weight of the memoryless even term (asymmetric loops)")
+        cs = model.parameter("H.c", centre, "", "centre of the drive's range (the even term's origin)")
+        hs = model.parameter("H.h", half, "", "half the drive's range (the even term's scale)")
+        expr = view.additive_expr(h + qs * hs * ((B - cs) / hs) ** 2, identity=False)
         view.with_drive(model, expr)
         return self.extension(view, fit, model, {**dict(zip(names, map(float, fit.coef))), "H.prior": prior}, expr)
 
@@ -290,6 +305,15 @@ class _InputPolynomial(_DriveCandidate):
 
     sign = -1.0
     prefix = "sat"
+    #: the prefixes of both polynomial candidates: once either is named, the other would only
+    #: free the sign of the same terms
+    prefixes = ("sat.", "exp.")
+
+    def applies(self, view):
+        ok = super().applies(view)
+        if ok is True and any(t.name.startswith(self.prefixes) for t in view.additive.terms):
+            return "a drive polynomial was named already (its terms are this candidate's, with the other sign)"
+        return ok
 
     def evidence(self, view):
         d = np.asarray(view.drive) / drive_scale(view)
