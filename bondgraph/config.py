@@ -84,6 +84,8 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.candidate_seconds": Default(60.0, "a candidate's fits stop at their best point after this many seconds "
                                                 "(reported as not converged)"),
     "diagnosis.max_fit_points": Default(20000, "samples of the fit part used by the optimisers (evenly thinned)"),
+    "diagnosis.blocks": Default(30, "equal time blocks of the record; the validation share of them, spread evenly, "
+                                    "is held out (each is at least one batch of the significance test)"),
 }
 
 _values: dict[str, Any] = {k: d.value for k, d in DEFAULTS.items()}

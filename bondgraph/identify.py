@@ -121,12 +121,14 @@ class Identification:
     """A model, a data set and the machinery to simulate, score and fit it.
 
     ``input``/``output`` name the model's input and output (default: its first declared
-    ones); ``data_input``/``data_output`` the data columns (default: the same names)."""
+    ones); ``data_input``/``data_output`` the data columns (default: the same names);
+    ``validation``, ``split`` and ``blocks``: the held-out part (:func:`split_masks`)."""
 
     def __init__(self, model: Model | Simulator, data: Dataset, input: str | None = None, output: str | None = None,
                  data_input: str | None = None, data_output: str | None = None,
                  validation: float = 0.3, split: str = "blocks", max_fit_points: int = 20000,
-                 rtol: float = 1e-6, method: str = "auto", lti: LTI | None = None, cut: float | None = None):
+                 rtol: float = 1e-6, method: str = "auto", lti: LTI | None = None, cut: float | None = None,
+                 blocks: int = 30):
         self.sim = model if isinstance(model, Simulator) else Simulator(model)
         input = input if input is not None else first_input(self.sim.eqs)
         output = output if output is not None else first_output(self.sim.eqs)
@@ -137,13 +139,13 @@ class Identification:
         self.data = data
         self.input, self.output = input, output
         self.data_input, self.data_output = data_input, data_output
-        self.validation, self.split_mode = validation, split
+        self.validation, self.split_mode, self.blocks = validation, split, blocks
         self.u = data.column(data_input or input)
         self.y = data.column(data_output or output)
         check_varies(self.u, data_input or input, data.path)
         self.t = data.t
         self.signal = PiecewiseLinear(self.t, self.u, label=f"data:{data_input or input}")
-        self.fit_mask, self.val_mask = split_masks(self.t, validation, split)
+        self.fit_mask, self.val_mask = split_masks(self.t, validation, split, blocks)
         idx = np.nonzero(self.fit_mask)[0]
         step = max(1, int(math.ceil(idx.size / max_fit_points)))
         self.fit_idx = idx[::step]
@@ -162,7 +164,7 @@ class Identification:
     def like(self, model: Model | Simulator, **kw) -> "Identification":
         """The same data, input/output mapping and split for another (e.g. extended) model."""
         args = dict(input=self.input, output=self.output, data_input=self.data_input,
-                    data_output=self.data_output, validation=self.validation, split=self.split_mode,
+                    data_output=self.data_output, validation=self.validation, split=self.split_mode, blocks=self.blocks,
                     max_fit_points=self.max_fit_points, rtol=self.rtol, method=self.method, cut=self.cut)
         args.update(kw)
         return Identification(model, self.data, **args)
@@ -315,17 +317,25 @@ class Identification:
 def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     """min ||A·x − b|| with lower ≤ x ≤ upper (scipy's bounded-variable least squares on the
     column-scaled problem; for tall A it works on the small triangular factor R of A,
-    ||Ax − b||² = ||Rx − Qᵀb||² + const)."""
-    norms = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
+    ||Ax − b||² = ||Rx − Qᵀb||² + const).  A column that vanishes on these rows (norm below
+    1e-9 of the largest) gets 0: any value would fit, and elsewhere it could be anything."""
+    norms = np.linalg.norm(A, axis=0)
+    live = norms > 1e-9 * max(float(norms.max(initial=0.0)), 1e-300)   # a column that is ~0 on these
+    out = np.zeros(A.shape[1])                                          # rows gets no coefficient
+    if not np.any(live):
+        return out
+    A, norms = A[:, live], norms[live]
     An = A / norms
-    lower = np.asarray(lower, float) * norms
-    upper = np.asarray(upper, float) * norms
+    lower = np.asarray(lower, float)[live] * norms
+    upper = np.asarray(upper, float)[live] * norms
     if np.all(np.isinf(lower)) and np.all(np.isinf(upper)):
-        return np.linalg.lstsq(An, b, rcond=None)[0] / norms
+        out[live] = np.linalg.lstsq(An, b, rcond=None)[0] / norms
+        return out
     if An.shape[0] > 4 * An.shape[1]:
         Qm, Rm = np.linalg.qr(An)
         An, b = Rm, Qm.T @ b
-    return lsq_linear(An, b, bounds=(lower, upper), method="bvls").x / norms
+    out[live] = lsq_linear(An, b, bounds=(lower, upper), method="bvls").x / norms
+    return out
 
 
 def check_varies(u: np.ndarray, name: str, path: str | None = None) -> None:

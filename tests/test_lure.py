@@ -1,5 +1,5 @@
 """The Lur'e route of the diagnosis (bondgraph.diagnosis.lure): a linear bond graph with
-polynomial terms added to some elements' laws, stepped sample by sample on the exact
+polynomial terms (and a smoothed Coulomb force) added to some elements' laws, stepped sample by sample on the exact
 first-order-hold discretisation, against the same rewritten bond graph integrated by the
 compiled Dormand–Prince solver (two independent routes to one answer).
 
@@ -100,8 +100,37 @@ def test_a_diverging_term_is_reported_not_returned():
         lure.simulate({}, u, softening, [(10 * K / 1e-4 ** 2, 0.0)])  # negative stiffness past 32 um
 
 
-def test_terms_are_polynomials_of_the_element_variables():
-    P = polynomial_term(softening, False)(2.0, 3.0)
+def friction(c, r2, x, a):
+    """A smoothed Coulomb force c·r2·tanh(x/r2) (r2: the smoothing velocity)."""
+    return c * r2 * sp.tanh(x / r2)
+
+
+def test_terms_are_polynomials_plus_one_saturation_of_the_element_variable():
+    P, hg = polynomial_term(softening, False)(2.0, 3.0)
     assert P[1, 0] == pytest.approx(6.0) and P[3, 0] == pytest.approx(-2.0)     # 2·3·x − 2·x³
-    with pytest.raises(NotConverged):
-        polynomial_term(lambda c, r2, x, a: c * sp.tanh(x), False)
+    assert list(hg) == [0.0, 0.0]
+    P, hg = polynomial_term(lambda c, r2, x, a: friction(c, r2, x, a) - c * x, False)(2.0, 0.5)
+    assert P[1, 0] == pytest.approx(-2.0) and list(hg) == pytest.approx([1.0, 2.0])  # 1·tanh(2x) − 2x
+    for other in (lambda c, r2, x, a: c * sp.sin(x), lambda c, r2, x, a: c * sp.tanh(x ** 2),
+                  lambda c, r2, x, a: c * (sp.tanh(x) + sp.tanh(2 * x / r2))):
+        with pytest.raises(NotConverged):
+            polynomial_term(other, False)
+    with pytest.raises(NotConverged):                                           # of the partner: no
+        polynomial_term(lambda c, r2, x, a: c * sp.tanh(a), True)
+
+
+def test_friction_on_the_lure_route_agrees_with_the_integrated_rewrite():
+    """A Coulomb force (smoothed over 2 % of the peak velocity) in the damper, 5× the viscous
+    damping's force at the peak: the stepped route against the compiled integrator."""
+    t, u = drive()
+    lure = Lure(resonator(), "F", "x", ["c"], {"c": None}, t[1] - t[0])
+    v = lure.linear_responses({}, u, friction)["diag.x:c"]
+    s = 0.02 * float(np.max(np.abs(v)))
+    coef = (5.0 * CD * float(np.max(np.abs(v))) / s, s)
+    y = lure.simulate({}, u, friction, [coef])
+    rewritten = resonator()
+    modify_law(rewritten, "c", lambda x, old: old + friction(*coef, x, None))
+    ref = integrated(rewritten, t, u)
+    linear = integrated(resonator(), t, u)
+    assert np.std(ref - linear) > 0.2 * np.std(linear)
+    assert np.std(y - ref) < 5e-3 * np.std(ref)

@@ -142,7 +142,8 @@ class Context:
         self.data = Dataset(self._data.t, cols, self._data.metadata, self._data.path)
         self.ident = Identification(self._sim, self.data, self.input, self.output, self.data_input,
                                     self.data_output, self.validation,
-                                    max_fit_points=config.get("diagnosis.max_fit_points"), lti=self._lti, cut=self.cut)
+                                    max_fit_points=config.get("diagnosis.max_fit_points"), lti=self._lti, cut=self.cut,
+                                    blocks=int(config.get("diagnosis.blocks")))
         self.u, self.y, self.t = self.ident.u, self.ident.y, self.ident.t
         self.dt = self.ident.dt
         self.lti = self.ident.lti

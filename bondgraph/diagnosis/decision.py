@@ -7,7 +7,10 @@ standard error, z.  Model errors are correlated in time, so n samples are worth 
 independent ones: the standard error comes from batches, each spanning four times the lag at
 which the autocorrelation of e_a² − e_b² (about each block's mean) first falls to zero (a
 whole period of a periodic error), never straddling two blocks; by the delta method,
-se² = var_k(A_k/A − B_k/B)/K over the K batches' mean squared errors A_k, B_k.  K is the
+se² = var_k(A_k/A − B_k/B)/K·(1 + ρ)/(1 − ρ) over the K batches' mean squared errors A_k,
+B_k, where ρ ≥ 0 is the lag-one autocorrelation of the batch contributions in time order
+beyond the 1/√K that independent batches show by chance (an error that changes slowly makes
+neighbouring batches alike).  K(1 − ρ)/(1 + ρ) is the
 effective sample size.  The ratio form weighs each regime by its error, as the RMS does, yet
 is not dominated by the spread of error levels between regimes (sines, holds, a chirp).
 
@@ -91,8 +94,21 @@ def compare(ea: np.ndarray, eb: np.ndarray, blocks: list[slice]) -> Comparison:
     if not (math.isfinite(A) and math.isfinite(B)) or A <= 0 or B <= 0 or K < 2:
         worse = B > A or not math.isfinite(B)
         return Comparison(gain, -math.inf if worse and K >= 2 else 0.0, float(K))
-    z = _z(math.log(A / B), float(np.std(A_k / A - B_k / B, ddof=1)) / math.sqrt(K))
-    return Comparison(gain, z, float(K))
+    d = A_k / A - B_k / B
+    inflation = _serial_inflation(d)
+    z = _z(math.log(A / B), float(np.std(d, ddof=1)) / math.sqrt(K) * math.sqrt(inflation))
+    return Comparison(gain, z, float(K) / inflation)
+
+
+def _serial_inflation(d: np.ndarray) -> float:
+    """(1 + ρ)/(1 − ρ) for the lag-one autocorrelation ρ of the batch contributions in time
+    order, beyond the 1/√K that K independent batches show by chance (clipped to [0, 0.9]):
+    batches of a slowly varying error are not independent."""
+    c = d - d.mean()
+    den = float(c @ c)
+    rho = float(c[1:] @ c[:-1]) / den if den > 0 else 0.0
+    rho = min(max(rho - 1 / math.sqrt(d.size), 0.0), 0.9)
+    return (1 + rho) / (1 - rho)
 
 
 def _z(stat: float, se: float) -> float:

@@ -7,8 +7,9 @@ partner element (or None).  The model with the w_k as extra inputs is linear; it
 first-order-hold discretisation (every input linear between samples, exact for the linear
 part) is stepped sample by sample in compiled code, and at each sample the small implicit
 equation w = term(x(w)) (x depends on w only through the hold's direct term) is solved by
-Newton's method from the previous sample's w; the term, a polynomial in x and a, is passed
-as its coefficients, so the stepping kernel is compiled once.  Unlike iterating on whole trajectories, this converges however strong the
+Newton's method from the previous sample's w; the term, a polynomial in x and a plus at most
+one smooth saturation h·tanh(g·x) of the element's own variable (Coulomb friction smoothed,
+say), is passed as its coefficients, so the stepping kernel is compiled once.  Unlike iterating on whole trajectories, this converges however strong the
 nonlinearity (a softening resonance that jumps between branches included); when a step does
 not (a term that makes the model unstable), :class:`NotConverged` is raised and the caller
 integrates the rewritten model.
@@ -98,7 +99,8 @@ class Lure:
                  term: Callable, coefs: Sequence[tuple[float, float]]) -> np.ndarray:
         """Raw output for the drive samples ``u`` with w_k = term(c_k, r2_k, x_k, a_k),
         ``coefs[k] = (c_k, r2_k)``; ``term`` is written in arithmetic that works on sympy
-        symbols and is a polynomial in x and a (see :func:`polynomial_term`)."""
+        symbols and is a polynomial in x and a, plus at most one h·tanh(g·x) (see
+        :func:`polynomial_term`)."""
         Y, ok = self._run(values, u, term, np.asarray(coefs, float).reshape(self.n - len(self.fixed), 2), True)
         if not ok:
             raise NotConverged("the nonlinear term makes the model diverge (an implicit step did not converge)")
@@ -124,12 +126,14 @@ class Lure:
                            for k, el in enumerate(self.elements)], np.int64)
         terms = [(t, c, r2) for _, _, t, c, r2 in self.fixed] + \
             [(term, (c if active_new else 0.0), r2) for c, r2 in coefs]
-        mats = [polynomial_term(t, self.partners[k])(c, r2) for k, (t, c, r2) in enumerate(terms)]
+        laws = [polynomial_term(t, self.partners[k])(c, r2) for k, (t, c, r2) in enumerate(terms)]
+        mats = [m for m, _ in laws]
         P = np.zeros((self.n, max(m.shape[0] for m in mats), max(m.shape[1] for m in mats)))
         for k, m in enumerate(mats):
             P[k, :m.shape[0], :m.shape[1]] = m
+        HG = np.array([hg for _, hg in laws], float).reshape(self.n, 2)
         ok = _step(np.ascontiguousarray(Phi), np.ascontiguousarray(Gam), np.ascontiguousarray(C),
-                   np.ascontiguousarray(Dd), np.ascontiguousarray(G1), u, self.n, a_rows, P, active, Y)
+                   np.ascontiguousarray(Dd), np.ascontiguousarray(G1), u, self.n, a_rows, P, HG, active, Y)
         return Y, ok
 
 
@@ -137,31 +141,55 @@ _TERMS: dict = {}
 
 
 def polynomial_term(term: Callable, partner: bool):
-    """``term(c, r2, x, a)`` (``a`` None without a partner) as a polynomial in x and a whose
-    coefficients are functions of (c, r2): a function (c, r2) → P with
-    term = Σ P[i, j]·x^i·a^j, made once per process and formula.  A term that is not a
-    polynomial in x and a raises :class:`NotConverged` (the caller then integrates)."""
+    """``term(c, r2, x, a)`` (``a`` None without a partner) as a polynomial in x and a plus at
+    most one smooth saturation h·tanh(g·x) of the element's own variable, the coefficients
+    functions of (c, r2): a function (c, r2) → (P, (h, g)) with
+    term = Σ P[i, j]·x^i·a^j + h·tanh(g·x), made once per process and formula.  Any other
+    term raises :class:`NotConverged` (the caller then integrates)."""
     c, r2, x, a = sp.symbols("c r2 x a", real=True)
     expr = sp.expand(sp.sympify(term(c, r2, x, a if partner else None)))
     key = sp.srepr(expr)
     if key not in _TERMS:
+        refuse = NotConverged(f"the term {expr} is not a polynomial in the element's variables plus one "
+                              f"h·tanh(g·x)")
+        h, g = sp.Integer(0), sp.Integer(0)
+        sats = list(expr.atoms(sp.tanh))
+        if len(sats) > 1:
+            raise refuse
+        if sats:
+            g = sp.simplify(sats[0].args[0] / x)
+            h = expr.coeff(sats[0])
+            if g.free_symbols & {x, a} or h.free_symbols & {x, a} or g == 0:
+                raise refuse
+            expr = sp.expand(expr - h * sats[0])
         try:
             poly = sp.Poly(expr, x, a)
         except sp.PolynomialError as exc:
-            raise NotConverged(f"the term {expr} is not a polynomial in the element's variables") from exc
+            raise refuse from exc
         if any(v.free_symbols & {x, a} for v in poly.coeffs()):
-            raise NotConverged(f"the term {expr} is not a polynomial in the element's variables")
+            raise refuse
         I, J = poly.degree(x) + 1, poly.degree(a) + 1
+        I, J = max(I, 1), max(J, 1)
         entries = [[poly.coeff_monomial(x ** i * a ** j) for j in range(J)] for i in range(I)]
-        f = sp.lambdify((c, r2), entries, modules="numpy")
-        _TERMS[key] = lambda cv, r2v, f=f: np.array(f(cv, r2v), float)
+        f = sp.lambdify((c, r2), [entries, [h, g]], modules="numpy")
+
+        def coefficients(cv, r2v, f=f):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                P, hg = f(np.float64(cv), np.float64(r2v))
+            hg = np.array(hg, float)
+            return np.array(P, float), (hg if hg[0] != 0.0 and np.all(np.isfinite(hg)) else np.zeros(2))
+        _TERMS[key] = coefficients
     return _TERMS[key]
 
 
 @njit(cache=True)
-def _poly(P, k, x, a):
-    """(f, ∂f/∂x, ∂f/∂a) of f = Σ P[k, i, j]·x^i·a^j."""
+def _poly(P, HG, k, x, a):
+    """(f, ∂f/∂x, ∂f/∂a) of f = Σ P[k, i, j]·x^i·a^j + HG[k, 0]·tanh(HG[k, 1]·x)."""
     f = fx = fa = 0.0
+    if HG[k, 0] != 0.0:
+        th = np.tanh(HG[k, 1] * x)
+        f += HG[k, 0] * th
+        fx += HG[k, 0] * HG[k, 1] * (1.0 - th * th)
     xi = 1.0
     for i in range(P.shape[1]):
         aj = 1.0
@@ -203,7 +231,7 @@ def _solve_in_place(J, g, m):
 
 
 @njit(cache=True)
-def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, active, Y):
+def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     """Sample-by-sample first-order-hold stepping of the augmented model (inputs: drive, then
     the n_el nonlinear terms; output rows: output, element variables, partners); at each
     sample Newton's method on w − term(x(w), a(w)) = 0 from the previous sample's w (w = 0
@@ -238,7 +266,7 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, active, Y):
                     a = row[ar]
                     for l in range(n_el):
                         a += Dd[ar, 1 + l] * w[l]
-                v, dx, da = _poly(P, j, x, a)
+                v, dx, da = _poly(P, HG, j, x, a)
                 g[j] = w[j] - v
                 scale = max(scale, abs(v))
                 for l in range(n_el):

@@ -15,10 +15,11 @@ entry point ``bondgraph.diagnosis`` → ``piezo = library.extensions:candidates`
 """
 from .drive import InputBoucWen, InputCreep, InputExpansion, InputHysteresis, InputRC, InputRLC, InputSaturation
 from .modes import OutputMode, ParallelMode
-from .structure import NonlinearDamping, StiffnessSoftening
+from .structure import FrictionDamping, NonlinearDamping, StiffnessSoftening
 
 
 def candidates() -> list:
     """The piezo candidate set."""
     return [InputHysteresis(), InputBoucWen(), InputCreep(), InputSaturation(), InputExpansion(), InputRC(), InputRLC(),
-            ParallelMode(), OutputMode(), StiffnessSoftening(), NonlinearDamping(), NonlinearDamping(velocity=True)]
+            ParallelMode(), OutputMode(), StiffnessSoftening(), NonlinearDamping(), NonlinearDamping(velocity=True),
+            FrictionDamping()]

@@ -10,6 +10,7 @@ from __future__ import annotations
 from abc import abstractmethod
 
 import numpy as np
+import sympy as sp
 
 from bondgraph import Quantity
 from bondgraph.diagnosis import Candidate, Extension
@@ -203,3 +204,29 @@ class NonlinearDamping(_Centred):
         peak = float(np.max(np.abs(amp))) or 1.0
         return (abs(slope(view.model, el, view.values)) / peak ** 2,
                 (1.5 if a is None else 0.5) * float(np.mean(amp ** 2)))
+
+
+class FrictionDamping(NonlinearDamping):
+    """Friction in the structure (a clamp, a bond layer): every element tagged ``damping``
+    gets a smoothed Coulomb force, e = law(f) + F·tanh(f/s), F = μ·s, μ ≥ 0 in units of the
+    element's damping; s, 3 % of the data's peak velocity, keeps the law smooth (the result
+    barely depends on it).  Its equivalent viscous damping 4F/(πV) falls with the velocity
+    amplitude V, where the cubic forms' rises.  Runs on the exact Lur'e route (one tanh is
+    allowed beside the polynomial terms)."""
+
+    label = "Coulomb friction (smoothed) in the damping elements"
+    upper = 300.0
+    grid = (0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
+
+    def __init__(self):
+        super().__init__(velocity=True)
+        self.label = FrictionDamping.label
+        self.prefix = "nld.fc"
+
+    @staticmethod
+    def term(c, r2, x, a):
+        return c * r2 * sp.tanh(x / r2)
+
+    def refs(self, view, el, x, a):
+        peak = float(np.max(np.abs(x))) or 1.0
+        return abs(slope(view.model, el, view.values)), 0.03 * peak

@@ -38,6 +38,15 @@ def _chain(out: dict) -> tuple[list, list]:
     return ([], []) if cause == "none" else ([cause], [out.get("gain")])
 
 
+def _verdicts(out: dict) -> list:
+    """Every chain step's candidates in brief (for the analysis of a run): cause, label, gain,
+    z, effective samples, gain and z over the reference, gain over the static twin, passed."""
+    keys = ("cause", "label", "gain", "z", "n_eff", "gain_reference", "z_reference", "gain_static", "passed")
+    steps = list(out.get("steps") or []) + ([out["stop"]] if out.get("stop") else [])
+    return [[{k: c.get(k) for k in keys} | {"verdict": (c.get("verdict") or c.get("skipped") or "")[:120]}
+             for c in st.get("candidates", []) if not c.get("skipped")] for st in steps]
+
+
 def score(truth_causes: tuple, ordered: bool, cause: str, causes: list) -> dict:
     """Right or wrong: a null record wants ``none``; a single cause wants that cause first; a
     compound wants both causes as the first two steps of the chain (in order when ``ordered``)
@@ -117,6 +126,7 @@ def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: f
         result.update(right=False, first_right=False)
         return result
     causes, gains = _chain(out)
-    result.update(cause=normalise(out.get("cause")), causes=causes, gains=gains, gain=out.get("gain"))
+    result.update(cause=normalise(out.get("cause")), causes=causes, gains=gains, gain=out.get("gain"),
+                  steps=_verdicts(out))
     result.update(score(record.causes, record.ordered, result["cause"], causes))
     return result
