@@ -5,7 +5,7 @@ model says 20 ms) driven by v = u + h·D[u] + C[u], where D is a Coleman–Hodgd
 hysteresis operator (not a play sum, not Bouc–Wen) started as after a sweep down from the top
 of the range (a device last driven to its maximum), and C a power-law creep t^0.25 (a dense
 spectrum of 8 cells per decade with weights ∝ τ^0.25, not the candidate's 2 per decade),
-settled at 0 before the record.  Drive: from rest, 0.4 Hz bursts of changing amplitude
+settled at 0 before the record.  Drive: from rest, 1 Hz bursts of changing amplitude
 rising from and returning to levels that change every 10 s, each followed by a 4 s hold, 60 s at
 100 Hz, white noise of 0.2 % of the stroke.
 
@@ -28,7 +28,7 @@ FS, T = 100.0, 60.0
 
 
 def drive(t):
-    """From 0: 0.4 Hz bursts (2.5 periods of 1 − cos, peaks 0.95 to 0.5) rising from and
+    """From 0: 1 Hz bursts (5 periods of 1 − cos, peaks 0.95 to 0.5) rising from and
     returning to levels that change every 10 s, each followed by a hold at its level."""
     u = np.zeros_like(t)
     levels, peaks = [0.0, 0.3, 0.1, 0.45, 0.2, 0.35], [0.95, 0.7, 0.85, 0.6, 0.9, 0.5]
@@ -38,7 +38,7 @@ def drive(t):
         burst = (t >= 10 * k + 1) & (t < 10 * k + 6)
         hold = (t >= 10 * k + 6) & (t < 10 * (k + 1))
         u[ramp] = prev + (c - prev) * (t[ramp] - 10 * k)
-        u[burst] = c + (p - c) * 0.5 * (1 - np.cos(2 * np.pi * 0.4 * (t[burst] - 10 * k - 1)))
+        u[burst] = c + (p - c) * 0.5 * (1 - np.cos(2 * np.pi * 1.0 * (t[burst] - 10 * k - 1)))
         u[hold] = c
     return u
 

@@ -231,11 +231,37 @@ def _solve_in_place(J, g, m):
 
 
 @njit(cache=True)
+def _residual(w, row, Dd, a_rows, P, HG, n_el, g, J, jac):
+    """g = w − term(x(w), a(w)) (and its Jacobian J) at one sample; returns (|g|², largest
+    |term|)."""
+    norm, big = 0.0, 0.0
+    for j in range(n_el):
+        x = row[1 + j]
+        for l in range(n_el):
+            x += Dd[1 + j, 1 + l] * w[l]
+        ar = a_rows[j]
+        a = 0.0
+        if ar >= 0:
+            a = row[ar]
+            for l in range(n_el):
+                a += Dd[ar, 1 + l] * w[l]
+        v, dx, da = _poly(P, HG, j, x, a)
+        g[j] = w[j] - v
+        norm += g[j] * g[j]
+        big = max(big, abs(v))
+        if jac:
+            for l in range(n_el):
+                J[j, l] = (1.0 if j == l else 0.0) - dx * Dd[1 + j, 1 + l] - (da * Dd[ar, 1 + l] if ar >= 0 else 0.0)
+    return norm, big
+
+
+@njit(cache=True)
 def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     """Sample-by-sample first-order-hold stepping of the augmented model (inputs: drive, then
     the n_el nonlinear terms; output rows: output, element variables, partners); at each
-    sample Newton's method on w − term(x(w), a(w)) = 0 from the previous sample's w (w = 0
-    throughout unless ``active``).  False when a step does not converge."""
+    sample Newton's method (with a backtracking line search) on w − term(x(w), a(w)) = 0 from
+    the previous sample's w (w = 0 throughout unless ``active``).  False when a step does not
+    converge."""
     n = Phi.shape[0]
     N = u.shape[0]
     R = C.shape[0]
@@ -244,6 +270,9 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     w = np.zeros(n_el)
     g = np.zeros(n_el)
     J = np.zeros((n_el, n_el))
+    step = np.zeros(n_el)
+    trial = np.zeros(n_el)
+    res = (0.0, 0.0)
     row = np.zeros(R)
     scale = 1e-300                           # largest |w| so far: the convergence test's scale
     for i in range(n):                       # at rest: x[0] = ξ[0] + Γ1·u_all[0] = 0
@@ -255,30 +284,40 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
                 acc += C[r, i] * xi[i]
             row[r] = acc
         converged = not active
-        for it in range(30 if active else 0):
+        if active:
+            res = _residual(w, row, Dd, a_rows, P, HG, n_el, g, J, True)
+            scale = max(scale, res[1])
+        for it in range(60 if active else 0):
             for j in range(n_el):
-                x = row[1 + j]
-                for l in range(n_el):
-                    x += Dd[1 + j, 1 + l] * w[l]
-                ar = a_rows[j]
-                a = 0.0
-                if ar >= 0:
-                    a = row[ar]
-                    for l in range(n_el):
-                        a += Dd[ar, 1 + l] * w[l]
-                v, dx, da = _poly(P, HG, j, x, a)
-                g[j] = w[j] - v
-                scale = max(scale, abs(v))
-                for l in range(n_el):
-                    J[j, l] = (1.0 if j == l else 0.0) - dx * Dd[1 + j, 1 + l] - (da * Dd[ar, 1 + l] if ar >= 0 else 0.0)
-            _solve_in_place(J, g, n_el)
+                step[j] = g[j]
+            _solve_in_place(J, step, n_el)
             change = 0.0
             for j in range(n_el):
-                w[j] -= g[j]
-                change = max(change, abs(g[j]))
+                change = max(change, abs(step[j]))
             if not np.isfinite(change):
                 return False
             if change <= 1e-12 * scale:
+                for j in range(n_el):
+                    w[j] -= step[j]
+                converged = True
+                break
+            norm0 = res[0]
+            lam = 1.0                        # backtracking: a saturating term (tanh) can send a
+            decreased = False                # full Newton step far past the root
+            for _ in range(40):
+                for j in range(n_el):
+                    trial[j] = w[j] - lam * step[j]
+                res = _residual(trial, row, Dd, a_rows, P, HG, n_el, g, J, True)
+                if res[0] <= (1.0 - 1e-4 * lam) * norm0:
+                    decreased = True
+                    break
+                lam *= 0.5
+            if not decreased:
+                break
+            for j in range(n_el):
+                w[j] = trial[j]
+            scale = max(scale, res[1])
+            if lam * change <= 1e-12 * scale:
                 converged = True
                 break
         if not converged:

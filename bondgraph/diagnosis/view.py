@@ -328,11 +328,20 @@ class View:
             ident.lti = None
         return ident
 
-    def simulate(self, model: Model, values: Mapping[str, float]) -> np.ndarray:
-        """Raw output (sensor gain 1, no offset) of ``model`` with ``values`` on every sample."""
+    def simulate(self, model: Model, values: Mapping[str, float], max_steps: int | None = None) -> np.ndarray:
+        """Raw output (sensor gain 1, no offset) of ``model`` with ``values`` on every sample;
+        with ``max_steps``, by the compiled explicit integrator within that many steps (a
+        :class:`~bondgraph.simulate.SimulationError` beyond: a bounded cost for a fallback)."""
+        from .. import config
         ident = self.identification(model)
         known = {p.name for p in ident.sim.eqs.params}
-        return ident.predict({k: v for k, v in values.items() if k in known})
+        vals = {k: v for k, v in values.items() if k in known}
+        if max_steps is None:
+            return ident.predict(vals)
+        ident = self._ctx.ident.like(model, rtol=1e-6, method="dopri5")
+        ident.lti = None
+        with config.override({"simulate.max_steps": int(max_steps)}):
+            return ident.predict(vals)
 
     def fit_model(self, model: Model, new: Sequence[Spec], max_nfev: int = 20, refit: bool = True,
                   start: Mapping[str, float] | None = None,

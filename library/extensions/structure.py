@@ -105,9 +105,9 @@ class _Centred(Candidate):
                 coefs = [(values[n], r2s[el]) for n, el in zip(names, els)]
                 try:
                     raw = lure.simulate(values, lure.drive, self.term, coefs)
-                except NotConverged:   # integrate the rewritten model for these values instead
-                    try:
-                        return view.simulate(model, values)
+                except NotConverged:   # integrate the rewritten model for these values instead,
+                    try:               # within a bounded number of explicit steps
+                        return view.simulate(model, values, max_steps=50 * len(view.y))
                     except SimulationError:   # it diverges: a fit as bad as no model at all
                         return np.zeros(len(view.y))
                 return raw if lure.extra is None else raw + lure.extra
