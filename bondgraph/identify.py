@@ -317,11 +317,14 @@ class Identification:
 def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     """min ||A·x − b|| with lower ≤ x ≤ upper (scipy's bounded-variable least squares on the
     column-scaled problem; for tall A it works on the small triangular factor R of A,
-    ||Ax − b||² = ||Rx − Qᵀb||² + const).  A column that vanishes on these rows (norm below
-    1e-9 of the largest) gets 0: any value would fit, and elsewhere it could be anything."""
+    ||Ax − b||² = ||Rx − Qᵀb||² + const).  A column that vanishes on these rows up to rounding
+    (norm below 1e-60 of the largest) gets 0: any value would fit, and elsewhere it could be
+    anything."""
     norms = np.linalg.norm(A, axis=0)
-    live = norms > 1e-9 * max(float(norms.max(initial=0.0)), 1e-300)   # a column that is ~0 on these
-    out = np.zeros(A.shape[1])                                          # rows gets no coefficient
+    # a column that is zero on these rows up to rounding gets no coefficient (columns of
+    # different units may differ by many decades, never by sixty)
+    live = norms > 1e-60 * max(float(norms.max(initial=0.0)), 1e-300)
+    out = np.zeros(A.shape[1])
     if not np.any(live):
         return out
     A, norms = A[:, live], norms[live]
