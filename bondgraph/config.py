@@ -84,6 +84,10 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.candidate_seconds": Default(60.0, "a candidate's fits stop at their best point after this many seconds "
                                                 "(reported as not converged)"),
     "diagnosis.max_fit_points": Default(20000, "samples of the fit part used by the optimisers (evenly thinned)"),
+    "diagnosis.confirm_margin": Default(1.0, "a candidate whose gain passes but whose z falls short of min_z by less "
+                                             "than this is fitted on a second fold (other validation blocks) and "
+                                             "judged on the two folds' combined z"),
+    "diagnosis.confirm_max": Default(2, "most candidates per chain step fitted on the second fold"),
     "diagnosis.blocks": Default(30, "equal time blocks of the record; the validation share of them, spread evenly, "
                                     "is held out (each is at least one batch of the significance test)"),
 }

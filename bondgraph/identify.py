@@ -94,12 +94,13 @@ class FitResult:
 
 
 def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", blocks: int = 30,
-                skip: float = 0.02):
+                skip: float = 0.02, shift: int = 0):
     """Boolean (fit, validation) masks over samples.
 
     ``blocks``: ``blocks`` equal time blocks, a share ``validation`` of them (spread evenly,
-    never the first) held out; ``tail``: the last ``validation`` of the time span.  The first
-    ``skip`` of the span is in neither: the model starts at rest, a measured device may not."""
+    never the first) held out, each ``shift`` blocks later for another fold; ``tail``: the last
+    ``validation`` of the time span.  The first ``skip`` of the span is in neither: the model
+    starts at rest, a measured device may not."""
     if not 0.0 < validation < 1.0:
         raise UsageError(f"validation share must be between 0 and 1, not {validation}")
     span = t[-1] - t[0]
@@ -108,7 +109,7 @@ def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", bl
     elif mode == "blocks":
         k = np.minimum(((t - t[0]) / span * blocks).astype(int), blocks - 1)
         n_val = max(1, round(validation * blocks))
-        held = {int(round(blocks * (i + 0.5) / n_val + 0.5)) % blocks or 1 for i in range(n_val)}
+        held = {(int(round(blocks * (i + 0.5) / n_val + 0.5)) + shift) % blocks or 1 for i in range(n_val)}
         held = sorted(held)[:n_val]
         val = np.isin(k, held)
     else:
@@ -122,13 +123,13 @@ class Identification:
 
     ``input``/``output`` name the model's input and output (default: its first declared
     ones); ``data_input``/``data_output`` the data columns (default: the same names);
-    ``validation``, ``split`` and ``blocks``: the held-out part (:func:`split_masks`)."""
+    ``validation``, ``split``, ``blocks`` and ``shift``: the held-out part (:func:`split_masks`)."""
 
     def __init__(self, model: Model | Simulator, data: Dataset, input: str | None = None, output: str | None = None,
                  data_input: str | None = None, data_output: str | None = None,
                  validation: float = 0.3, split: str = "blocks", max_fit_points: int = 20000,
                  rtol: float = 1e-6, method: str = "auto", lti: LTI | None = None, cut: float | None = None,
-                 blocks: int = 30):
+                 blocks: int = 30, shift: int = 0):
         self.sim = model if isinstance(model, Simulator) else Simulator(model)
         input = input if input is not None else first_input(self.sim.eqs)
         output = output if output is not None else first_output(self.sim.eqs)
@@ -139,13 +140,13 @@ class Identification:
         self.data = data
         self.input, self.output = input, output
         self.data_input, self.data_output = data_input, data_output
-        self.validation, self.split_mode, self.blocks = validation, split, blocks
+        self.validation, self.split_mode, self.blocks, self.shift = validation, split, blocks, shift
         self.u = data.column(data_input or input)
         self.y = data.column(data_output or output)
         check_varies(self.u, data_input or input, data.path)
         self.t = data.t
         self.signal = PiecewiseLinear(self.t, self.u, label=f"data:{data_input or input}")
-        self.fit_mask, self.val_mask = split_masks(self.t, validation, split, blocks)
+        self.fit_mask, self.val_mask = split_masks(self.t, validation, split, blocks, shift=shift)
         idx = np.nonzero(self.fit_mask)[0]
         step = max(1, int(math.ceil(idx.size / max_fit_points)))
         self.fit_idx = idx[::step]
@@ -165,6 +166,7 @@ class Identification:
         """The same data, input/output mapping and split for another (e.g. extended) model."""
         args = dict(input=self.input, output=self.output, data_input=self.data_input,
                     data_output=self.data_output, validation=self.validation, split=self.split_mode, blocks=self.blocks,
+                    shift=self.shift,
                     max_fit_points=self.max_fit_points, rtol=self.rtol, method=self.method, cut=self.cut)
         args.update(kw)
         return Identification(model, self.data, **args)

@@ -3,6 +3,7 @@
 the drive's band and the noise floor; and the :class:`State` a chain step starts from."""
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field
 
@@ -122,6 +123,8 @@ class Context:
         self._lti = lti if lti.exact else None
         self._data = data
         self._sim = Simulator(self.eqs)
+        #: the validation blocks are this many blocks later than the first fold's
+        self.shift = 0
         #: delay (in samples) of the measured output behind the drive, solved by the calibration
         self.delay = 0.0
         self.set_delay(0.0)
@@ -143,11 +146,19 @@ class Context:
         self.ident = Identification(self._sim, self.data, self.input, self.output, self.data_input,
                                     self.data_output, self.validation,
                                     max_fit_points=config.get("diagnosis.max_fit_points"), lti=self._lti, cut=self.cut,
-                                    blocks=int(config.get("diagnosis.blocks")))
+                                    blocks=int(config.get("diagnosis.blocks")), shift=self.shift)
         self.u, self.y, self.t = self.ident.u, self.ident.y, self.ident.t
         self.dt = self.ident.dt
         self.lti = self.ident.lti
         self.blocks = _blocks(self.ident.val_mask)
+
+    def refold(self, shift: int) -> "Context":
+        """The same context with the validation blocks ``shift`` blocks later (another fold:
+        disjoint from this one's for a shift of 2 with the default split)."""
+        other = copy.copy(self)
+        other.shift = int(shift)
+        other.set_delay(self.delay)
+        return other
 
     def _decimate(self, lti: LTI, th0, data: Dataset, fs: float, y_band: float | None):
         """Decimate while the new Nyquist frequency stays ``decimate_margin`` times above the

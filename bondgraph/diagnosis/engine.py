@@ -17,7 +17,7 @@ from ..simulate import SimulationError
 from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State
-from .decision import Verdict, compare, judge, reference_prediction, regress
+from .decision import Comparison, Verdict, compare, judge, reference_prediction, regress
 from .pool import Pool, single_threaded_blas
 from .projection import time_budget
 from .report import CandidateResult, Report, Step
@@ -82,12 +82,42 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
     return Outcome(res, ext, np.asarray(raw, float), refit, None if static is None else np.asarray(static, float))
 
 
+def effect_errors(ctx: Context, oc: Outcome, e_state: np.ndarray,
+                  e_plaus: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """(errors before, errors after) of an outcome on every sample: after, its prediction with
+    sensor gain and offset solved on ``ctx``'s fit part; before, the state's (or the plausible
+    device's, for a candidate fitted on it), or the current model refitted from where the
+    candidate left its linear parameters when that is better (only the effect is credited)."""
+    y, val = ctx.y, ctx.ident.val_mask
+    g, b, _, _ = score(ctx, oc.raw)
+    before = e_plaus if oc.result.against == "plausible" and e_plaus is not None else e_state
+    if oc.linear_refit is not None:
+        gr, br, _, rv = score(ctx, oc.linear_refit)
+        if rv < rms(before[val]):
+            before = y - (gr * oc.linear_refit + br)
+    return before, y - (g * oc.raw + b)
+
+
+def second_fold(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate,
+                plausible: tuple[State, dict] | None, e_plaus: np.ndarray | None) -> Comparison | None:
+    """The candidate fitted again with other validation blocks (``ctx`` refolded) and compared
+    there as on the first fold; None when it fails."""
+    oc = run_candidate(ctx, state, calibrated, cand, plausible)
+    if oc.raw is None:
+        return None
+    before, after = effect_errors(ctx, oc, ctx.y - state.prediction, e_plaus)
+    return compare(before, after, ctx.blocks)
+
+
 def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
-           plausible: State | None = None) -> tuple[Step, Outcome | None]:
+           plausible: State | None = None, confirm=None) -> tuple[Step, Outcome | None]:
     """Score every outcome against the state and the flexible linear reference; pick the winner.
     Linear structural candidates fitted on the ``plausible`` device are compared with it, and
     must explain ``linear_share`` of what the best linear explanation (the null or the flexible
-    reference, whichever is better) explains over it."""
+    reference, whichever is better) explains over it.  ``confirm(outcome, e_plaus)``: the
+    comparison on a second fold (:func:`second_fold`), asked for candidates whose gain passes
+    but whose significance falls short by less than ``diagnosis.confirm_margin`` standard
+    errors (a record whose evidence sits in a few blocks); the two folds' z are combined."""
     idx, y = ctx.ident.fit_idx, ctx.y
     drive = state.drive if state.drive is not None else ctx.u
     ref_cols, ref_pred = reference_prediction(view.respond, drive, state.raw, y, idx, ctx.dt, ctx.span)
@@ -97,19 +127,19 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
     rms_state, rms_ref = rms(e_state[val]), rms(e_ref[val])
     e_plaus = y - plausible.prediction if plausible is not None else None
     rms_plaus = rms(e_plaus[val]) if plausible is not None else None
+    scored = {}
+    for oc in outcomes:
+        if oc.raw is not None:
+            _, _, oc.result.rms_fit, oc.result.rms_validation = score(ctx, oc.raw)
+            before, e = effect_errors(ctx, oc, e_state, e_plaus)
+            scored[id(oc)] = (before, e, compare(before, e, ctx.blocks))
+    if confirm is not None:
+        _confirm_borderline(outcomes, scored, confirm, e_plaus, later=bool(state.causes))
     for oc in outcomes:
         r = oc.result
         if oc.raw is None:
             continue
-        g, b, r.rms_fit, r.rms_validation = score(ctx, oc.raw)
-        e = y - (g * oc.raw + b)
-        on_plausible = r.against == "plausible" and e_plaus is not None
-        before = e_plaus if on_plausible else e_state
-        if oc.linear_refit is not None:   # credit the effect, not a better linear refit
-            gr, br, _, rv = score(ctx, oc.linear_refit)
-            if rv < rms(before[val]):
-                before = y - (gr * oc.linear_refit + br)
-        base = compare(before, e, ctx.blocks)
+        before, e, base = scored[id(oc)]
         r.gain, r.z, r.n_eff = base.gain, base.z, base.n_eff
         e_both = y - regress(np.column_stack([oc.raw, ref_cols]), y, idx)
         vr = compare(e_ref, e_both, ctx.blocks)
@@ -138,6 +168,26 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
                 winner.result.rms_validation if winner else rms_state, rms_ref,
                 [oc.result for oc in outcomes], why)
     return step, winner
+
+
+def _confirm_borderline(outcomes: list[Outcome], scored: dict, confirm, e_plaus, later: bool) -> None:
+    """Combine the first fold's z with a second fold's (Stouffer: (z1 + z2)/√2) for at most
+    ``diagnosis.confirm_max`` candidates, the best gains first, whose gain passes and whose
+    z falls short of ``diagnosis.min_z`` by less than ``diagnosis.confirm_margin``."""
+    min_z = config.get("diagnosis.min_z")
+    min_gain = config.get("diagnosis.min_gain_chain" if later else "diagnosis.min_gain")
+    margin = config.get("diagnosis.confirm_margin")
+    near = [oc for oc in outcomes if id(oc) in scored and scored[id(oc)][2].gain >= min_gain
+            and min_z - margin <= scored[id(oc)][2].z < min_z
+            and not [n for n in oc.result.at_bounds if n in oc.result.params]]
+    for oc in sorted(near, key=lambda oc: -scored[id(oc)][2].gain)[:int(config.get("diagnosis.confirm_max"))]:
+        second = confirm(oc, e_plaus)
+        if second is None:
+            continue
+        before, e, first = scored[id(oc)]
+        oc.result.z_second = second.z
+        scored[id(oc)] = (before, e, Comparison(first.gain, (first.z + second.z) / math.sqrt(2),
+                                                first.n_eff + second.n_eff))
 
 
 def _simplest_of_best(passing: list[Outcome]) -> Outcome | None:
@@ -242,6 +292,7 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
     plausible = (pstate, cal.plausible) if pstate is not state else None
     say(f"calibrated in {time.time() - started:.1f} s: validation RMS {cal.rms_validation:.4g}")
     steps: list[Step] = []
+    folds: list[Context] = []   # the second fold's context, made when first needed
     baseline = state
     with Pool(ctx, cal.free, cands, workers) as pool:
         for k in range(int(config.get("diagnosis.max_chain")) if chain else 1):
@@ -258,7 +309,15 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                     say(_line(k + 1, n, len(pending), oc.result))
             ordered = [outcomes[i] for i in pending]
             view = View(ctx, state, cal.free)
-            step, winner = assess(ctx, state, view, ordered, first[0] if first else None)
+            of = {id(outcomes[i]): cands[i] for i in pending}
+
+            def confirm(oc, e_plaus, state=state, first=first):
+                if not folds:
+                    say("a second fold (other validation blocks) for borderline candidates")
+                    folds.append(ctx.refold(2))
+                return second_fold(folds[0], state, cal.free, of[id(oc)], first, e_plaus)
+
+            step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
             steps.append(step)
             say(f"step {k + 1}: {step.why}")
             if winner is None:

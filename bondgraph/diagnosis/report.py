@@ -39,6 +39,9 @@ class CandidateResult:
     against: str = ""
     #: for a memory effect, its gain over the same freedom without memory (a static curve)
     gain_static: float | None = None
+    #: z on a second fold (other validation blocks), when the first was borderline; ``z`` is
+    #: then the two folds' combined z
+    z_second: float | None = None
 
     def as_json(self) -> dict:
         out = {"cause": self.cause, "label": self.label, "kind": self.kind, "gain": self.gain,
@@ -51,6 +54,8 @@ class CandidateResult:
             out["against"] = self.against
         if self.gain_static is not None:
             out["gain_static"] = self.gain_static
+        if self.z_second is not None:
+            out["z_second"] = self.z_second
         if self.skipped:
             out["skipped"] = self.skipped
         if self.error:
