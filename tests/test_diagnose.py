@@ -193,6 +193,36 @@ def test_comparison_is_significant_only_for_a_real_improvement():
     assert better.n_eff < sum(s.stop - s.start for s in blocks) / 10
 
 
+def test_batches_of_a_slowly_varying_error_count_less():
+    """The same batch contributions, once in a slowly varying order (neighbours alike) and once
+    shuffled: the slow order is worth fewer independent batches, so its z is lower."""
+    rng = np.random.default_rng(1)
+    n_blocks, m = 40, 50
+    blocks = [slice(k * 2 * m, k * 2 * m + m) for k in range(n_blocks)]
+    ratio = 0.8 + 0.15 * np.sin(np.linspace(0, 3 * np.pi, n_blocks))     # the improvement drifts slowly
+    ea, eb = np.zeros(2 * m * n_blocks), np.zeros(2 * m * n_blocks)
+    for s_, r in zip(blocks, ratio):
+        ea[s_] = 1.0 + rng.normal(0, 0.05, m)
+        eb[s_] = r + rng.normal(0, 0.05, m)
+    slow = compare(ea, eb, blocks)
+    order = rng.permutation(n_blocks)
+    shuffled_a, shuffled_b = np.zeros_like(ea), np.zeros_like(eb)
+    for dst, src in zip(blocks, [blocks[k] for k in order]):
+        shuffled_a[dst], shuffled_b[dst] = ea[src], eb[src]
+    fast = compare(shuffled_a, shuffled_b, blocks)
+    assert slow.gain == pytest.approx(fast.gain)
+    assert slow.n_eff < 0.8 * fast.n_eff and slow.z < fast.z
+
+
+def test_the_second_fold_holds_out_other_blocks():
+    from bondgraph.identify import split_masks
+    t = np.linspace(0.0, 10.0, 30_001)
+    fit0, val0 = split_masks(t, 0.3, "blocks", 30)
+    fit2, val2 = split_masks(t, 0.3, "blocks", 30, shift=2)
+    assert not np.any(val0 & val2)
+    assert abs(int(val0.sum()) - int(val2.sum())) <= 2 and val2.sum() > 0.25 * t.size
+
+
 def test_rules_refuse_bound_stuck_and_linear_lookalikes():
     good = Comparison(3.0, 8.0, 40)
     assert judge("nonlinear", good, Comparison(2.0, 6.0, 40), None, [], "").passed
