@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
+import scipy.linalg
 from scipy.optimize import least_squares, lsq_linear
 
 from .data import Dataset, uniform_step
@@ -319,27 +320,29 @@ class Identification:
 def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     """min ||A·x − b|| with lower ≤ x ≤ upper (scipy's bounded-variable least squares on the
     column-scaled problem; for tall A it works on the small triangular factor R of A,
-    ||Ax − b||² = ||Rx − Qᵀb||² + const).  A column that vanishes on these rows up to rounding
-    (norm below 1e-60 of the largest) gets 0: any value would fit, and elsewhere it could be
-    anything."""
+    ||Ax − b||² = ||Rx − Qᵀb||² + const).  Columns that these rows cannot tell from the
+    others (pivoted QR of the scaled columns: a diagonal below 1e-10 of the largest; a column
+    that vanishes here up to rounding among them) get 0: any split between them would fit,
+    and elsewhere, where they differ, a huge one would be anything but a fit."""
     norms = np.linalg.norm(A, axis=0)
-    # a column that is zero on these rows up to rounding gets no coefficient (columns of
-    # different units may differ by many decades, never by sixty)
-    live = norms > 1e-60 * max(float(norms.max(initial=0.0)), 1e-300)
     out = np.zeros(A.shape[1])
-    if not np.any(live):
+    live = np.nonzero(norms > 1e-60 * max(float(norms.max(initial=0.0)), 1e-300))[0]
+    if live.size == 0:
         return out
-    A, norms = A[:, live], norms[live]
-    An = A / norms
-    lower = np.asarray(lower, float)[live] * norms
-    upper = np.asarray(upper, float)[live] * norms
+    An = A[:, live] / norms[live]
+    _, Rp, piv = scipy.linalg.qr(An, mode="economic", pivoting=True)
+    d = np.abs(np.diag(Rp))
+    live = np.sort(live[piv[d > 1e-10 * d[0]]])
+    An = A[:, live] / norms[live]
+    lower = np.asarray(lower, float)[live] * norms[live]
+    upper = np.asarray(upper, float)[live] * norms[live]
     if np.all(np.isinf(lower)) and np.all(np.isinf(upper)):
-        out[live] = np.linalg.lstsq(An, b, rcond=None)[0] / norms
+        out[live] = np.linalg.lstsq(An, b, rcond=None)[0] / norms[live]
         return out
     if An.shape[0] > 4 * An.shape[1]:
         Qm, Rm = np.linalg.qr(An)
         An, b = Rm, Qm.T @ b
-    out[live] = lsq_linear(An, b, bounds=(lower, upper), method="bvls").x / norms
+    out[live] = lsq_linear(An, b, bounds=(lower, upper), method="bvls").x / norms[live]
     return out
 
 

@@ -396,8 +396,9 @@ class View:
         """A :class:`~bondgraph.diagnosis.lure.Lure` system for nonlinear terms on ``elements``,
         on this record's grid: of the linear core when the current model is a drive transform of
         it (:attr:`on_core`: e.g. after hysteresis on the drive) or the core with the terms named
-        so far (held), else of ``model``.  Its ``drive`` is the series to feed it and ``extra``
-        the output part outside it (or None); None when that model is not linear."""
+        so far (held), else of ``model`` (e.g. after a linear structural cause: a compliant output
+        stage).  Its ``drive`` is the series to feed it and ``extra`` the output part outside it
+        (or None); None when that model is not linear."""
         from ..errors import BondGraphError
         from .lure import Lure
         if not self.exact or self.reduced:
@@ -409,11 +410,9 @@ class View:
             elif self.on_core:
                 lure = Lure(self.core(), self.input, self.output, elements, partners, self._ctx.dt)
                 lure.drive, lure.extra = np.asarray(self.drive), self.extra
-            elif not self.structural:
+            else:   # the model itself, when it is linear (a linear structural extension included)
                 lure = Lure(model, self.input, self.output, elements, partners, self._ctx.dt)
                 lure.drive, lure.extra = np.asarray(self.u), None
-            else:
-                return None
         except BondGraphError:
             return None
         return lure

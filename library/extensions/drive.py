@@ -182,12 +182,14 @@ class InputBoucWen(_DriveCandidate):
             return [Vr * bouc_wen_response(v, beta, gamma, 1.0, z[2] / (beta + gamma))]
 
         # z starts where the device's history left it: a fraction of its saturation 1/(β + γ)
-        # (at ±1 it is saturated, so that bound is no limit), fitted from rest and both branches
-        fit = view.fit_drive(basis, [-np.inf], [np.inf], z0=[math.log(3.0), 0.0, 0.0],
+        # (at ±1 it is saturated, so that bound is no limit), fitted from the best of a few
+        # starts (slow and fast saturation; from rest and both branches), each one linear solve
+        grid = [(math.log(s0), 0.0, f0) for s0 in (3.0, 30.0) for f0 in (0.0, 0.9, -0.9)]
+        start = grid[int(best_on_grid(view, lambda k: basis(grid[int(k)]), range(len(grid)), lower=[-np.inf],
+                                      upper=[np.inf], names=["bw.kappa"]))]
+        fit = view.fit_drive(basis, [-np.inf], [np.inf], z0=list(start),
                              z_bounds=[(math.log(0.05), math.log(500.0)), (-6.0, 6.0), (-1.0, 1.0)],
-                             z_names=["bw.s", "bw.rho", "bw.z0"], names=["bw.kappa"],
-                             starts=[[math.log(30.0), 0.0, 0.0], [math.log(3.0), 0.0, 0.9],
-                                     [math.log(3.0), 0.0, -0.9]])
+                             z_names=["bw.s", "bw.rho", "bw.z0"], names=["bw.kappa"])
         fit.at_bounds = [n for n in fit.at_bounds if n != "bw.z0"]
         beta, gamma = self.shape(fit.z)
         z_start = float(fit.z[2]) / (beta + gamma)
