@@ -216,7 +216,7 @@ class FrictionDamping(NonlinearDamping):
 
     label = "Coulomb friction (smoothed) in the damping elements"
     upper = 300.0
-    grid = (0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
+    grid = (1.0, 4.0, 16.0, 64.0)
 
     def __init__(self):
         super().__init__(velocity=True)
