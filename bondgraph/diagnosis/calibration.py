@@ -181,7 +181,7 @@ def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarra
     """Multi-start fit of ``frf_of(z)`` (complex, at ``w``) to the measured ``H``: log-magnitude
     (its coherence-weighted mean removed: the sensor gain is solved later) and wrapped phase,
     weighted by √coherence.  Starts: ``z0``, ``starts``, and ``random`` perturbations of z0
-    (σ = 0.5 in z).  Returns the best z or None."""
+    (σ = 0.5 in z).  Returns the best (z, cost) or None."""
     wt = np.sqrt(coh)
 
     def fres(z):
@@ -202,7 +202,7 @@ def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarra
             continue
         if best is None or sol.cost < best.cost:
             best = sol
-    return None if best is None else best.x
+    return None if best is None else (best.x, float(best.cost))
 
 
 #: the measured output's delay behind the drive is sought within ± this many samples (recorded rate)
@@ -214,9 +214,11 @@ def max_delay(ctx: Context) -> float:
     return MAX_DELAY * ctx.fs / ctx.source_rate
 
 
-def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, z0: np.ndarray, delay: bool):
+def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, delay: bool):
     """The free parameters (and the delay, last, if ``delay``) fitted to the empirical frequency
-    response (:func:`fit_frf`), or None when the drive leaves too few coherent frequencies."""
+    response (:func:`fit_frf`), or None when the drive leaves too few coherent frequencies.  Both
+    signs of the sensor are tried: the nominal model's correlation with the data does not tell it
+    when the data's resonance lies on the other side of the drive's frequency."""
     w, H, coh = empirical_frf(ctx.u_recorded, ctx.y, ctx.fs)
     if w.size < 2 * len(z0) + 2:
         return None
@@ -228,7 +230,8 @@ def _frf_starts(ctx: Context, specs: list[Param], values: dict, sign: float, z0:
         return Hm * np.exp(-1j * w * z[-1] * ctx.dt) if delay else Hm
 
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
-    return fit_frf(frf_of, z0, lb, ub, w, sign * H, coh)
+    fits = [f for f in (fit_frf(frf_of, z0, lb, ub, w, sign * H, coh) for sign in (1.0, -1.0)) if f is not None]
+    return min(fits, key=lambda f: f[1])[0] if fits else None
 
 
 def _z_bounds(specs: list[Param], delay: float | None):
@@ -237,7 +240,7 @@ def _z_bounds(specs: list[Param], delay: float | None):
     return np.array(lb, float), np.array(ub, float)
 
 
-def _fit(ctx: Context, specs: list[Param], nominal: dict, sign: float, z0: np.ndarray, starts=(),
+def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts=(),
          delay: bool = False):
     """Frequency response first when the data allow, then the time series by variable projection
     (sensor gain and offset solved exactly); with ``delay``, the output's delay behind the drive
@@ -248,7 +251,7 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, sign: float, z0: np.nd
     starts = [np.append(s, 0.0) if delay else s for s in starts]
     z_frf = None
     if z0.size and ctx.lti is not None:
-        z_frf = _frf_starts(ctx, specs, nominal, sign, z0, delay)
+        z_frf = _frf_starts(ctx, specs, nominal, z0, delay)
         if z_frf is not None:
             route = "frequency response, then time series"
 
@@ -324,15 +327,14 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     specs = [Param(n, nominal[n], *bounds[n]) for n in free]
     say(f"calibrating {', '.join(free) or 'the sensor gain and offset only'}"
         + (f" (held: {', '.join(held)})" if held else ""))
-    sign = 1.0 if float(np.dot(raw0[idx] - raw0[idx].mean(), ctx.y[idx] - ctx.y[idx].mean())) >= 0 else -1.0
     z0 = np.array([s.to_z(s.start) for s in specs])
     with_delay = ctx.lti is not None and _delay_identifiable(ctx, S, names, free, nominal, raw0, scale)
     if ctx.lti is not None and not with_delay:
         held["output delay"] = "not separable from the calibrated parameters"
-    values, delay, raw, sol, route = _fit(ctx, specs, nominal, sign, z0, delay=with_delay)
+    values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, delay=with_delay)
     if with_delay and abs(delay) >= 0.99 * max_delay(ctx):   # a model error the delay mimics: not a delay
         held["output delay"] = f"it went to its search bound (±{MAX_DELAY:g} recorded samples): a model error, not a delay"
-        values, delay, raw, sol, route = _fit(ctx, specs, nominal, sign, z0)
+        values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0)
     ctx.set_delay(delay)
     gain, offset, rf, rv = score(ctx, raw)
     factors = tolerances(free, tolerance)
@@ -351,7 +353,7 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     pspecs = [Param(n, min(max(abs(values[n]), plausible[n][0]), plausible[n][1]) * (1 if values[n] > 0 else -1),
                     *plausible[n]) for n in free]
     pz0 = np.array([s.to_z(s.start) for s in pspecs])
-    pvalues, _, praw, psol, _ = _fit(ctx, pspecs, nominal, sign, pz0,
+    pvalues, _, praw, psol, _ = _fit(ctx, pspecs, nominal, pz0,
                                   starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])])
     pgain, poffset, _, prv = score(ctx, praw)
     cal.rms_plausible = prv
