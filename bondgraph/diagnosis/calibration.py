@@ -14,7 +14,8 @@
    own dynamics on narrow-band drives) when its effect is clearly apart from the parameters'
    (else, or when it ends on that bound, it is held at 0 and reported).
 3. **Fit.** On the empirical frequency response first (multi-start, coherence-weighted,
-   gain removed: free of the local minima lightly damped modes give a time-domain fit), then
+   gain removed, both signs of the sensor tried: free of the local minima lightly damped
+   modes give a time-domain fit), then
    on the time series by variable projection (gain and offset solved at every step); without
    a frequency response, from the model's values and the best three of 48 random points
    within ×/÷2 of them.
