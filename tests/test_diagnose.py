@@ -57,6 +57,22 @@ def test_real_record_names_hysteresis_first(p885_json):
     assert named and named[0]["gain_reference"] > 1.05  # beyond what any linear lag explains
 
 
+def test_the_sensor_orientation_does_not_change_the_diagnosis(p885_json):
+    """The real record with its displacement sensor mounted the other way round (x -> -x): the
+    sensor gain changes sign and nothing else.  The drive-side weights' bounds (the PI's linear
+    play and the creep ratios are ≥ 0) are on the drive, not on the gain-scaled coefficients:
+    before, the flipped record was named hysteresis ×5.37 → saturation."""
+    out, _ = p885_json
+    data = read_csv(P885)
+    flipped = Dataset(data.t, {"V": data.columns["V"], "x": -data.columns["x"]})
+    lm = load_model(MODELS / "stack.py")
+    rep = diagnose(lm.model, flipped, **model_file_options(lm.module), workers=2)
+    assert rep.calibration["sensor_gain"] == pytest.approx(-out["calibration"]["sensor_gain"], rel=1e-3)
+    named = [s for s in rep.steps if s.cause != "none"]
+    assert [s.cause for s in named] == out["causes"]
+    assert [s.gain for s in named] == pytest.approx([s["gain"] for s in out["steps"]], rel=0.02)
+
+
 def test_cli_json_contract(p885_json):
     out, png = p885_json
     assert png.stat().st_size > 10_000

@@ -260,8 +260,11 @@ class View:
                 cols.insert(-1, ex[:, None])
             return np.column_stack(cols)
 
-        lo = lead_lo + list(lower)
-        hi = lead_hi + list(upper)
+        # the bounds are on the drive's weights; the solved coefficients are these times the
+        # sensor gain, whose sign is the sensor's orientation, not physics
+        lo, hi = lead_lo + list(lower), lead_hi + list(upper)
+        if self.gain < 0:
+            lo, hi = [-b for b in hi], [-a for a in lo]
         # the direct columns and the offset are free
         n_dir = len(direct(np.asarray(z0, float))) if call_d else len(fixed_d)
         n_free = n_dir + 1 + (1 if has_extra and not identity else 0)
