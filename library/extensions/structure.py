@@ -210,8 +210,9 @@ class FrictionDamping(NonlinearDamping):
     """Friction in the structure (a clamp, a bond layer): every element tagged ``damping``
     gets a smoothed Coulomb force, e = law(f) + F·tanh(f/s), F = μ·s, μ ≥ 0 in units of the
     element's damping; s keeps the law smooth: 3 % of the data's peak velocity, or 10 or 30 %
-    if these fit better (tried only when the first improves the fit part by 2 % or more).  Its equivalent viscous damping 4F/(πV) falls with the velocity
-    amplitude V, where the cubic forms' rises.  Runs on the exact Lur'e route (one tanh is
+    if these fit better (tried only when the first improves the fit part by 2 % or more).  Its
+    equivalent viscous damping 4F/(πV) falls with the velocity amplitude V, where the cubic
+    forms' rises.  Runs on the exact Lur'e route (one tanh is
     allowed beside the polynomial terms)."""
 
     label = "Coulomb friction (smoothed) in the damping elements"
@@ -220,11 +221,12 @@ class FrictionDamping(NonlinearDamping):
     #: smoothing velocities tried, as shares of the data's peak velocity (the best fit is kept)
     smoothing = (0.03, 0.1, 0.3)
 
-    def __init__(self):
+    def __init__(self, velocity_share: float | None = None):
         super().__init__(velocity=True)
         self.label = FrictionDamping.label
         self.prefix = "nld.fc"
-        self._share = self.smoothing[0]
+        #: the smoothing velocity of this fit (share of the peak velocity); None: try ``smoothing``
+        self.velocity_share = velocity_share
 
     @staticmethod
     def term(c, r2, x, a):
@@ -232,14 +234,15 @@ class FrictionDamping(NonlinearDamping):
 
     def refs(self, view, el, x, a):
         peak = float(np.max(np.abs(x))) or 1.0
-        return abs(slope(view.model, el, view.values)), self._share * peak
+        return abs(slope(view.model, el, view.values)), self.velocity_share * peak
 
     def fit(self, view):
+        if self.velocity_share is not None:
+            return super().fit(view)
         before = view.score(view.prediction)[2]
         best = None
         for share in self.smoothing:
-            self._share = share
-            ext = super().fit(view)
+            ext = FrictionDamping(share).fit(view)
             rf = view.score(ext.prediction)[2]
             if best is None or rf < best[0]:
                 best = (rf, ext)
