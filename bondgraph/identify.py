@@ -321,8 +321,8 @@ def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     """min ||A·x − b|| with lower ≤ x ≤ upper (scipy's bounded-variable least squares on the
     column-scaled problem; for tall A it works on the small triangular factor R of A,
     ||Ax − b||² = ||Rx − Qᵀb||² + const).  Columns that these rows cannot tell from the
-    others (pivoted QR of the scaled columns: a diagonal below 1e-10 of the largest; a column
-    that vanishes here up to rounding among them) get 0: any split between them would fit,
+    others (pivoted QR of the scaled columns: a diagonal below 1e-10 of the largest, or beyond
+    the number of rows; a column that vanishes here up to rounding among them) get 0: any split between them would fit,
     and elsewhere, where they differ, a huge one would be anything but a fit."""
     norms = np.linalg.norm(A, axis=0)
     out = np.zeros(A.shape[1])
@@ -332,7 +332,7 @@ def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     An = A[:, live] / norms[live]
     _, Rp, piv = scipy.linalg.qr(An, mode="economic", pivoting=True)
     d = np.abs(np.diag(Rp))
-    live = np.sort(live[piv[d > 1e-10 * d[0]]])
+    live = np.sort(live[piv[:d.size][d > 1e-10 * d[0]]])   # at most one column per row
     An = A[:, live] / norms[live]
     lower = np.asarray(lower, float)[live] * norms[live]
     upper = np.asarray(upper, float)[live] * norms[live]

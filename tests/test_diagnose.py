@@ -363,7 +363,7 @@ def test_the_output_delay_stays_within_half_a_recorded_sample_on_a_decimated_rec
     rep = diagnose(lm.model, t215_slow_sine(), **model_file_options(lm.module), workers=2, chain=False)
     assert any("decimated by" in n for n in rep.notes)
     assert abs(rep.calibration["delay"]) <= 0.5 / 50_000.0 * (1 + 1e-9)
-    assert rep.cause == "none", rep.why
+    assert rep.cause == "none", rep.steps[0].why
 
 
 # ---- calibration when the drive sits between the nominal and the true resonance ---------------
@@ -393,4 +393,17 @@ def test_calibration_finds_a_resonance_on_the_other_side_of_the_drive():
     rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2, chain=False)
     assert rep.calibration["params"]["omega_1"] == pytest.approx(omega, rel=0.01)
     assert rep.calibration["sensor_gain"] == pytest.approx(1.0, abs=0.1)
-    assert rep.cause == "none", rep.why
+    assert rep.cause == "none", rep.steps[0].why
+
+
+def test_a_record_of_a_few_samples_is_answered_not_crashed(recwarn):
+    """Ten samples of the real record: fewer fit rows than a candidate has columns (the
+    pivoted QR's diagonal is shorter than its pivots) and shorter than a Welch segment.  The
+    answer is `none` with the reason (a handful of effective samples), without a warning."""
+    data = read_csv(P885)
+    short = Dataset(data.t[:10], {k: v[:10] for k, v in data.columns.items()})
+    lm = load_model(MODELS / "stack.py")
+    rep = diagnose(lm.model, short, **model_file_options(lm.module), workers=2)
+    assert rep.cause == "none"
+    assert "effective samples" in rep.steps[0].why, rep.steps[0].why
+    assert not [w for w in recwarn if "nperseg" in str(w.message)]

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 import bondgraph as bg
 from bondgraph.data import Dataset
@@ -129,3 +130,22 @@ def test_several_outputs_of_one_state_recursion_equal_one_recursion_each():
     for r in range(3):
         alone = StateSpace(A, B, C[r:r + 1], D[r:r + 1]).response(1e-3, u)[:, 0]
         np.testing.assert_allclose(rows[:, r], alone, rtol=1e-12, atol=1e-12 * np.max(np.abs(alone)))
+
+
+@given(rows=st.integers(1, 30), cols=st.integers(1, 12), seed=st.integers(0, 10_000))
+@settings(max_examples=60, deadline=None)
+def test_bounded_least_squares_on_any_shape(rows, cols, seed):
+    """bounded_lstsq against scipy's lsq_linear on the same problem, for tall and wide systems
+    (a wide one, fewer rows than columns, indexed past the QR's diagonal before): within the
+    bounds, and as good a fit (to rounding) whenever the columns are independent."""
+    from scipy.optimize import lsq_linear
+    from bondgraph.identify import bounded_lstsq
+    rng = np.random.default_rng(seed)
+    A, b = rng.normal(size=(rows, cols)), rng.normal(size=rows)
+    lower = np.where(rng.random(cols) < 0.5, 0.0, -np.inf)
+    upper = np.full(cols, np.inf)
+    x = bounded_lstsq(A, b, lower, upper)
+    assert np.all(np.isfinite(x)) and np.all(x >= lower - 1e-12)
+    if rows > cols:
+        ref = lsq_linear(A, b, bounds=(lower, upper)).x
+        assert np.linalg.norm(A @ x - b) <= np.linalg.norm(A @ ref - b) * (1 + 1e-6) + 1e-9

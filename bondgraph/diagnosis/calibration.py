@@ -38,7 +38,7 @@ from scipy.optimize import least_squares
 
 from .. import config
 from ..errors import UsageError
-from .context import SENSOR_GAIN, Context, State
+from .context import SENSOR_GAIN, Context, State, welch_length
 from .projection import Param, projected_fit
 
 
@@ -169,7 +169,7 @@ def _delay_identifiable(ctx: Context, S: np.ndarray, names: Sequence[str], free:
 def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
     """(ω rad/s, H, coherence) of output/input from Welch estimates (detrended segments)."""
     n = len(u)
-    nper = int(2 ** min(15, max(8, math.floor(math.log2(max(n, 256) / 8)))))
+    nper = welch_length(n, 8, 15)
     f, Puu = signal.welch(u, fs, nperseg=nper, detrend="linear")
     _, Puy = signal.csd(u, y, fs, nperseg=nper, detrend="linear")
     _, coh = signal.coherence(u, y, fs, nperseg=nper, detrend="linear")

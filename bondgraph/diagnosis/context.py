@@ -202,10 +202,16 @@ def with_sensor_gain(model: Model, output: str) -> Model:
     return m
 
 
+def welch_length(n: int, parts: float, top: int) -> int:
+    """Welch segment length for ``n`` samples: the largest power of two not above n/parts, within
+    2**8..2**top samples, and never longer than the record."""
+    return int(min(n, 2 ** max(8, min(top, int(math.log2(max(n, 256) / parts))))))
+
+
 def drive_band(u: np.ndarray, fs: float, share: float = 1e-4) -> float:
     """Frequency (Hz) below which all but ``share`` of the drive's (detrended) power lies."""
     n = len(u)
-    nper = int(min(n, 2 ** max(8, min(16, int(math.log2(max(n, 256) / 4))))))
+    nper = welch_length(n, 4, 16)
     f, P = signal.welch(u, fs, nperseg=nper, detrend="linear")
     c = np.cumsum(P[1:])
     if c.size == 0 or c[-1] <= 0:
@@ -217,7 +223,7 @@ def drive_band(u: np.ndarray, fs: float, share: float = 1e-4) -> float:
 def drive_peak(u: np.ndarray, fs: float) -> float:
     """Frequency (Hz) where the drive's (detrended) power spectrum peaks."""
     n = len(u)
-    nper = int(min(n, 2 ** max(8, min(16, int(math.log2(max(n, 256) / 4))))))
+    nper = welch_length(n, 4, 16)
     f, P = signal.welch(u, fs, nperseg=nper, detrend="linear")
     return float(f[1 + int(np.argmax(P[1:]))]) if f.size > 1 else 0.0
 
@@ -226,7 +232,7 @@ def noise_psd(y: np.ndarray, u: np.ndarray, fs: float, band: float) -> float | N
     """One-sided noise density of ``y`` (units²/Hz) in the frequencies the drive does not
     reach (above 5× its band, where only noise is left), or None if there is no such band."""
     n = len(y)
-    nper = int(min(n, 2 ** max(8, min(14, int(math.log2(max(n, 256) / 8))))))
+    nper = welch_length(n, 8, 14)
     f, Pyy = signal.welch(y, fs, nperseg=nper, detrend="linear")
     _, Puu = signal.welch(u, fs, nperseg=nper, detrend="linear")
     quiet = (f > 5 * band) & (f < 0.9 * fs / 2) & (Puu < 1e-6 * Puu.max())
@@ -241,7 +247,7 @@ def output_band(y: np.ndarray, fs: float, noise_density: float | None, above: fl
     if noise_density is None or noise_density <= 0:
         return None
     n = len(y)
-    nper = int(min(n, 2 ** max(8, min(14, int(math.log2(max(n, 256) / 8))))))
+    nper = welch_length(n, 8, 14)
     f, Pyy = signal.welch(y, fs, nperseg=nper, detrend="linear")
     loud = np.nonzero(Pyy[1:] > above * noise_density)[0]
     return float(f[1 + loud[-1]]) if loud.size else float(f[1])
