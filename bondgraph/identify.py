@@ -322,8 +322,9 @@ def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     column-scaled problem; for tall A it works on the small triangular factor R of A,
     ||Ax − b||² = ||Rx − Qᵀb||² + const).  Columns that these rows cannot tell from the
     others (pivoted QR of the scaled columns: a diagonal below 1e-10 of the largest, or beyond
-    the number of rows; a column that vanishes here up to rounding among them) get 0: any split between them would fit,
-    and elsewhere, where they differ, a huge one would be anything but a fit."""
+    the number of rows; a column that vanishes here up to rounding among them) get 0: any
+    split between them would fit, and elsewhere, where they differ, a huge one would be
+    anything but a fit."""
     norms = np.linalg.norm(A, axis=0)
     out = np.zeros(A.shape[1])
     live = np.nonzero(norms > 1e-60 * max(float(norms.max(initial=0.0)), 1e-300))[0]

@@ -212,8 +212,8 @@ class FrictionDamping(NonlinearDamping):
     element's damping; s keeps the law smooth: 3 % of the data's peak velocity, or 10 or 30 %
     if these fit better (tried only when the first improves the fit part by 2 % or more).  Its
     equivalent viscous damping 4F/(πV) falls with the velocity amplitude V, where the cubic
-    forms' rises.  Runs on the exact Lur'e route (one tanh is
-    allowed beside the polynomial terms)."""
+    forms' rises.  Runs on the exact Lur'e route (one tanh is allowed beside the polynomial
+    terms)."""
 
     label = "Coulomb friction (smoothed) in the damping elements"
     upper = 300.0
