@@ -57,6 +57,13 @@ def test_real_record_names_hysteresis_first(p885_json):
     assert named and named[0]["gain_reference"] > 1.05  # beyond what any linear lag explains
 
 
+def assert_same_chain(rep, out: dict, rel: float) -> None:
+    """The report ``rep`` names the chain of the JSON report ``out``, each step's gain within ``rel``."""
+    named = [s for s in rep.steps if s.cause != "none"]
+    assert [s.cause for s in named] == out["causes"]
+    assert [s.gain for s in named] == pytest.approx([s["gain"] for s in out["steps"]], rel=rel)
+
+
 def test_the_sensor_orientation_does_not_change_the_diagnosis(p885_json):
     """The real record with its displacement sensor mounted the other way round (x -> -x): the
     sensor gain changes sign and nothing else.  The drive-side weights' bounds (the PI's linear
@@ -68,9 +75,7 @@ def test_the_sensor_orientation_does_not_change_the_diagnosis(p885_json):
     lm = load_model(MODELS / "stack.py")
     rep = diagnose(lm.model, flipped, **model_file_options(lm.module), workers=2)
     assert rep.calibration["sensor_gain"] == pytest.approx(-out["calibration"]["sensor_gain"], rel=1e-3)
-    named = [s for s in rep.steps if s.cause != "none"]
-    assert [s.cause for s in named] == out["causes"]
-    assert [s.gain for s in named] == pytest.approx([s["gain"] for s in out["steps"]], rel=0.02)
+    assert_same_chain(rep, out, rel=0.02)
 
 
 def test_half_the_sample_rate_gives_the_same_chain(p885_json):
@@ -81,9 +86,7 @@ def test_half_the_sample_rate_gives_the_same_chain(p885_json):
     half = Dataset(data.t[::2], {k: v[::2] for k, v in data.columns.items()})
     lm = load_model(MODELS / "stack.py")
     rep = diagnose(lm.model, half, **model_file_options(lm.module), workers=2)
-    named = [s for s in rep.steps if s.cause != "none"]
-    assert [s.cause for s in named] == out["causes"]
-    assert [s.gain for s in named] == pytest.approx([s["gain"] for s in out["steps"]], rel=0.05)
+    assert_same_chain(rep, out, rel=0.05)
 
 
 def test_cli_json_contract(p885_json):

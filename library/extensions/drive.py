@@ -56,13 +56,13 @@ def static_curve(view, pieces: int):
     return fit.prediction
 
 
-def best_on_grid(view, basis_of, grid, **fit_args) -> float:
+def best_on_grid(view, basis_of, grid, **fit_args):
     """The point of ``grid`` whose basis ``basis_of(point)`` fits the fit part best with the
-    linear parameters held (one linear solve each): for a scalar of a basis that a local
-    optimiser would find only from the right start (where the device's history left it)."""
+    linear parameters held (one linear solve each): for a start of a basis that a local
+    optimiser would find only from the right one (where the device's history left it)."""
     def cost(point):
         return view.score(view.fit_drive(basis_of(point), refit=False, **fit_args).prediction)[2]
-    return float(min(grid, key=cost))
+    return min(grid, key=cost)
 
 
 def loop_area(r: np.ndarray, u: np.ndarray) -> float:
@@ -128,7 +128,7 @@ class InputHysteresis(_DriveCandidate):
         # (prior) is chosen on a grid over the widest play's reach of the first input (beyond
         # it every play is on its branch), with the old convention (from 0) among the points.
         priors = np.r_[b0 + np.linspace(-1.0, 1.0, 9) * reach, 0.0]
-        prior = best_on_grid(view, basis, priors, **bounds)
+        prior = float(best_on_grid(view, basis, priors, **bounds))
         fit = view.fit_drive(basis(prior), **bounds)
         model = view.rewrite()
         B = view.additive.base_expr
@@ -185,8 +185,7 @@ class InputBoucWen(_DriveCandidate):
         # (at ±1 it is saturated, so that bound is no limit), fitted from the best of a few
         # starts (slow and fast saturation; from rest and both branches), each one linear solve
         grid = [(math.log(s0), 0.0, f0) for s0 in (3.0, 30.0) for f0 in (0.0, 0.9, -0.9)]
-        start = grid[int(best_on_grid(view, lambda k: basis(grid[int(k)]), range(len(grid)), lower=[-np.inf],
-                                      upper=[np.inf], names=["bw.kappa"]))]
+        start = best_on_grid(view, basis, grid, lower=[-np.inf], upper=[np.inf], names=["bw.kappa"])
         fit = view.fit_drive(basis, [-np.inf], [np.inf], z0=list(start),
                              z_bounds=[(math.log(0.05), math.log(500.0)), (-6.0, 6.0), (-1.0, 1.0)],
                              z_names=["bw.s", "bw.rho", "bw.z0"], names=["bw.kappa"])
@@ -253,7 +252,7 @@ class InputCreep(_DriveCandidate):
         # the record starts where the device's history left it: the level the cells had
         # settled to (prior) is chosen on a grid over the drive's range, the first input among
         # the points (cells in equilibrium with it)
-        prior = best_on_grid(view, cells_from, np.r_[d0, np.linspace(d.min(), d.max(), 7)], **bounds)
+        prior = float(best_on_grid(view, cells_from, np.r_[d0, np.linspace(d.min(), d.max(), 7)], **bounds))
         cells = cells_from(prior)
         fit = view.fit_drive(cells, **bounds)
         keep = [i for i in range(len(taus)) if fit.coef[i] > 1e-6 * max(float(np.max(fit.coef)), 1e-300)]
