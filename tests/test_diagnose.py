@@ -267,6 +267,19 @@ def test_rules_refuse_bound_stuck_and_linear_lookalikes():
     assert judge("linear", good, None, 0.95, [], "").passed
 
 
+def test_a_mode_on_the_models_own_must_beat_the_reference():
+    """A mode placed on one of the model's own may be that mode recalibrated: named only when
+    it explains what the free calibration under the flexible reference does not."""
+    good = Comparison(3.0, 8.0, 40)
+    on_own = "it sits on the model's own mode at 2242 Hz"
+    beyond = judge("linear", good, Comparison(1.9, 60.0, 40), 1.4, [], "", recalibration=on_own)
+    assert beyond.passed
+    recal = judge("linear", good, Comparison(1.01, 2.9, 40), 1.4, [], "", recalibration=on_own)
+    assert not recal.passed and "2242 Hz" in recal.reason and "linear reference" in recal.reason
+    weak = judge("linear", good, Comparison(1.3, 1.5, 40), 1.4, [], "", recalibration=on_own)
+    assert not weak.passed
+
+
 # ---- Ctrl-C -------------------------------------------------------------------------------------
 def _children(pid):
     out = []

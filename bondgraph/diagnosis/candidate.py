@@ -90,5 +90,12 @@ class Candidate(ABC):
         linear structural causes, which could otherwise absorb any linear mismatch."""
         return ""
 
+    def mimics_recalibration(self, view, ext: Extension) -> str:
+        """Why the fitted linear extension may be the model's own structure recalibrated ('' if
+        not), e.g. a mode placed on one of the model's modes.  The engine then names it only if
+        it also beats the flexible linear reference on the freely calibrated model, as a
+        nonlinear cause must: what it explains is then beyond any recalibration."""
+        return ""
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.cause}: {self.label})"

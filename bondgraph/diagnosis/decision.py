@@ -29,7 +29,10 @@ parameter on a search bound, and
   ``min_gain_reference`` with z ≥ ``min_z_reference`` (a second-stage test: that it explains
   something is established against the calibrated model; this asks that it is not linear);
 * a linear structural cause explains at least ``linear_share`` of what the reference
-  explains, and its fitted values are physically plausible (the candidate says).
+  explains, and its fitted values are physically plausible (the candidate says); one that may
+  be the model's own structure recalibrated (a mode placed on one of the model's modes: the
+  candidate says) must also beat the reference as a nonlinear cause must, since the free
+  calibration under the reference has had every chance to recalibrate that structure.
 
 Of the passing candidates, the one that explains most when the reference's freedom is
 allowed too (its gain over the reference) is named, then the one with the larger own gain: a
@@ -139,9 +142,10 @@ class Verdict:
 
 
 def judge(kind: str, base: Comparison, versus_reference: Comparison | None, share: float | None,
-          at_bounds: list[str], implausible: str, later: bool = False) -> Verdict:
+          at_bounds: list[str], implausible: str, later: bool = False, recalibration: str = "") -> Verdict:
     """Apply the rules of the module docstring to one candidate (``later``: in a chain step
-    after the first, where ``diagnosis.min_gain_chain`` replaces ``diagnosis.min_gain``)."""
+    after the first, where ``diagnosis.min_gain_chain`` replaces ``diagnosis.min_gain``;
+    ``recalibration``: why a linear cause may be the model's own structure recalibrated)."""
     min_z = config.get("diagnosis.min_z")
     min_gain = config.get("diagnosis.min_gain_chain" if later else "diagnosis.min_gain")
     if at_bounds:
@@ -150,10 +154,11 @@ def judge(kind: str, base: Comparison, versus_reference: Comparison | None, shar
         return Verdict(False, f"gain {base.gain:.3g} < {min_gain:g}")
     if base.z < min_z:
         return Verdict(False, f"not significant (z = {base.z:.2g} < {min_z:g}, {base.n_eff:.0f} effective samples)")
+    ref_gain, ref_z = config.get("diagnosis.min_gain_reference"), config.get("diagnosis.min_z_reference")
+    vr = versus_reference
+    beyond = vr is not None and vr.gain >= ref_gain and vr.z >= ref_z
     if kind == "nonlinear":
-        ref_gain, ref_z = config.get("diagnosis.min_gain_reference"), config.get("diagnosis.min_z_reference")
-        vr = versus_reference
-        if vr.gain < ref_gain or vr.z < ref_z:
+        if not beyond:
             return Verdict(False, f"does not beat the linear reference (gain {vr.gain:.3g}, z = {vr.z:.2g})")
     else:
         need = config.get("diagnosis.linear_share")
@@ -161,6 +166,9 @@ def judge(kind: str, base: Comparison, versus_reference: Comparison | None, shar
             return Verdict(False, f"explains {share:.0%} of the linear mismatch (< {need:.0%})")
         if implausible:
             return Verdict(False, f"implausible: {implausible}")
+        if recalibration and not beyond:
+            return Verdict(False, f"{recalibration} and does not beat the linear reference"
+                                  + (f" (gain {vr.gain:.3g}, z = {vr.z:.2g})" if vr is not None else ""))
     return Verdict(True, "passes")
 
 

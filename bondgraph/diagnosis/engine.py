@@ -76,6 +76,7 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
     res.success, res.message = ext.success, ext.message
     if cand.kind == LINEAR:
         res.verdict = cand.implausible(view, ext)
+        res.recalibration = cand.mimics_recalibration(view, ext)
     ext.prediction = None
     refit = view.refit_linear(ext.values, additive=ext.additive is not None)
     static = cand.without_memory(view)
@@ -149,7 +150,7 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
         r.share = (before ** 2 - r.rms_validation ** 2) / explained_ref if explained_ref > 0 else None
         implausible = r.verdict
         v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], implausible,
-                  later=bool(state.causes))
+                  later=bool(state.causes), recalibration=r.recalibration)
         if v.passed and oc.static is not None and np.all(np.isfinite(oc.static)):
             # both with the reference's freedom: loops that only mimic a linear lag are no memory
             e_static = y - regress(np.column_stack([oc.static, ref_cols]), y, idx)

@@ -37,6 +37,9 @@ class CandidateResult:
     #: "plausible" when fitted from, and compared with, the plausible device (the calibration
     #: within tolerance) instead of the null
     against: str = ""
+    #: for a linear cause, why it may be a recalibration of the model's own structure ('' if
+    #: not): it must then beat the flexible linear reference too
+    recalibration: str = ""
     #: for a memory effect, its gain over the same freedom without memory (a static curve)
     gain_static: float | None = None
     #: z on a second fold (other validation blocks), when the first was borderline; ``z`` is

@@ -33,6 +33,16 @@ def mismatch_peaks(view, n: int = 3) -> list[float]:
     return [float(w[k]) for k in order]
 
 
+def mode_on_own(view, omega: float) -> str:
+    """Whether an added mode at ``omega`` (rad/s) sits on one of the model's own modes (within
+    15 %), where a recalibration of that mode could stand for it."""
+    f = omega / (2 * math.pi)
+    for fm in view.resonances_hz:
+        if fm > 0 and abs(f / fm - 1) < 0.15:
+            return f"it sits on the model's own mode at {fm:.4g} Hz"
+    return ""
+
+
 def mode_implausible(view, omega: float, zeta: float) -> str:
     """Why an added mode at ``omega`` (rad/s) with damping ratio ``zeta`` is not plausible."""
     f = omega / (2 * math.pi)
@@ -43,9 +53,6 @@ def mode_implausible(view, omega: float, zeta: float) -> str:
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
     if not near.any() or P[near].max() < 1e-6 * P.max():
         return f"the drive does not excite {f:.4g} Hz"
-    for fm in view.resonances_hz:
-        if fm > 0 and abs(f / fm - 1) < 0.15:
-            return f"it duplicates the model's own mode at {fm:.4g} Hz (a recalibration, not a missing mode)"
     if zeta > 0.3:
         return f"it is not a resonance (damping ratio {zeta:.2g})"
     return ""
@@ -107,6 +114,9 @@ class ParallelMode(Candidate):
     def implausible(self, view, ext):
         return mode_implausible(view, ext.values["hm.omega"], ext.values["hm.zeta"])
 
+    def mimics_recalibration(self, view, ext):
+        return mode_on_own(view, ext.values["hm.omega"])
+
 
 class OutputMode(Candidate):
     """A mode of the output structure: a mass m2 on a spring k2 with damper c2 riding on the
@@ -165,3 +175,6 @@ class OutputMode(Candidate):
 
     def implausible(self, view, ext):
         return mode_implausible(view, ext.values["om.omega"], ext.values["om.zeta"])
+
+    def mimics_recalibration(self, view, ext):
+        return mode_on_own(view, ext.values["om.omega"])
