@@ -34,8 +34,8 @@ def mismatch_peaks(view, n: int = 3) -> list[float]:
 
 
 def mode_on_own(view, omega: float) -> str:
-    """Whether an added mode at ``omega`` (rad/s) sits on one of the model's own modes (within
-    15 %), where a recalibration of that mode could stand for it."""
+    """Why an added mode at ``omega`` (rad/s) may be a recalibration of one of the model's own
+    modes ('' if it is not within 15 % of any)."""
     f = omega / (2 * math.pi)
     for fm in view.resonances_hz:
         if fm > 0 and abs(f / fm - 1) < 0.15:
