@@ -361,6 +361,22 @@ def test_an_amplifier_pole_hidden_by_implausible_values_is_named():
     assert rep.cause == "electrical-rc", rep.steps[0].why
     named = next(c for c in rep.steps[0].candidates if c.passed and c.cause == "electrical-rc")
     assert named.against == "plausible"
+    assert rep.unexplained == ""                         # the named input stage accounts for it
+
+
+def test_an_implausible_device_that_no_candidate_explains_is_said_so():
+    """The same record with only a drive nonlinearity to try: nothing is named, and the report
+    says that the calibrated device stays outside its tolerance unexplained (in the text and
+    the JSON), naming the parameters, instead of a bare `none`."""
+    from library.extensions import InputSaturation
+    lm = load_model(MODELS / "apa120ml.py")
+    rep = diagnose(lm.model, apa_behind_amplifier_pole(), **model_file_options(lm.module), workers=1,
+                   chain=False, candidates=[InputSaturation()])
+    outside = rep.calibration["outside_tolerance"]
+    assert rep.cause == "none" and outside
+    assert all(f"{k} ×" in rep.unexplained for k in outside)
+    assert "NOTE: the calibration needs" in rep.text()
+    assert json.loads(json.dumps(rep.as_json()))["unexplained"] == rep.unexplained
 
 
 # ---- the measurement chain's delay on a decimated record -------------------------------------

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass, field
 
 from .. import config
+from .candidate import LINEAR
 
 
 @dataclass
@@ -111,6 +112,21 @@ class Report:
     def candidates(self) -> list[CandidateResult]:
         return self.steps[0].candidates if self.steps else []
 
+    @property
+    def unexplained(self) -> str:
+        """Why the calibrated device stays implausible: its parameters outside their tolerance
+        when no linear structural cause fitted on the plausible device was named to account for
+        them ('' otherwise)."""
+        outside = self.calibration.get("outside_tolerance") or {}
+        if not outside or any(c.passed and c.cause == s.cause and c.kind == LINEAR and c.against == "plausible"
+                              for s in self.steps for c in s.candidates):
+            return ""
+        return ("the calibration needs " + ", ".join(f"{k} ×{v:.3g}" for k, v in outside.items())
+                + " of the model's values, beyond their tolerance, and no structural cause explains it: "
+                  "the model's linear structure may lack something no candidate covers (a mode, a "
+                  "compliance, a sensor stage), or the device is further from the model file than its "
+                  "tolerance says")
+
     def as_json(self) -> dict:
         steps = [s for s in self.steps if s.cause != "none"]
         return {"cause": self.cause, "causes": list(self.causes), "gain": self.gain,
@@ -121,7 +137,8 @@ class Report:
                 "stop": self.steps[-1].as_json() if self.steps and self.steps[-1].cause == "none" else None,
                 "noise_rms": self.noise,
                 "extended_rms_integrated": self.extended_rms_integrated,
-                "calibration": self.calibration, "data": self.data, "notes": self.notes,
+                "calibration": self.calibration, "unexplained": self.unexplained, "data": self.data,
+                "notes": self.notes,
                 "criterion": {k.split(".", 1)[1]: config.get(k) for k in
                               ("diagnosis.min_z", "diagnosis.min_gain", "diagnosis.min_gain_chain",
                                "diagnosis.min_gain_reference",
@@ -175,6 +192,8 @@ class Report:
         causes = " → ".join(self.causes) if self.causes else "none"
         lines += ["", f"Causes: {causes}" + (f" (gain {self.gain:.3g}, validation RMS {self.baseline_rms:.4g} → "
                                             f"{self.extended_rms:.4g})" if self.causes else "")]
+        if self.unexplained:
+            lines.append(f"  NOTE: {self.unexplained}")
         if self.extended_rms_integrated is not None:
             lines.append(f"  extended model integrated: validation RMS {self.extended_rms_integrated:.4g}")
         if self.equations:
