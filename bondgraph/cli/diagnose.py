@@ -13,6 +13,8 @@ from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, comm
              arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="measured vs calibrated vs extended, residuals"),
              arg("--workers", type=int, default=2, help="parallel worker processes (default 2)"),
              arg("--no-chain", action="store_true", help="name one cause only (no compound effects)"),
+             arg("--drift", action="store_true", help="solve a linear sensor drift with the calibration and remove "
+                 "it before any effect is sought (thermal or sensor drift in the record)"),
              QUIET_ARG,
          ])
 def run(args):
@@ -25,7 +27,8 @@ def run(args):
         with Progress("diagnosing", unit="candidates", mode="quiet" if args.quiet else "auto") as bar:
             report = diagnose(lm.model, data, **model_file_options(lm.module),
                               input=args.model_input, output=args.model_output, validation=args.validation,
-                              workers=args.workers, chain=not args.no_chain, progress=bar, source=str(args.model))
+                              workers=args.workers, chain=not args.no_chain, progress=bar, source=str(args.model),
+                              drift=True if args.drift else None)
         if args.json:
             print(json.dumps(report.as_json()))
         else:

@@ -68,6 +68,9 @@ class Calibration:
     #: delay of the measured output behind the drive (s): the measurement chain's, solved with
     #: the linear parameters
     delay: float = 0.0
+    #: linear sensor drift solved with the parameters and removed from the record (output
+    #: units per second), when asked for (setting ``diagnosis.drift``)
+    drift: float | None = None
     notes: list[str] = field(default_factory=list)
 
     def as_json(self) -> dict:
@@ -76,7 +79,7 @@ class Calibration:
                 "at_bounds": self.at_bounds, "sensor_gain": self.gain, "offset": self.offset,
                 "rms_fit": self.rms_fit, "rms_validation": self.rms_validation, "success": self.success,
                 "message": self.message, "route": self.route, "outside_tolerance": self.outside,
-                "rms_plausible": self.rms_plausible, "delay": self.delay}
+                "rms_plausible": self.rms_plausible, "delay": self.delay, "drift": self.drift}
 
 
 def patterns(names: Sequence[str], pats: Sequence[str] | None) -> list[str]:
@@ -242,10 +245,12 @@ def _z_bounds(specs: list[Param], delay: float | None):
 
 
 def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts=(),
-         delay: bool = False):
+         delay: bool = False, drift: bool = False):
     """Frequency response first when the data allow, then the time series by variable projection
-    (sensor gain and offset solved exactly); with ``delay``, the output's delay behind the drive
-    (samples, last in z) too.  (values, delay, raw prediction, solution, route)."""
+    (sensor gain and offset solved exactly, and with ``drift`` a linear drift, its coefficient
+    the solution's third, per half the record's span from its middle); with ``delay``, the
+    output's delay behind the drive (samples, last in z) too.  (values, delay, raw prediction,
+    solution, route)."""
     idx = ctx.ident.fit_idx
     route = "time series"
     z0 = np.append(z0, 0.0) if delay else np.asarray(z0, float)
@@ -261,13 +266,16 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts
         vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
         raw = ctx.ident.predict(vals, drive=ctx.drive_with_delay(z[-1]) if delay else None)
         raw = raw if rows is None else raw[rows]
-        return np.column_stack([raw, np.ones(raw.size)])
+        return np.column_stack([raw, np.ones(raw.size)] + ([trend if rows is None else trend[rows]] if drift else []))
 
+    t = ctx.t
+    trend = (t - 0.5 * (t[0] + t[-1])) / max(0.5 * (t[-1] - t[0]), 1e-300)
+    lin = 3 if drift else 2
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
     first = z0 if z_frf is None else z_frf
     if z_frf is None and z0.size:   # no frequency response to start from: the best of a random sample
         starts = list(starts) + _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
-    sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * 2, [np.inf] * 2, max_nfev=40,
+    sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * lin, [np.inf] * lin, max_nfev=40,
                         starts=([] if z_frf is None else [z0]) + list(starts))
     values = dict(nominal)
     values.update({s.name: s.from_z(zi) for s, zi in zip(specs, sol.z)})
@@ -332,11 +340,16 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     with_delay = ctx.lti is not None and _delay_identifiable(ctx, S, names, free, nominal, raw0, scale)
     if ctx.lti is not None and not with_delay:
         held["output delay"] = "not separable from the calibrated parameters"
-    values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, delay=with_delay)
+    drift = bool(config.get("diagnosis.drift"))
+    values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, delay=with_delay, drift=drift)
     if with_delay and abs(delay) >= 0.99 * max_delay(ctx):   # a model error the delay mimics: not a delay
         held["output delay"] = f"it went to its search bound (±{MAX_DELAY:g} recorded samples): a model error, not a delay"
-        values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0)
+        values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, drift=drift)
     ctx.set_delay(delay)
+    if drift:
+        rate = float(sol.coef[2]) / max(0.5 * ctx.span, 1e-300)
+        ctx.remove_drift(rate)
+        say(f"sensor drift {rate:.4g} per s solved with the calibration and removed from the record")
     gain, offset, rf, rv = score(ctx, raw)
     factors = tolerances(free, tolerance)
     plausible = {n: param_bounds(ctx, n, nominal[n], factors[n]) for n in free}
@@ -344,7 +357,8 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
                if not plausible[n][0] * (1 - 1e-9) <= abs(values[n]) <= plausible[n][1] * (1 + 1e-9)}
     cal = Calibration(values, nominal, free, held, {k: tuple(v) for k, v in bounds.items()},
                       [(specs[i].name if i < len(specs) else "delay") for i in sol.at_bounds], gain, offset, rf, rv,
-                      sol.success, sol.message, route, plausible=plausible, outside=outside, delay=delay * ctx.dt)
+                      sol.success, sol.message, route, plausible=plausible, outside=outside, delay=delay * ctx.dt,
+                      drift=ctx.drift if drift else None)
     state = State(ctx.model, values, raw, gain, offset, ctx.u if ctx.lti is not None else None,
                   ctx.model.inputs[ctx.input].symbol if ctx.lti is not None else None, [], ctx.lti is not None)
     if not outside:

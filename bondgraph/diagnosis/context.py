@@ -127,6 +127,8 @@ class Context:
         self.shift = 0
         #: delay (in samples) of the measured output behind the drive, solved by the calibration
         self.delay = 0.0
+        #: linear sensor drift removed from the output (units per second; see remove_drift)
+        self.drift = 0.0
         self.set_delay(0.0)
         #: parameter names of the working model (the linear core of every chain state)
         self.core_parameters = frozenset(p.name for p in self.eqs.params)
@@ -151,6 +153,16 @@ class Context:
         self.dt = self.ident.dt
         self.lti = self.ident.lti
         self.blocks = _blocks(self.ident.val_mask)
+
+    def remove_drift(self, rate: float) -> None:
+        """Subtract a linear sensor drift of ``rate`` (output units per second, zero at the
+        record's middle) from the measured output, from now on."""
+        t = self._data.t
+        cols = {k: self._data.column(k) for k in self._data.names if k != "t"}
+        cols[self.data_output] = cols[self.data_output] - rate * (t - 0.5 * (t[0] + t[-1]))
+        self._data = Dataset(t, cols, self._data.metadata, self._data.path)
+        self.drift = float(rate)
+        self.set_delay(self.delay)
 
     def refold(self, shift: int) -> "Context":
         """The same context with the validation blocks ``shift`` blocks later (another fold:

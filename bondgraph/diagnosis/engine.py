@@ -264,7 +264,8 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
              calibrate_first: Sequence[str] | None = None, input: str | None = None, output: str | None = None,
              data_input: str | None = None, data_output: str | None = None, validation: float = 0.3,
              workers: int = 2, chain: bool = True, progress=None, source: str = "",
-             equations: bool = True, tolerance: Mapping[str, float] | None = None) -> Report:
+             equations: bool = True, tolerance: Mapping[str, float] | None = None,
+             drift: bool | None = None) -> Report:
     """Diagnose what ``model`` misses in ``data`` (see the package docstring).
 
     ``candidates``: the causes to try (default: the installed entry points);
@@ -276,7 +277,14 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     (default: the same names); ``workers``: parallel processes; ``chain``: keep naming
     causes on the extended model until none passes; ``progress``: a
     :class:`bondgraph.progress.Progress` (one count per candidate fitted, notes for the
-    stages) or any callable taking a line of text."""
+    stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
+    the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
+    if drift is not None:
+        with config.override({"diagnosis.drift": bool(drift)}):
+            return diagnose(model, data, candidates=candidates, calibrate_first=calibrate_first, input=input,
+                            output=output, data_input=data_input, data_output=data_output, validation=validation,
+                            workers=workers, chain=chain, progress=progress, source=source, equations=equations,
+                            tolerance=tolerance)
     with single_threaded_blas():
         return _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
                          validation, workers, chain, progress, source, equations, tolerance)

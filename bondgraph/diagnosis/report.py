@@ -157,7 +157,9 @@ class Report:
         free = ", ".join(f"{k} = {v:.5g}" + (" (AT BOUND)" if k in cal["at_bounds"] else "")
                          for k, v in cal["params"].items())
         lines.append(f"  calibrated ({cal['route']}): {free or 'no model parameter'}; sensor gain "
-                     f"{cal['sensor_gain']:.5g}, offset {cal['offset']:.4g}, output delay {cal.get('delay', 0.0):.3g} s")
+                     f"{cal['sensor_gain']:.5g}, offset {cal['offset']:.4g}, output delay {cal.get('delay', 0.0):.3g} s"
+                     + (f"; sensor drift {cal['drift']:.4g} per s (removed from the record)"
+                        if cal.get("drift") is not None else ""))
         if cal.get("outside_tolerance"):
             lines.append("  outside their tolerance (an implausible device unless a structural cause explains it): "
                          + ", ".join(f"{k} ×{v:.3g}" for k, v in cal["outside_tolerance"].items())

@@ -1,0 +1,71 @@
+"""A linear sensor drift (``diagnose --drift``): solved with the calibration and removed before
+any effect is sought.
+
+A thermal or sensor drift of the displacement reading is not in the model and is no physical
+effect of the actuator, yet left in the record it passes for creep or an opening loop.  The
+records: the real P-885 stack record (tests/data, see its README) and an effect-free T215
+record of the independent truth generator (ci seed 1011: a sine drive, nothing hidden), each
+with a drift of 1 % of its stroke over the record added here.  The drift option is off by
+default: on records without drift it also takes part of a slow creep under bursts for drift
+(benchmarks/README.md, "Sensor drift").
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from bondgraph.cli import main
+from bondgraph.data import Dataset, read_csv
+from bondgraph.diagnosis import diagnose, model_file_options
+from bondgraph.modelfile import load_model
+from conftest import MODELS
+from test_diagnose import P885, assert_same_chain
+from truthgen import draw
+from truthgen.families import ROOT
+
+
+def drifted(data: Dataset, share: float = 0.01) -> tuple[Dataset, float]:
+    """``data`` with a linear drift of ``share`` × the output's range over the record added to x;
+    (the record, the drift's rate in units of x per second)."""
+    t, x = data.t, data.columns["x"]
+    rate = share * float(np.ptp(x)) / float(t[-1] - t[0])
+    return Dataset(t, {"V": data.columns["V"], "x": x + rate * (t - t[0])}), rate
+
+
+def test_the_real_record_with_a_drift_gives_the_drift_back_and_the_same_chain():
+    """Two routes to one number: the drift solved on the record with a drift added, minus the
+    drift solved on the record as it is, is the drift added (within 2 %); the chain is the one
+    the record gives without the added drift (hysteresis first)."""
+    lm = load_model(MODELS / "stack.py")
+    data = read_csv(P885)
+    plain = diagnose(lm.model, data, **model_file_options(lm.module), workers=2, drift=True)
+    assert plain.cause == "hysteresis"
+    with_drift, rate = drifted(data)
+    rep = diagnose(lm.model, with_drift, **model_file_options(lm.module), workers=2, drift=True)
+    assert rep.calibration["drift"] - plain.calibration["drift"] == pytest.approx(rate, rel=0.02)
+    assert "sensor drift" in rep.text()
+    assert_same_chain(rep, plain.as_json(), rel=0.05)
+
+
+def test_a_drift_on_an_effect_free_record_is_not_named_an_effect():
+    rec = draw(1011, "ci")
+    assert rec.causes == ()                                   # the truth: nothing hidden
+    lm = load_model(ROOT / rec.model, rec.overrides)
+    data, rate = drifted(Dataset(np.asarray(rec.t), {"V": np.asarray(rec.V), "x": np.asarray(rec.x)}))
+    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2, drift=True)
+    assert rep.cause == "none", rep.steps[-1].why
+    assert rep.calibration["drift"] == pytest.approx(rate, rel=0.2)
+    assert diagnose(lm.model, data, **model_file_options(lm.module), workers=2).calibration["drift"] is None
+
+
+def test_the_command_line_option_reports_the_drift(tmp_path, capsys):
+    """``diagnose --drift --json``: the calibration's ``drift`` is the one solved (x per s)."""
+    data, rate = drifted(read_csv(P885), 0.2)   # the record drifts by itself too, 4e-9 m/s
+    path = tmp_path / "drifting.csv"
+    path.write_text("t,V,x\n" + "".join(f"{a:.4f},{b:.6g},{c:.8g}\n" for a, b, c in
+                                          zip(data.t, data.columns["V"], data.columns["x"])))
+    assert main(["diagnose", str(MODELS / "stack.py"), str(path), "--drift", "--json", "--quiet", "--no-chain"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["calibration"]["drift"] == pytest.approx(rate, rel=0.1)
