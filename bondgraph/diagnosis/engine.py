@@ -279,13 +279,8 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     :class:`bondgraph.progress.Progress` (one count per candidate fitted, notes for the
     stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
     the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
-    if drift is not None:
-        with config.override({"diagnosis.drift": bool(drift)}):
-            return diagnose(model, data, candidates=candidates, calibrate_first=calibrate_first, input=input,
-                            output=output, data_input=data_input, data_output=data_output, validation=validation,
-                            workers=workers, chain=chain, progress=progress, source=source, equations=equations,
-                            tolerance=tolerance)
-    with single_threaded_blas():
+    settings = {} if drift is None else {"diagnosis.drift": bool(drift)}
+    with single_threaded_blas(), config.override(settings):
         return _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
                          validation, workers, chain, progress, source, equations, tolerance)
 
