@@ -322,6 +322,15 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                 return second_fold(folds[0], state, cal.free, of[id(oc)], first, e_plaus)
 
             step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
+            if k == 0 and winner is not None and not config.get("diagnosis.drift") and _drift_explains(ctx, state, winner):
+                say("a linear drift explains the record as well as the best candidate: solved as a sensor drift")
+                with config.override({"diagnosis.drift": True}):
+                    rep = _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
+                                    validation, workers, chain, progress, source, equations, tolerance)
+                rep.notes.append(f"a linear drift of the output explained the record as well as "
+                                 f"{winner.result.cause} (gain {winner.result.gain:.3g}): solved with the calibration "
+                                 f"as a sensor drift")
+                return rep
             steps.append(step)
             say(f"step {k + 1}: {step.why}")
             if winner is None:
@@ -351,6 +360,19 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
             report.extended_rms_integrated = _integrated(ctx, ext_model, state)
     report.seconds = time.time() - started
     return report
+
+
+def _drift_explains(ctx: Context, state: State, winner: Outcome) -> bool:
+    """Whether a linear drift added to the calibrated model explains the validation part as
+    well as the winner (within ``diagnosis.equivalent``) and passes the rules a cause must."""
+    idx, val, y, t = ctx.ident.fit_idx, ctx.ident.val_mask, ctx.y, ctx.t
+    trend = (t - 0.5 * (t[0] + t[-1])) / max(0.5 * ctx.span, 1e-300)
+    e_state = y - state.prediction
+    e_drift = y - regress(np.column_stack([state.raw, trend]), y, idx)
+    base = compare(e_state, e_drift, ctx.blocks)
+    if base.gain < config.get("diagnosis.min_gain") or base.z < config.get("diagnosis.min_z"):
+        return False
+    return rms(e_drift[val]) <= config.get("diagnosis.equivalent") * winner.result.rms_validation
 
 
 def _integrated(ctx: Context, model: Model, state: State) -> float | None:
