@@ -90,7 +90,9 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.confirm_max": Default(2, "most candidates per chain step fitted on the second fold"),
     "diagnosis.drift": Default(False, "solve a linear sensor drift (output units per second) with the calibration and "
                                       "remove it from the record before any effect is sought: a thermal or "
-                                      "sensor drift must not pass for creep or an opening loop"),
+                                      "sensor drift must not pass for creep or an opening loop (off: a drift is "
+                                      "still solved when a straight line explains the record as well as the "
+                                      "first cause found)"),
     "diagnosis.blocks": Default(30, "equal time blocks of the record; the validation share of them, spread evenly, "
                                     "is held out (each is at least one batch of the significance test)"),
 }

@@ -363,8 +363,10 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
 
 
 def _drift_explains(ctx: Context, state: State, winner: Outcome) -> bool:
-    """Whether a linear drift added to the calibrated model explains the validation part as
-    well as the winner (within ``diagnosis.equivalent``) and passes the rules a cause must."""
+    """Whether a straight line added to the calibrated model (a sensor drift) passes the rules
+    a cause must (``diagnosis.min_gain``, ``diagnosis.min_z``) and explains the validation part
+    as well as the first step's winner (within ``diagnosis.equivalent``): then the winner may
+    be a drift passing for an effect, and the diagnosis starts again with the drift solved."""
     idx, val, y, t = ctx.ident.fit_idx, ctx.ident.val_mask, ctx.y, ctx.t
     trend = (t - 0.5 * (t[0] + t[-1])) / max(0.5 * ctx.span, 1e-300)
     e_state = y - state.prediction
