@@ -268,8 +268,7 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts
         raw = raw if rows is None else raw[rows]
         return np.column_stack([raw, np.ones(raw.size)] + ([trend if rows is None else trend[rows]] if drift else []))
 
-    t = ctx.t
-    trend = (t - 0.5 * (t[0] + t[-1])) / max(0.5 * (t[-1] - t[0]), 1e-300)
+    trend = ctx.trend if drift else None
     lin = 3 if drift else 2
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
     first = z0 if z_frf is None else z_frf

@@ -154,12 +154,19 @@ class Context:
         self.lti = self.ident.lti
         self.blocks = _blocks(self.ident.val_mask)
 
+    @property
+    def trend(self) -> np.ndarray:
+        """A straight line over the record: -1 at its start, 0 at its middle, 1 at its end (a
+        sensor drift's shape; its coefficient over half the span is the drift per second)."""
+        t = self.t
+        return (t - 0.5 * (t[0] + t[-1])) / max(0.5 * (t[-1] - t[0]), 1e-300)
+
     def remove_drift(self, rate: float) -> None:
         """Subtract a linear sensor drift of ``rate`` (output units per second, zero at the
         record's middle) from the measured output, from now on."""
         t = self._data.t
         cols = {k: self._data.column(k) for k in self._data.names if k != "t"}
-        cols[self.data_output] = cols[self.data_output] - rate * (t - 0.5 * (t[0] + t[-1]))
+        cols[self.data_output] = cols[self.data_output] - rate * 0.5 * (t[-1] - t[0]) * self.trend
         self._data = Dataset(t, cols, self._data.metadata, self._data.path)
         self.drift = float(rate)
         self.set_delay(self.delay)

@@ -2,6 +2,7 @@
 extend the model with it and try the others again on the extended model, until none passes."""
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -280,13 +281,22 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
     the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
     settings = {} if drift is None else {"diagnosis.drift": bool(drift)}
+    run = functools.partial(_diagnose, model, data, candidates, calibrate_first, input, output, data_input,
+                            data_output, validation, workers, chain, progress, source, equations, tolerance)
     with single_threaded_blas(), config.override(settings):
-        return _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
-                         validation, workers, chain, progress, source, equations, tolerance)
+        out = run()
+        if isinstance(out, str):   # a drift passed for the first cause: again, with the drift solved
+            with config.override({"diagnosis.drift": True}):
+                rep = run()
+            rep.notes.append(out)
+            return rep
+        return out
 
 
 def _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output, validation,
-              workers, chain, progress, source, equations, tolerance) -> Report:
+              workers, chain, progress, source, equations, tolerance) -> Report | str:
+    """The diagnosis (see :func:`diagnose`), or the note to add when a sensor drift explains
+    the record as well as the first cause found (the caller then runs it with the drift solved)."""
     started = time.time()
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     tick = getattr(progress, "advance", None)
@@ -324,13 +334,8 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
             step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
             if k == 0 and winner is not None and not config.get("diagnosis.drift") and _drift_explains(ctx, state, winner):
                 say("a linear drift explains the record as well as the best candidate: solved as a sensor drift")
-                with config.override({"diagnosis.drift": True}):
-                    rep = _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
-                                    validation, workers, chain, progress, source, equations, tolerance)
-                rep.notes.append(f"a linear drift of the output explained the record as well as "
-                                 f"{winner.result.cause} (gain {winner.result.gain:.3g}): solved with the calibration "
-                                 f"as a sensor drift")
-                return rep
+                return (f"a linear drift of the output explained the record as well as {winner.result.cause} "
+                        f"(gain {winner.result.gain:.3g}): solved with the calibration as a sensor drift")
             steps.append(step)
             say(f"step {k + 1}: {step.why}")
             if winner is None:
@@ -367,10 +372,9 @@ def _drift_explains(ctx: Context, state: State, winner: Outcome) -> bool:
     a cause must (``diagnosis.min_gain``, ``diagnosis.min_z``) and explains the validation part
     as well as the first step's winner (within ``diagnosis.equivalent``): then the winner may
     be a drift passing for an effect, and the diagnosis starts again with the drift solved."""
-    idx, val, y, t = ctx.ident.fit_idx, ctx.ident.val_mask, ctx.y, ctx.t
-    trend = (t - 0.5 * (t[0] + t[-1])) / max(0.5 * ctx.span, 1e-300)
+    idx, val, y = ctx.ident.fit_idx, ctx.ident.val_mask, ctx.y
     e_state = y - state.prediction
-    e_drift = y - regress(np.column_stack([state.raw, trend]), y, idx)
+    e_drift = y - regress(np.column_stack([state.raw, ctx.trend]), y, idx)
     base = compare(e_state, e_drift, ctx.blocks)
     if base.gain < config.get("diagnosis.min_gain") or base.z < config.get("diagnosis.min_z"):
         return False
