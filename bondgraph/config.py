@@ -88,6 +88,12 @@ DEFAULTS: dict[str, Default] = {
                                              "than this is fitted on a second fold (other validation blocks) and "
                                              "judged on the two folds' combined z"),
     "diagnosis.confirm_max": Default(2, "most candidates per chain step fitted on the second fold"),
+    "diagnosis.polish_margin": Default(1.5, "passing candidates within this factor of the best's gain over the "
+                                            "flexible linear reference, when one of them stopped before its optimiser "
+                                            "converged, are fitted again with polish_effort times the evaluations "
+                                            "before one is named (a race decided by converged fits, not by which "
+                                            "optimiser got further)"),
+    "diagnosis.polish_effort": Default(10.0, "factor on every optimiser's evaluation budget when a race is polished"),
     "diagnosis.drift": Default(False, "solve a linear sensor drift (output units per second) with the calibration and "
                                       "remove it from the record before any effect is sought: a thermal or "
                                       "sensor drift must not pass for creep or an opening loop (off: a drift is "

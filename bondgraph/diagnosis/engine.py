@@ -39,17 +39,18 @@ class Outcome:
 
 
 def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate,
-                  plausible: tuple[State, dict] | None = None) -> Outcome:
+                  plausible: tuple[State, dict] | None = None, effort: float = 1.0) -> Outcome:
     """Fit one candidate on the chain state (in a worker or in the calling process).  A linear
     structural candidate starts from the plausible device instead, when one is given
-    (``(state, bounds)``: the calibration within tolerance), and refits within its bounds."""
+    (``(state, bounds)``: the calibration within tolerance), and refits within its bounds.
+    ``effort``: a factor on its optimisers' evaluation budgets (see :func:`polish_race`)."""
     started = time.time()
-    res = CandidateResult(cand.cause, cand.label, cand.kind)
+    res = CandidateResult(cand.cause, cand.label, cand.kind, effort=float(effort))
     if cand.kind == LINEAR and plausible is not None:
-        view = View(ctx, plausible[0], calibrated, bounds=plausible[1])
+        view = View(ctx, plausible[0], calibrated, bounds=plausible[1], effort=effort)
         res.against = "plausible"
     else:
-        view = View(ctx, state, calibrated)
+        view = View(ctx, state, calibrated, effort=effort)
     try:
         with time_budget(config.get("diagnosis.candidate_seconds")):
             return _fit_candidate(cand, view, res)
@@ -101,10 +102,11 @@ def effect_errors(ctx: Context, oc: Outcome, e_state: np.ndarray,
 
 
 def second_fold(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate,
-                plausible: tuple[State, dict] | None, e_plaus: np.ndarray | None) -> Comparison | None:
+                plausible: tuple[State, dict] | None, e_plaus: np.ndarray | None,
+                effort: float = 1.0) -> Comparison | None:
     """The candidate fitted again with other validation blocks (``ctx`` refolded) and compared
     there as on the first fold; None when it fails."""
-    oc = run_candidate(ctx, state, calibrated, cand, plausible)
+    oc = run_candidate(ctx, state, calibrated, cand, plausible, effort)
     if oc.raw is None:
         return None
     before, after = effect_errors(ctx, oc, ctx.y - state.prediction, e_plaus)
@@ -190,6 +192,22 @@ def _confirm_borderline(outcomes: list[Outcome], scored: dict, confirm, e_plaus,
         oc.result.z_second = second.z
         scored[id(oc)] = (before, e, Comparison(first.gain, (first.z + second.z) / math.sqrt(2),
                                                 first.n_eff + second.n_eff))
+
+
+def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
+    """The outcomes to fit again with more effort before one is named: when two or more passing
+    candidates are within ``diagnosis.polish_margin`` of the best gain over the flexible linear
+    reference and one of them stopped before its optimiser converged, those of them that did
+    not converge (the ranking must not reward the optimiser that got further in its budget)."""
+    passing = [oc for oc in outcomes if oc.result.passed]
+    if len(passing) < 2:
+        return []
+    margin = config.get("diagnosis.polish_margin")
+    top = max(oc.result.gain_reference for oc in passing)
+    race = [oc for oc in passing if oc.result.gain_reference * margin >= top]
+    if len(race) < 2:
+        return []
+    return [oc for oc in race if not oc.result.success]
 
 
 def _simplest_of_best(passing: list[Outcome]) -> Outcome | None:
@@ -325,13 +343,29 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
             view = View(ctx, state, cal.free)
             of = {id(outcomes[i]): cands[i] for i in pending}
 
+            efforts, seconds = {}, {}
+
             def confirm(oc, e_plaus, state=state, first=first):
                 if not folds:
                     say("a second fold (other validation blocks) for borderline candidates")
                     folds.append(ctx.refold(2))
-                return second_fold(folds[0], state, cal.free, of[id(oc)], first, e_plaus)
+                key = (of[id(oc)].label, efforts.get(id(oc), 1.0))
+                if key not in seconds:
+                    seconds[key] = second_fold(folds[0], state, cal.free, of[id(oc)], first, e_plaus, key[1])
+                return seconds[key]
 
             step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
+            again = {id(oc) for oc in polish_race(ordered)}
+            if again:
+                effort = config.get("diagnosis.polish_effort")
+                say(f"step {k + 1}: {len(again)} candidates in the race stopped before converging: "
+                    f"fitted again with {effort:g}× the evaluations")
+                redo = [i for i in pending if id(outcomes[i]) in again]
+                outcomes.update(pool.run(state, redo, first, effort))
+                ordered = [outcomes[i] for i in pending]
+                of = {id(outcomes[i]): cands[i] for i in pending}
+                efforts = {id(outcomes[i]): effort for i in redo}
+                step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
             if k == 0 and winner is not None and not config.get("diagnosis.drift") and _drift_explains(ctx, state, winner):
                 say("a linear drift explains the record as well as the best candidate: solved as a sensor drift")
                 return (f"a linear drift of the output explained the record as well as {winner.result.cause} "

@@ -27,8 +27,8 @@ def _worker(ctx, calibrated, candidates, settings, tasks, results) -> None:
         task = tasks.get()
         if task is None:
             return
-        index, state, plausible = task
-        results.put((index, run_candidate(ctx, state, calibrated, candidates[index], plausible)))
+        index, state, plausible, effort = task
+        results.put((index, run_candidate(ctx, state, calibrated, candidates[index], plausible, effort)))
 
 
 def single_threaded_blas():
@@ -54,17 +54,18 @@ class Pool:
                 p.start()
                 self._procs.append(p)
 
-    def run(self, state, indices: Sequence[int], plausible=None) -> Iterator[tuple[int, object]]:
+    def run(self, state, indices: Sequence[int], plausible=None, effort: float = 1.0) -> Iterator[tuple[int, object]]:
         """(index, outcome) for every candidate index, as they finish (costly ones start first);
-        ``plausible``: (state, bounds) of the plausible device for linear structural candidates."""
+        ``plausible``: (state, bounds) of the plausible device for linear structural candidates;
+        ``effort``: a factor on the candidates' optimiser budgets."""
         from .engine import run_candidate
         order = sorted(indices, key=lambda i: -getattr(self.candidates[i], "cost", 1))
         if not self._procs:
             for i in order:
-                yield i, run_candidate(self.ctx, state, self.calibrated, self.candidates[i], plausible)
+                yield i, run_candidate(self.ctx, state, self.calibrated, self.candidates[i], plausible, effort)
             return
         for i in order:
-            self._tasks.put((i, state, plausible))
+            self._tasks.put((i, state, plausible, effort))
         for _ in order:
             while True:
                 try:

@@ -46,6 +46,9 @@ class CandidateResult:
     #: z on a second fold (other validation blocks), when the first was borderline; ``z`` is
     #: then the two folds' combined z
     z_second: float | None = None
+    #: the factor on its optimisers' evaluation budgets (above 1 when it was fitted again
+    #: because it stopped before converging in a close race)
+    effort: float = 1.0
 
     def as_json(self) -> dict:
         out = {"cause": self.cause, "label": self.label, "kind": self.kind, "gain": self.gain,
@@ -60,6 +63,8 @@ class CandidateResult:
             out["gain_static"] = self.gain_static
         if self.z_second is not None:
             out["z_second"] = self.z_second
+        if self.effort != 1.0:
+            out["effort"] = self.effort
         if self.skipped:
             out["skipped"] = self.skipped
         if self.error:
@@ -187,7 +192,8 @@ class Report:
                     lines.append(f"  {c.cause:<18} {'':>7} {'':>10} {'':>6} {'':>7}  FAILED: {c.error} ({c.label})")
                     continue
                 vr = f"{c.gain_reference:.3g}" if c.gain_reference is not None else "-"
-                flag = "" if c.success else " [optimiser: not converged]"
+                flag = ("" if c.success else " [optimiser: not converged]") + \
+                    (f" [fitted again, {c.effort:g}× the evaluations]" if c.effort != 1.0 else "")
                 lines.append(f"  {c.cause:<18} {c.gain:>7.3g} {c.rms_validation:>10.4g} {c.z:>6.1f} {vr:>7}  "
                              f"{'NAMED' if c.passed and c.cause == s.cause else c.verdict}; {c.label}{flag}")
             lines.append(f"  → {s.cause}: {s.why}")

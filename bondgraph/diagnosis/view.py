@@ -49,11 +49,13 @@ class DriveFit:
 
 class View:
     """What a candidate sees.  Arrays are read-only; ``model`` must not be changed (use
-    :meth:`rewrite` for a copy carrying the current values)."""
+    :meth:`rewrite` for a copy carrying the current values).  ``effort``: a factor on every
+    optimiser's evaluation budget (:meth:`fit_drive`, :meth:`fit_model`)."""
 
     def __init__(self, ctx: Context, state: State, calibrated: Sequence[str],
-                 bounds: Mapping[str, tuple[float, float]] | None = None):
+                 bounds: Mapping[str, tuple[float, float]] | None = None, effort: float = 1.0):
         self._ctx, self._state = ctx, state
+        self._effort = float(effort)
         self._bounds = dict(bounds or {})
         self.t, self.u, self.y = _frozen(ctx.t), _frozen(ctx.u), _frozen(ctx.y)
         self.dt = ctx.dt
@@ -97,6 +99,10 @@ class View:
             extra = state.raw - self.respond([state.drive])[:, 0]
             self.extra = _frozen(extra if np.max(np.abs(extra)) > 1e-9 * np.max(np.abs(state.raw)) else
                                  np.zeros_like(extra))
+
+    def _budget(self, max_nfev: int) -> int:
+        """An optimiser's evaluation budget at this view's effort."""
+        return max(1, int(round(max_nfev * self._effort)))
 
     # ---- the current model ----------------------------------------------------------------
     def rewrite(self) -> Model:
@@ -276,7 +282,7 @@ class View:
         zlin0 = [p.to_z(p.start) for p in lin]
         more_starts = [list(s) + zlin0 for s in starts]
         sol = projected_fit(columns, self._ctx.y, self._ctx.ident.fit_idx, zb0 + zlin0, zl, zu, lo, hi,
-                            max_nfev=max_nfev if (nz or lin) else 1, starts=more_starts)
+                            max_nfev=self._budget(max_nfev) if (nz or lin) else 1, starts=more_starts)
         vals, b, dc = parts(sol.z)
         c = sol.coef
         gain = c[0] if identity else self.gain
@@ -391,7 +397,7 @@ class View:
         lb = [s.z_bounds()[0] for s in specs] + [p.z_bounds()[0] for p in lin]
         ub = [s.z_bounds()[1] for s in specs] + [p.z_bounds()[1] for p in lin]
         sol = projected_fit(columns, self._ctx.y, self._ctx.ident.fit_idx, z0, lb, ub, [-np.inf] * 2, [np.inf] * 2,
-                            max_nfev=max_nfev)
+                            max_nfev=self._budget(max_nfev))
         names = [s.name for s in specs] + [p.name for p in lin]
         return (values_of(sol.z), sol.columns[:, 0], sol.success, sol.message, [names[i] for i in sol.at_bounds])
 
