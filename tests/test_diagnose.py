@@ -23,9 +23,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+import sympy as sp
 import pytest
 
 import bondgraph as bg
+from bondgraph import config
 from bondgraph.cli import main
 from bondgraph.data import Dataset, read_csv
 from bondgraph.diagnosis import Candidate, Extension, diagnose, model_file_options
@@ -200,6 +202,49 @@ def test_third_party_candidate_silent_on_effect_free_data(monkeypatch):
     rep = diagnose(lag_model(), lag_record(square=0.0), workers=2)
     assert rep.causes == [] and rep.cause == "none"
     assert rep.steps[0].why.startswith("none")
+
+
+class PowerLaw(Candidate):
+    """u_eff = d + a·|d|^p with the exponent p searched from 3.5 on a deliberately tiny budget
+    (two evaluations at effort 1), so that its first fit stops before converging."""
+
+    cause = "power-law"
+    label = "power-law drive term"
+
+    def applies(self, view):
+        return True if view.drive is not None else "needs the drive"
+
+    def fit(self, view):
+        d = np.abs(np.asarray(view.drive))
+        fit = view.fit_drive(lambda z: [d ** z[0]], [-np.inf], [np.inf], z0=[3.5], z_bounds=[(1.0, 4.0)],
+                             z_names=["pw.p"], max_nfev=2)
+        model = view.rewrite()
+        a = model.parameter("pw.a", float(fit.coef[0]), "", "power-law coefficient")
+        p = model.parameter("pw.p", float(fit.z[0]), "", "power-law exponent")
+        expr = view.drive_expr + a * sp.Abs(view.drive_expr) ** p
+        view.with_drive(model, expr)
+        return Extension(model, {**fit.values, "pw.a": float(fit.coef[0]), "pw.p": float(fit.z[0])},
+                         ["pw.a", "pw.p"], fit.prediction, fit.drive, expr, fit.at_bounds, fit.success, fit.message)
+
+
+def test_a_close_race_is_decided_by_converged_fits():
+    """The record's drive term is 0.4·u² = 0.4·|u|², so the power law (at p = 2) and the square
+    law explain it alike; the power law's first fit stops after two evaluations.  In a race
+    (polish_margin wide) it is fitted again with 10× the evaluations: it converges, its fit
+    improves, the report says so, and the simpler square law is still the one named."""
+    data = lag_record(square=0.4)
+    with config.override({"diagnosis.polish_margin": 1.0}):   # no race: only the best counts
+        rough = diagnose(lag_model(), data, candidates=[SquareLaw(), PowerLaw()], workers=1, chain=False)
+    with config.override({"diagnosis.polish_margin": 100.0}):
+        polished = diagnose(lag_model(), data, candidates=[SquareLaw(), PowerLaw()], workers=1, chain=False)
+    before = {c.cause: c for c in rough.steps[0].candidates}["power-law"]
+    after = {c.cause: c for c in polished.steps[0].candidates}["power-law"]
+    assert not before.success and before.effort == 1.0
+    assert after.success and after.effort == 10.0 and "effort" in after.as_json()
+    assert after.rms_validation < before.rms_validation
+    assert after.params["pw.p"] == pytest.approx(2.0, rel=0.01) and after.params["pw.a"] == pytest.approx(0.4, rel=0.02)
+    assert "fitted again, 10× the evaluations" in polished.text()
+    assert polished.causes == rough.causes == ["square-law"]
 
 
 def test_first_declared_input_and_output_by_default():
