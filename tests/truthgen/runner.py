@@ -41,9 +41,9 @@ def _chain(out: dict) -> tuple[list, list]:
 def _verdicts(out: dict) -> list:
     """Every chain step's candidates in brief (for the analysis of a run): cause, label, gain,
     z, effective samples, gain and z over the reference, gain over the static twin, the second
-    fold's z, passed, seconds."""
+    fold's z, the optimiser effort when it was fitted again in a close race, passed, seconds."""
     keys = ("cause", "label", "gain", "z", "n_eff", "gain_reference", "z_reference", "gain_static", "z_second",
-            "passed", "seconds")
+            "effort", "passed", "seconds")
     steps = list(out.get("steps") or []) + ([out["stop"]] if out.get("stop") else [])
     return [[{k: c.get(k) for k in keys} | {"verdict": (c.get("verdict") or c.get("skipped") or "")[:120]}
              for c in st.get("candidates", []) if not c.get("skipped")] for st in steps]
