@@ -30,7 +30,7 @@ import bondgraph as bg
 from bondgraph import config
 from bondgraph.cli import main
 from bondgraph.data import Dataset, read_csv
-from bondgraph.diagnosis import Candidate, Extension, diagnose, model_file_options
+from bondgraph.diagnosis import LINEAR, Candidate, Extension, diagnose, model_file_options
 from bondgraph.diagnosis.decision import compare, judge, Comparison
 from bondgraph.modelfile import load_model
 from conftest import MODELS
@@ -227,16 +227,29 @@ class PowerLaw(Candidate):
                          ["pw.a", "pw.p"], fit.prediction, fit.drive, expr, fit.at_bounds, fit.success, fit.message)
 
 
+class SquareLawJudgedLinear(SquareLaw):
+    """The square law judged by the rules of a linear structural cause (plausibility, share of
+    the linear mismatch): a passing candidate of that kind in the race."""
+
+    cause = "square-law-linear"
+    kind = LINEAR
+
+
 def test_a_close_race_is_decided_by_converged_fits():
     """The record's drive term is 0.4·u² = 0.4·|u|², so the power law (at p = 2) and the square
     law explain it alike; the power law's first fit stops after two evaluations.  In a race
     (polish_margin wide) it is fitted again with 10× the evaluations: it converges, its fit
     improves, the report says so, and the simpler square law is still the one named."""
     data = lag_record(square=0.4)
+    cands = [SquareLaw(), PowerLaw(), SquareLawJudgedLinear()]
     with config.override({"diagnosis.polish_margin": 1.0}):   # no race: only the best counts
-        rough = diagnose(lag_model(), data, candidates=[SquareLaw(), PowerLaw()], workers=1, chain=False)
+        rough = diagnose(lag_model(), data, candidates=cands, workers=1, chain=False)
     with config.override({"diagnosis.polish_margin": 100.0}):
-        polished = diagnose(lag_model(), data, candidates=[SquareLaw(), PowerLaw()], workers=1, chain=False)
+        polished = diagnose(lag_model(), data, candidates=cands, workers=1, chain=False)
+    # judged again after the race, the candidates not fitted again keep their verdicts
+    assert all(c.passed for c in rough.steps[0].candidates if c.cause != "power-law")
+    assert [c.verdict for c in polished.steps[0].candidates if c.cause != "power-law"] == \
+        [c.verdict for c in rough.steps[0].candidates if c.cause != "power-law"]
     before = {c.cause: c for c in rough.steps[0].candidates}["power-law"]
     after = {c.cause: c for c in polished.steps[0].candidates}["power-law"]
     assert not before.success and before.effort == 1.0

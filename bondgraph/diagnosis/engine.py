@@ -77,7 +77,7 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
     res.at_bounds = list(ext.at_bounds)
     res.success, res.message = ext.success, ext.message
     if cand.kind == LINEAR:
-        res.verdict = cand.implausible(view, ext)
+        res.implausible = cand.implausible(view, ext)
         res.recalibration = cand.mimics_recalibration(view, ext)
     ext.prediction = None
     refit = view.refit_linear(ext.values, additive=ext.additive is not None)
@@ -151,8 +151,7 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
         before = rms(before[val])
         explained_ref = before ** 2 - min(rms_ref, rms_state) ** 2
         r.share = (before ** 2 - r.rms_validation ** 2) / explained_ref if explained_ref > 0 else None
-        implausible = r.verdict
-        v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], implausible,
+        v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], r.implausible,
                   later=bool(state.causes), recalibration=r.recalibration)
         if v.passed and oc.static is not None and np.all(np.isfinite(oc.static)):
             # both with the reference's freedom: loops that only mimic a linear lag are no memory

@@ -38,6 +38,8 @@ class CandidateResult:
     #: "plausible" when fitted from, and compared with, the plausible device (the calibration
     #: within tolerance) instead of the null
     against: str = ""
+    #: for a linear cause, why its fitted values are physically implausible ('' if they are not)
+    implausible: str = ""
     #: for a linear cause, why it may be a recalibration of the model's own structure ('' if
     #: not): it must then beat the flexible linear reference too
     recalibration: str = ""
