@@ -276,6 +276,10 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts
         starts = list(starts) + _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
     sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * lin, [np.inf] * lin, max_nfev=40,
                         starts=([] if z_frf is None else [z0]) + list(starts))
+    if not sol.success:   # the baseline must be the best linear explanation: go on from the best point
+        more = projected_fit(columns, ctx.y, idx, sol.z, lb, ub, [-np.inf] * lin, [np.inf] * lin,
+                             max_nfev=int(40 * config.get("diagnosis.polish_effort")))
+        sol = more if more.cost <= sol.cost else sol
     values = dict(nominal)
     values.update({s.name: s.from_z(zi) for s, zi in zip(specs, sol.z)})
     return values, (float(sol.z[-1]) if delay else 0.0), sol.columns[:, 0], sol, route
