@@ -93,7 +93,8 @@ DEFAULTS: dict[str, Default] = {
                                             "converged, are fitted again with polish_effort times the evaluations "
                                             "before one is named (a race decided by converged fits, not by which "
                                             "optimiser got further)"),
-    "diagnosis.polish_effort": Default(10.0, "factor on every optimiser's evaluation budget when a race is polished"),
+    "diagnosis.polish_effort": Default(10.0, "factor on every optimiser's evaluation budget when a race is polished, and on the "
+                                            "calibration's when it stops before converging"),
     "diagnosis.drift": Default(False, "solve a linear sensor drift (output units per second) with the calibration and "
                                       "remove it from the record before any effect is sought: a thermal or "
                                       "sensor drift must not pass for creep or an opening loop (off: a drift is "
