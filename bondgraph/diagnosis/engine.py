@@ -348,7 +348,7 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                 if not folds:
                     say("a second fold (other validation blocks) for borderline candidates")
                     folds.append(ctx.refold(2))
-                key = (of[id(oc)].label, efforts.get(id(oc), 1.0))
+                key = (id(of[id(oc)]), efforts.get(id(oc), 1.0))   # (the candidate, the effort)
                 if key not in seconds:
                     seconds[key] = second_fold(folds[0], state, cal.free, of[id(oc)], first, e_plaus, key[1])
                 return seconds[key]
