@@ -102,6 +102,12 @@ DEFAULTS: dict[str, Default] = {
                                       "first cause found)"),
     "diagnosis.blocks": Default(30, "equal time blocks of the record; the validation share of them, spread evenly, "
                                     "is held out (each is at least one batch of the significance test)"),
+    "diagnosis.sweep_blocks": Default(60, "blocks instead when the drive sweeps its frequency (a chirp): shorter "
+                                          "blocks, so that the fit part brackets every frequency the validation "
+                                          "part holds and a resonance passage is neither fitted only nor held out "
+                                          "only"),
+    "diagnosis.sweep_ratio": Default(8.0, "the drive sweeps when the mean frequency of its blocks rises (or falls) "
+                                          "steadily over the record by at least this factor"),
 }
 
 _values: dict[str, Any] = {k: d.value for k, d in DEFAULTS.items()}

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import sympy as sp
-from scipy import signal
+from scipy import signal, stats
 
 from .. import config
 from ..data import Dataset
@@ -115,6 +115,14 @@ class Context:
         #: white-noise equivalent of the measurement noise in the (decimated) record
         self.noise_psd = noise_density
         self.noise = math.sqrt(noise_density * fs / 2) if noise_density is not None else None
+        #: equal time blocks of the split (see :func:`drive_sweep`)
+        self.n_blocks = int(config.get("diagnosis.blocks"))
+        sweep = drive_sweep(data.column(self.data_input), fs, self.n_blocks)
+        if sweep is not None:
+            self.n_blocks = int(config.get("diagnosis.sweep_blocks"))
+            self.notes.append(f"the drive sweeps from {sweep[0]:.4g} to {sweep[1]:.4g} Hz: the record is split into "
+                              f"{self.n_blocks} blocks instead of {config.get('diagnosis.blocks')}, so that the fit "
+                              f"part brackets every frequency the validation part holds")
         say(f"{len(data)} samples at {fs:.6g} Hz, drive band {self.band_hz:.4g} Hz"
             + (f", {self.n_fast} fast states residualised" if self.n_fast else ""))
         self.validation = validation
@@ -148,7 +156,7 @@ class Context:
         self.ident = Identification(self._sim, self.data, self.input, self.output, self.data_input,
                                     self.data_output, self.validation,
                                     max_fit_points=config.get("diagnosis.max_fit_points"), lti=self._lti, cut=self.cut,
-                                    blocks=int(config.get("diagnosis.blocks")), shift=self.shift)
+                                    blocks=self.n_blocks, shift=self.shift)
         self.u, self.y, self.t = self.ident.u, self.ident.y, self.ident.t
         self.dt = self.ident.dt
         self.lti = self.ident.lti
@@ -245,6 +253,34 @@ def drive_peak(u: np.ndarray, fs: float) -> float:
     nper = welch_length(n, 4, 16)
     f, P = signal.welch(u, fs, nperseg=nper, detrend="linear")
     return float(f[1 + int(np.argmax(P[1:]))]) if f.size > 1 else 0.0
+
+
+def drive_sweep(u: np.ndarray, fs: float, blocks: int) -> tuple[float, float] | None:
+    """(first, last) mean frequency (Hz) of the drive's blocks when it sweeps, else None.
+
+    The record is cut into ``blocks`` equal blocks; each block where the drive moves (RMS about
+    its mean at least a tenth of the largest block's) has a power-weighted mean frequency.  The
+    drive sweeps when these frequencies are ordered in time (Spearman |ρ| ≥ 0.8) and span a
+    factor ``diagnosis.sweep_ratio``: a chirp, never a periodic drive, steps or noise, whose
+    blocks look alike.  A record of fewer than eight samples per block never sweeps."""
+    if len(u) < 8 * blocks:
+        return None
+    edges = np.linspace(0, len(u), blocks + 1).astype(int)
+    centre, level = [], []
+    for a, b in zip(edges[:-1], edges[1:]):
+        seg = u[a:b] - np.mean(u[a:b])
+        power = np.abs(np.fft.rfft(seg))[1:] ** 2
+        f = np.fft.rfftfreq(seg.size, 1.0 / fs)[1:]
+        centre.append(float(power @ f / power.sum()) if power.sum() > 0 else 0.0)
+        level.append(float(np.std(seg)))
+    level = np.asarray(level)
+    moving = level >= 0.1 * level.max() if level.size and level.max() > 0 else np.zeros(0, bool)
+    c = np.asarray(centre)[moving]
+    if c.size < 5 or c.min() <= 0 or c.max() / c.min() < config.get("diagnosis.sweep_ratio"):
+        return None
+    if abs(stats.spearmanr(np.arange(c.size), c).statistic) < 0.8:
+        return None
+    return float(c[0]), float(c[-1])
 
 
 def noise_psd(y: np.ndarray, u: np.ndarray, fs: float, band: float) -> float | None:
