@@ -321,8 +321,13 @@ def test_a_sweeping_drive_is_recognised():
     t = np.arange(0.0, 3.0, 1 / fs)
     rng = np.random.default_rng(7)
     for f0, f1, how in ((50, 5000, "logarithmic"), (5000, 50, "logarithmic"), (20, 2000, "linear")):
-        lo, hi = sorted(drive_sweep(signal.chirp(t, f0, t[-1], f1, method=how), fs, 30))
-        assert lo < max(f0, f1) / 10 and hi > max(f0, f1) / 2
+        u = signal.chirp(t, f0, t[-1], f1, method=how)
+        first, last = drive_sweep(u, fs, 30)
+        lo, hi = sorted((first, last))
+        assert lo < max(f0, f1) / 10 and hi > max(f0, f1) / 2 and (first < last) == (f0 < f1)
+        assert drive_sweep(5.0 - 3.0 * u, fs, 30) == pytest.approx((first, last))   # units, sign, offset
+        assert drive_sweep(u[::-1], fs, 30) == pytest.approx((last, first))
+    assert drive_sweep(np.zeros(t.size), fs, 30) is None
     steps = np.repeat(rng.uniform(-1, 1, 30), t.size // 30 + 1)[:t.size]
     noise = signal.lfilter(*signal.butter(4, 0.1), rng.standard_normal(t.size))
     bursts = np.sin(2 * np.pi * 300 * t) * (np.sin(2 * np.pi * 0.5 * t) > 0) * np.minimum(t, 1.0)

@@ -274,8 +274,9 @@ def drive_sweep(u: np.ndarray, fs: float, blocks: int) -> tuple[float, float] | 
         centre.append(float(power @ f / power.sum()) if power.sum() > 0 else 0.0)
         level.append(float(np.std(seg)))
     level = np.asarray(level)
-    moving = level >= 0.1 * level.max() if level.size and level.max() > 0 else np.zeros(0, bool)
-    c = np.asarray(centre)[moving]
+    if level.max() <= 0:
+        return None
+    c = np.asarray(centre)[level >= 0.1 * level.max()]
     if c.size < 5 or c.min() <= 0 or c.max() / c.min() < config.get("diagnosis.sweep_ratio"):
         return None
     if abs(stats.spearmanr(np.arange(c.size), c).statistic) < 0.8:
