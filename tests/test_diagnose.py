@@ -104,6 +104,7 @@ def test_cli_json_contract(p885_json):
                                                        "higher-mode", "nonlinear-damping", "electrical-rc"}
     assert all("gain" in c and "passed" in c for c in out["candidates"])
     assert "at_bounds" in out["calibration"] and "held" in out["calibration"]
+    assert out["data"]["blocks"] == config.get("diagnosis.blocks")   # bursts at one frequency: no sweep
     assert out["why"]
 
 

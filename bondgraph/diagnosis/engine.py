@@ -380,7 +380,7 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                     final_rms if causes else cal.rms_validation, steps, cal.as_json(),
                     {"file": data.path or "", "model": source, "samples": len(ctx.t), "rate_hz": ctx.fs,
                      "source_samples": ctx.source_samples, "source_rate_hz": ctx.source_rate,
-                     "validation_share": validation, "input": ctx.input, "output": ctx.output,
+                     "validation_share": validation, "blocks": ctx.n_blocks, "input": ctx.input, "output": ctx.output,
                      "drive_band_hz": ctx.band_hz},
                     list(ctx.notes), noise=ctx.noise)
     report.predictions = {"t": ctx.t, "u": ctx.u_recorded, "y": ctx.y, "baseline": baseline.prediction}

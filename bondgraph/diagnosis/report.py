@@ -159,7 +159,8 @@ class Report:
                  f"  {d['samples']} samples at {d['rate_hz']:.6g} Hz"
                  + (f" (from {d['source_samples']} at {d['source_rate_hz']:.6g} Hz)"
                     if d.get("source_samples") != d["samples"] else "")
-                 + f", validation {d['validation_share']:.0%} in interleaved blocks"]
+                 + f", validation {d['validation_share']:.0%} of "
+                 + (f"{d['blocks']} " if d.get("blocks") else "") + "interleaved time blocks held out"]
         lines += [f"  note: {n}" for n in self.notes]
         free = ", ".join(f"{k} = {v:.5g}" + (" (AT BOUND)" if k in cal["at_bounds"] else "")
                          for k, v in cal["params"].items())
