@@ -174,11 +174,12 @@ class Identification:
 
     # ---- simulation and scores ---------------------------------------------------------------
     def predict(self, values: Mapping[str, float] | None = None, inputs=None,
-                drive: np.ndarray | None = None) -> np.ndarray:
+                drive: np.ndarray | None = None, deadline: float | None = None) -> np.ndarray:
         """Model output at every data time, without offset (exact LTI recursion when the model
         is linear and the data uniformly sampled, with the modes faster than ``cut``
         residualised, from rest; else the compiled integrator).  ``drive``: other input samples
-        for the exact route (one per data time, units of the input)."""
+        for the exact route (one per data time, units of the input); ``deadline``: the
+        integrator's (see :meth:`Simulator.run`)."""
         self.nfev += 1
         if self.lti is not None and not inputs:
             th = self.sim.theta(values)
@@ -186,7 +187,7 @@ class Identification:
             u = self.u if drive is None else np.asarray(drive, float)
             return ss.response(self.dt, u, None if ss.fast else self.sim.initial_state(th))[:, 0]
         res = self.sim.run(self.t, {self.input: self.signal, **(inputs or {})}, params=values,
-                           rtol=self.rtol, method=self.method)
+                           rtol=self.rtol, method=self.method, deadline=deadline)
         return res.outputs[self.output]
 
     def offset(self, pred: np.ndarray) -> float:

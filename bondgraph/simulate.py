@@ -15,6 +15,7 @@ Defaults (tolerances, the step cap, the stiffness threshold of ``auto``) are set
 """
 from __future__ import annotations
 
+import time
 from collections import Counter
 from dataclasses import dataclass, field
 from typing import Mapping
@@ -37,6 +38,15 @@ METHODS = ("auto", "dopri5", "radau", "bdf", "lsoda")
 
 class SimulationError(BondGraphError, RuntimeError):
     """The integrator failed (step-size underflow, non-finite state, too many steps)."""
+
+
+class SimulationTimeout(SimulationError):
+    """The run passed its ``deadline`` (see :meth:`Simulator.run`)."""
+
+
+def _check_deadline(deadline: float | None, t: float) -> None:
+    if deadline is not None and time.monotonic() > deadline:
+        raise SimulationTimeout(f"the run passed its deadline near t = {t:.6g} s")
 
 
 @dataclass
@@ -137,12 +147,15 @@ class Simulator:
     # ---- running -----------------------------------------------------------------------------
     def run(self, t, inputs: Mapping[str, Signal] | None = None, params: Mapping | None = None,
             x0=None, method: str = "auto", rtol: float | None = None, atol=None, max_step: float = np.inf,
-            max_steps: int | None = None, progress=None) -> SimResult:
+            max_steps: int | None = None, progress=None, deadline: float | None = None) -> SimResult:
         """Simulate and sample at times ``t`` (increasing array, or a scalar end time → 1001 samples).
 
         ``params`` maps parameter names to values; ``progress(fraction)`` is called between
         chunks of long runs.  ``rtol``, ``atol`` and ``max_steps`` default to the settings
-        ``simulate.rtol``, ``simulate.atol_floor`` and ``simulate.max_steps``."""
+        ``simulate.rtol``, ``simulate.atol_floor`` and ``simulate.max_steps``.  ``deadline``
+        (a ``time.monotonic()`` value): past it the stiff solvers (radau, bdf, lsoda) stop with
+        :class:`SimulationTimeout` at their next step; the compiled dopri5 checks it between
+        chunks only (one chunk unless ``progress`` is given)."""
         rtol = config.get("simulate.rtol") if rtol is None else rtol
         atol = config.get("simulate.atol_floor") if atol is None else atol
         max_steps = config.get("simulate.max_steps") if max_steps is None else max_steps
@@ -182,8 +195,11 @@ class Simulator:
                 stats.update(steps=st.steps, rejected=st.rejected, rhs_calls=st.rhs_calls,
                              reversal_rejections=st.reversal_rejections)
             else:
-                stats += self._run_scipy(method, tc, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, Xc, Yc)
+                stats += self._run_scipy(method, tc, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, Xc, Yc,
+                                         deadline)
             x = np.ascontiguousarray(Xc[-1])
+            if b < t.size - 1:
+                _check_deadline(deadline, float(t[b]))
             if progress is not None:
                 progress(b / (t.size - 1))
         return SimResult(t, {n: Y[:, i] for i, n in enumerate(self.output_names)},
@@ -224,7 +240,8 @@ class Simulator:
         steps = (t[-1] - t[0]) * lam / 3.3
         return "radau" if steps > config.get("simulate.explicit_step_limit") else "dopri5"
 
-    def _run_scipy(self, method, t, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, X, Y) -> Counter:
+    def _run_scipy(self, method, t, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, X, Y,
+                   deadline: float | None = None) -> Counter:
         """scipy's stiff solvers; returns the step and right-hand-side counts."""
         c = self.compiled
         stats: Counter = Counter()
@@ -245,7 +262,7 @@ class Simulator:
             return self.jacobian_at(tt, np.ascontiguousarray(xx), th, mem, bank)
 
         solver_cls = {"radau": si.Radau, "bdf": si.BDF, "lsoda": si.LSODA}[method]
-        atol_v = np.maximum(atol_v, self._scale_atol(solver_cls, f, t, x, rtol, breaks))
+        atol_v = np.maximum(atol_v, self._scale_atol(solver_cls, f, t, x, rtol, breaks, deadline))
         edges = [t[0], *breaks, t[-1]]
         k = 0
 
@@ -260,6 +277,7 @@ class Simulator:
             kw = {"jac": jac} if method != "lsoda" else {}
             s = solver_cls(f, a, x, b, rtol=rtol, atol=atol_v, max_step=max_step, **kw)
             while s.status == "running":
+                _check_deadline(deadline, s.t)
                 t_old = s.t
                 msg = s.step()
                 if s.status == "failed":
@@ -280,7 +298,7 @@ class Simulator:
             stats["rhs_calls"] += s.nfev
         return stats
 
-    def _scale_atol(self, solver_cls, f, t, x, rtol, breaks):
+    def _scale_atol(self, solver_cls, f, t, x, rtol, breaks, deadline=None):
         """atol_i = rtol·max|x_i| from a loose first pass (scipy's solvers weigh errors by
         atol + rtol·|x|, which chases rounding noise when a state crosses zero)."""
         peak = np.abs(x).copy()
@@ -290,6 +308,7 @@ class Simulator:
         for a, b in zip(edges[:-1], edges[1:]):
             s = solver_cls(f, a, xx, b, rtol=1e-3, atol=floor)
             while s.status == "running":
+                _check_deadline(deadline, s.t)
                 s.step()
                 if s.status == "failed":
                     break

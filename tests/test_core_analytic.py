@@ -72,6 +72,21 @@ def test_sampled_pulse_reaches_a_model_at_rest(method):
     assert res["vc"].max() == pytest.approx(1.0, abs=1e-3)
     assert abs(res["vc"][-1]) < 1e-6
 
+@pytest.mark.parametrize("method", ["radau", "bdf", "lsoda"])
+def test_a_stiff_run_stops_at_its_deadline(method):
+    """A deadline already passed stops the stiff solvers at their first step with a
+    SimulationTimeout (a SimulationError); one in the future changes nothing."""
+    import time
+    from bondgraph.simulate import SimulationError, SimulationTimeout
+    t = np.linspace(0, 3, 3001)
+    free = bg.simulate(msd(), t, {"F": bg.Step(1.0)}, method=method)
+    with pytest.raises(SimulationTimeout, match="deadline") as err:
+        bg.simulate(msd(), t, {"F": bg.Step(1.0)}, method=method, deadline=time.monotonic() - 1.0)
+    assert isinstance(err.value, SimulationError)
+    timed = bg.simulate(msd(), t, {"F": bg.Step(1.0)}, method=method, deadline=time.monotonic() + 600.0)
+    assert np.array_equal(timed["x"], free["x"])
+
+
 def test_energy_balance_of_driven_msd():
     """Work done by the source = stored energy + dissipated energy (to integration accuracy)."""
     g = msd()

@@ -305,6 +305,36 @@ def test_batches_of_a_slowly_varying_error_count_less():
     assert slow.n_eff < 0.8 * fast.n_eff and slow.z < fast.z
 
 
+def test_a_slow_simulation_stops_at_the_fits_budget():
+    """Inside a candidate's time budget, a simulation in an optimiser evaluation gets the
+    budget's deadline once the optimiser has a point to stop at: the first evaluation always
+    finishes, a later one that would outlast the budget stops, the fit returns its best point
+    so far as not converged, and the final prediction runs without a deadline."""
+    import time
+    from bondgraph.diagnosis.projection import projected_fit, simulation_deadline, time_budget
+    from bondgraph.simulate import SimulationTimeout
+    t = np.linspace(0.0, 1.0, 200)
+    y = np.exp(-3.0 * t)
+    seen = []
+
+    def columns(z, rows):
+        deadline = simulation_deadline()
+        seen.append(deadline)
+        if deadline is not None:            # a run that would take far longer than the budget
+            while time.monotonic() <= deadline:
+                time.sleep(0.005)
+            raise SimulationTimeout("the run passed its deadline")
+        A = np.exp(-z[0] * t)[:, None]
+        return A if rows is None else A[rows]
+
+    started = time.monotonic()
+    with time_budget(0.2):
+        sol = projected_fit(columns, y, np.arange(t.size), [1.0], [0.1], [10.0], [-np.inf], [np.inf])
+    assert time.monotonic() - started < 5.0
+    assert seen[0] is None and any(d is not None for d in seen) and seen[-1] is None
+    assert not sol.success and "time budget" in sol.message and sol.z[0] == pytest.approx(1.0)
+
+
 def test_the_second_fold_holds_out_other_blocks():
     from bondgraph.identify import split_masks
     t = np.linspace(0.0, 10.0, 30_001)

@@ -17,6 +17,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..identify import bounded_lstsq
+from ..simulate import SimulationTimeout
 
 
 #: the time (time.monotonic) after which fits in this context stop at their best point so far
@@ -32,6 +33,18 @@ def time_budget(seconds: float | None) -> Iterator[None]:
         yield
     finally:
         _DEADLINE.reset(token)
+
+
+#: the deadline a simulation inside an optimiser's evaluation obeys: set only once the optimiser
+#: has a point to stop at (its first evaluation always finishes)
+_STOP_AT: contextvars.ContextVar[float | None] = contextvars.ContextVar("stop_at", default=None)
+
+
+def simulation_deadline() -> float | None:
+    """The deadline (time.monotonic) for a simulation run inside an optimiser's evaluation in
+    this context, or None: :meth:`~bondgraph.simulate.Simulator.run` stops there, and the fit
+    stops at its best point so far (a single slow simulation must not outlast the budget)."""
+    return _STOP_AT.get()
 
 
 class _OutOfTime(Exception):
@@ -94,7 +107,13 @@ def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray]
     def resid(z):
         if deadline is not None and seen["z"] is not None and time.monotonic() > deadline:
             raise _OutOfTime
-        Ai = columns(z, idx)
+        token = _STOP_AT.set(deadline if seen["z"] is not None else None)
+        try:
+            Ai = columns(z, idx)
+        except SimulationTimeout:
+            raise _OutOfTime from None
+        finally:
+            _STOP_AT.reset(token)
         if not np.all(np.isfinite(Ai)):      # never hand LAPACK a NaN (it prints to stdout)
             return np.full(idx.size, 1e3)
         c = bounded_lstsq(Ai, yi, lower, upper)

@@ -16,7 +16,7 @@ from ..lti import LTI
 from .calibration import score
 from .additive import AdditiveDrive, Term
 from .context import Context, State
-from .projection import Param, projected_fit
+from .projection import Param, projected_fit, simulation_deadline
 
 
 def _frozen(a: np.ndarray | None) -> np.ndarray | None:
@@ -372,6 +372,10 @@ class View:
 
                 def predict(values):
                     return ident.predict(values, drive=drive) + extra
+            elif ident.lti is None:     # the integrator: one slow run must not outlast the fit's budget
+
+                def predict(values):
+                    return ident.predict(values, deadline=simulation_deadline())
         else:
             known = set(model.all_parameters())
         base = {k: v for k, v in {**self.values, **(start or {})}.items() if k in known}
