@@ -82,7 +82,8 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.check_max_steps": Default(2_000_000, "integrator steps allowed to the second route (the extended "
                                          "model integrated as a check); beyond, the check is skipped"),
     "diagnosis.candidate_seconds": Default(60.0, "a candidate's fits stop at their best point after this many seconds "
-                                                "(reported as not converged)"),
+                                                "(reported as not converged), within a simulation on the stiff "
+                                                "integrators too"),
     "diagnosis.max_fit_points": Default(20000, "samples of the fit part used by the optimisers (evenly thinned)"),
     "diagnosis.confirm_margin": Default(1.0, "a candidate whose gain passes but whose z falls short of min_z by less "
                                              "than this is fitted on a second fold (other validation blocks) and "
