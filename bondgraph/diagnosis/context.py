@@ -116,13 +116,13 @@ class Context:
         self.noise_psd = noise_density
         self.noise = math.sqrt(noise_density * fs / 2) if noise_density is not None else None
         #: equal time blocks of the split (see :func:`drive_sweep`)
-        self.n_blocks = int(config.get("diagnosis.blocks"))
-        sweep = drive_sweep(data.column(self.data_input), fs, self.n_blocks)
+        blocks = int(config.get("diagnosis.blocks"))
+        sweep = drive_sweep(data.column(self.data_input), fs, blocks)
+        self.n_blocks = blocks if sweep is None else int(config.get("diagnosis.sweep_blocks"))
         if sweep is not None:
-            self.n_blocks = int(config.get("diagnosis.sweep_blocks"))
             self.notes.append(f"the drive sweeps from {sweep[0]:.4g} to {sweep[1]:.4g} Hz: the record is split into "
-                              f"{self.n_blocks} blocks instead of {config.get('diagnosis.blocks')}, so that the fit "
-                              f"part brackets every frequency the validation part holds")
+                              f"{self.n_blocks} blocks instead of {blocks}, so that the fit part brackets every "
+                              f"frequency the validation part holds")
         say(f"{len(data)} samples at {fs:.6g} Hz, drive band {self.band_hz:.4g} Hz"
             + (f", {self.n_fast} fast states residualised" if self.n_fast else ""))
         self.validation = validation
