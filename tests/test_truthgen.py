@@ -253,9 +253,12 @@ def test_scoring_of_null_single_and_compound_truths():
 
 
 def test_diagnosis_json_chains_are_read_in_every_shape():
+    """As ``diagnose --json`` writes them (``causes`` and per-step gains in ``steps``), and the
+    simpler shapes of other tools."""
     assert _chain({"cause": "none", "gain": 1.0}) == ([], [])
     assert _chain({"cause": "creep", "gain": 2.5}) == (["creep"], [2.5])
-    assert _chain({"cause": "creep", "causes": ["creep", "hysteresis"], "gains": [3.0, 1.5]}) == (
+    assert _chain({"cause": "creep", "causes": ["creep", "hysteresis"],
+                   "steps": [{"cause": "creep", "gain": 3.0}, {"cause": "hysteresis", "gain": 1.5}]}) == (
         ["creep", "hysteresis"], [3.0, 1.5])
     assert _chain({"cause": "hysteresis", "causes": [{"cause": "hysteresis", "gain": 4.0},
                                                      {"cause": "electrical-rc", "gain": 1.3}]}) == (

@@ -25,13 +25,15 @@ def normalise(cause) -> str:
 
 def _chain(out: dict) -> tuple[list, list]:
     """(causes, gains) of a diagnosis JSON: its ``causes`` chain when present (strings, or
-    objects with ``cause`` and ``gain``), else its single ``cause`` and ``gain``."""
+    objects with ``cause`` and ``gain``; a step's gain from ``steps``), else its single
+    ``cause`` and ``gain``."""
     chain = out.get("causes")
     if isinstance(chain, list):
         causes = [normalise(c.get("cause") if isinstance(c, dict) else c) for c in chain]
         gains = [c.get("gain") if isinstance(c, dict) else None for c in chain]
-        if isinstance(out.get("gains"), list):
-            gains = list(out["gains"])
+        steps = out.get("steps")
+        if isinstance(steps, list) and len(steps) == len(chain):
+            gains = [s.get("gain") if isinstance(s, dict) else None for s in steps]
         causes_gains = [(c, g) for c, g in zip(causes, gains) if c != "none"]
         return [c for c, _ in causes_gains], [g for _, g in causes_gains]
     cause = normalise(out.get("cause"))
