@@ -4,6 +4,7 @@
     python benchmarks/diagnosis_accuracy.py --set bench           # the 72 realistic records
     python benchmarks/diagnosis_accuracy.py --set bench --limit 20 --timeout 900
     python benchmarks/diagnosis_accuracy.py --seeds 2004,2010 --size bench
+    python benchmarks/diagnosis_accuracy.py --fresh 3100 --families apa,t215  # 20 records nobody has seen
     python benchmarks/diagnosis_accuracy.py --set bench --resume  # continue an interrupted run
     python benchmarks/diagnosis_accuracy.py --set bench --cache benchmarks/.data/records  # keep the records
     git archive REV | tar -x -C /tmp/old && python benchmarks/diagnosis_accuracy.py --engine /tmp/old
@@ -36,7 +37,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "tests"))
 
-from truthgen import SEEDS, design, draw  # noqa: E402
+from truthgen import SEEDS, design, draw, fresh_seeds  # noqa: E402
+from truthgen.families import FAMILIES  # noqa: E402
 from truthgen.runner import diagnose_record  # noqa: E402
 
 DEFAULT_OUT = os.path.join(HERE, ".data", "diagnosis_accuracy_{set}.json")
@@ -118,6 +120,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--set", default="ci", choices=sorted(SEEDS), help="seed set (default ci)")
     ap.add_argument("--seeds", help="comma-separated seeds instead of a set")
+    ap.add_argument("--fresh", type=int, metavar="START",
+                    help="instead of a set: the seeds from START on that no set holds, single-effect or "
+                         "effect-free, in --families, --limit of them (default 20; bench size).  Records "
+                         "nobody has looked at: run an engine on them once, then move START past them")
     ap.add_argument("--size", choices=("ci", "bench"), help="record size (default: ci for the ci and dev sets, bench for bench)")
     ap.add_argument("--limit", type=int, help="only the first N seeds of the set")
     ap.add_argument("--families", help="comma-separated families to keep (apa, t215, stack, t226)")
@@ -132,15 +138,23 @@ def main(argv=None) -> int:
                                      "unpacked): its bondgraph, library and models come first on PYTHONPATH")
     args = ap.parse_args(argv)
 
-    seeds = [int(s) for s in args.seeds.split(",")] if args.seeds else list(SEEDS[args.set])
-    if args.families:
-        keep = set(args.families.split(","))
-        seeds = [s for s in seeds if design(s)[0] in keep]
-    if args.limit:
-        seeds = seeds[: args.limit]
-    size = args.size or ("bench" if args.set == "bench" and not args.seeds else "ci")
+    keep = set(args.families.split(",")) if args.families else None
+    if keep and keep - set(FAMILIES):
+        ap.error(f"unknown families {', '.join(sorted(keep - set(FAMILIES)))}: use {', '.join(FAMILIES)}")
+    if args.fresh is not None:
+        seeds = fresh_seeds(args.fresh, args.limit or 20, keep)
+        name = f"fresh seeds from {args.fresh}"
+    else:
+        seeds = [int(s) for s in args.seeds.split(",")] if args.seeds else list(SEEDS[args.set])
+        if keep:
+            seeds = [s for s in seeds if design(s)[0] in keep]
+        if args.limit:
+            seeds = seeds[: args.limit]
+        name = args.set if not args.seeds else "seeds " + args.seeds
+    size = args.size or ("bench" if (args.set == "bench" and not args.seeds) or args.fresh is not None else "ci")
     timeout = args.timeout or (900.0 if size == "bench" else 180.0)
-    out_path = args.out or DEFAULT_OUT.format(set=args.set if not args.seeds else "seeds")
+    out_path = args.out or DEFAULT_OUT.format(set="fresh" if args.fresh is not None else
+                                              args.set if not args.seeds else "seeds")
     os.makedirs(os.path.dirname(out_path), exist_ok=True)
     results = []
     if args.resume and os.path.exists(out_path):
@@ -171,7 +185,7 @@ def main(argv=None) -> int:
                        "engine": args.engine, "started": started, "results": results}, f, indent=1)
         os.replace(out_path + ".tmp", out_path)
     results.sort(key=lambda r: seeds.index(r["seed"]))
-    report = (f"Diagnosis accuracy, {args.set if not args.seeds else 'seeds ' + args.seeds} ({size} records), "
+    report = (f"Diagnosis accuracy, {name} ({size} records), "
               f"{started}; timeout {timeout:g} s, diagnose --workers {args.workers}"
               + (f", engine {args.engine}" if args.engine else "") + "\n\n"
               + summary(results) + "\n\n" + confusion(results) + "\n\n" + table(results) + "\n")

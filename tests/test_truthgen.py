@@ -17,7 +17,7 @@ from bondgraph import Sine
 from bondgraph.data import read_csv
 from bondgraph.modelfile import load_model
 from bondgraph.simulate import simulate as bondgraph_simulate
-from truthgen import SEEDS, VISIBLE, design, draw
+from truthgen import SEEDS, VISIBLE, design, draw, fresh_seeds
 from truthgen.generator import plan
 from truthgen import bimorph, drives, stack
 from truthgen.draws import factor
@@ -250,6 +250,15 @@ def test_scoring_of_null_single_and_compound_truths():
     assert not score(both, True, "creep", ["creep", "hysteresis"])["right"]
     half = score(both, False, "hysteresis", ["hysteresis"])
     assert not half["right"] and half["first_right"]
+
+
+def test_fresh_seeds_lie_outside_every_set_and_hold_one_effect_or_none():
+    fresh = fresh_seeds(1990, 30, {"apa", "t215"})
+    assert len(fresh) == 30 and fresh == sorted(set(fresh)) and fresh[0] >= 1990
+    assert not set(fresh) & set().union(*map(set, SEEDS.values()))
+    assert all(design(s)[0] in ("apa", "t215") and len(design(s)[1]) <= 1 for s in fresh)
+    assert fresh_seeds(3000, 20, {"apa", "t215"})[-1] == 3031   # the first 40 measured (benchmarks/README.md)
+    assert fresh_seeds(3032, 20, {"apa", "t215"})[-1] == 3063
 
 
 def test_diagnosis_json_chains_are_read_in_every_shape():

@@ -105,7 +105,10 @@ strengths and the rounds used are stored in the record.  (No seed of the three s
 
 **Seed sets** (:data:`SEEDS`, disjoint, fixed before tuning): ``dev`` 0-199 (tune freely, any
 size); ``ci`` 1000-1013 (14 small records: 3 null, 1 compound, all four families);
-``bench`` 2000-2071 (72 realistic records: 17 null, 9 compound).
+``bench`` 2000-2071 (72 realistic records: 17 null, 9 compound).  Records of the sets are looked
+at while the diagnosis is built; :func:`fresh_seeds` picks seeds outside them, single-effect or
+effect-free like the held-out records a user brings, for a measurement nobody has tuned on (run
+an engine on them once, then move on past them).
 
 References
 ----------
@@ -139,9 +142,23 @@ SEEDS = {
     "bench": list(range(2000, 2072)),
 }
 
+
+def fresh_seeds(start: int, n: int, families=None) -> list[int]:
+    """The first ``n`` seeds from ``start`` on that no seed set holds and whose design is one
+    effect or none, in ``families`` (a collection of family names; all when None)."""
+    used = set().union(*map(set, SEEDS.values()))
+    seeds, s = [], start
+    while len(seeds) < n:
+        family, causes = design(s)
+        if s not in used and len(causes) <= 1 and (families is None or family in families):
+            seeds.append(s)
+        s += 1
+    return seeds
+
+
 #: the causes of the truths (a diagnosis' ``electrical-rc`` is scored as ``electrical``)
 CAUSES = ("none", "hysteresis", "creep", "saturation", "softening", "nonlinear-damping",
           "higher-mode", "electrical")
 
 __all__ = ["SEEDS", "CAUSES", "VISIBLE", "ATTEMPTS", "NOISE_FLOOR", "Record", "design", "draw",
-           "diagnose_record"]
+           "diagnose_record", "fresh_seeds"]
