@@ -133,6 +133,7 @@ Timing (a loaded 2-core machine): a ``ci`` record takes 0.1-5 s to generate, a f
 ``bench`` record 1-60 s, median 16 s, a few that need many rounds of the visibility rule up to
 ~10 min (compounds at 250 000 samples).
 """
+from .families import FAMILIES
 from .generator import ATTEMPTS, NOISE_FLOOR, VISIBLE, Record, design, draw
 from .runner import diagnose_record
 
@@ -146,6 +147,8 @@ SEEDS = {
 def fresh_seeds(start: int, n: int, families=None) -> list[int]:
     """The first ``n`` seeds from ``start`` on that no seed set holds and whose design is one
     effect or none, in ``families`` (a collection of family names; all when None)."""
+    if families is not None and not set(families) <= set(FAMILIES):
+        raise ValueError(f"unknown families {sorted(set(families) - set(FAMILIES))}: use {', '.join(FAMILIES)}")
     used = set().union(*map(set, SEEDS.values()))
     seeds, s = [], start
     while len(seeds) < n:
