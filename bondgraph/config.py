@@ -57,6 +57,9 @@ DEFAULTS: dict[str, Default] = {
                                         "linear structural causes are fitted within it and must beat it"),
     "diagnosis.identifiable": Default(1e-3, "a linear parameter is calibrated only if its pivot in the normalised "
                                             "sensitivity matrix (pivoted QR) is at least this share of the largest"),
+    "diagnosis.residual_share": Default(0.2, "a parameter held by that rule is calibrated after all when its "
+                                             "sensitivity alone explains this share of the calibrated model's residual "
+                                             "energy (with a step within the spread)"),
     "diagnosis.fast_factor": Default(10.0, "modes faster than this many times the data's Nyquist frequency are "
                                            "residualised (replaced by their static contribution)"),
     "diagnosis.decimate_margin": Default(8.0, "records are decimated while the new Nyquist frequency stays this many "

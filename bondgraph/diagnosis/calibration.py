@@ -6,7 +6,9 @@
    and offset are solved exactly) are selected greedily, as a pivoted QR does: a parameter is
    calibrated if what it does to the output is not already done by those kept before it (the
    model file's ``CALIBRATE`` patterns first, then by size); the others are held at the
-   model's values and reported with the reason.
+   model's values and reported with the reason.  After the fit, a held parameter whose
+   sensitivity alone explains a share ``diagnosis.residual_share`` of the residual is
+   calibrated too (the pivots compare parameters with each other, the residual asks the data).
 2. **Bounds.**  Within ×/÷ ``diagnosis.spread`` of the model's values and the parameter's
    declared bounds; the sensor gain and offset are free.  The output's delay behind the drive
    (the measurement chain's: sensor electronics, sampling skew) is solved within ±0.5 sample
@@ -144,6 +146,49 @@ def select(S: np.ndarray, names: Sequence[str], priority: Sequence[str], tol: fl
             kept.append(j)
             basis.append(r / nr)
     return [names[k] for k in kept], held
+
+
+def residual_asks(ctx: Context, names: Sequence[str], free: Sequence[str], held: Mapping[str, str],
+                  values: dict, sol) -> dict[str, float]:
+    """Held parameters the calibrated model's residual asks for, each with the factor one
+    Gauss-Newton step would move it by: greedily, the held parameter whose sensitivity (at the
+    calibrated values, beside the kept ones', the sensor gain and offset) alone explains at
+    least ``diagnosis.residual_share`` of the residual's energy, with a step within ×/÷
+    ``diagnosis.spread``.  The pivot rule of :func:`select` compares sensitivities with each
+    other, not with the data: a sharp mode's frequency moves the output by many times its size
+    and hides a second mode's damping that the data plainly show (a missing parameter a
+    structural cause would then stand in for)."""
+    share = config.get("diagnosis.residual_share")
+    cands = [n for n in held if n in names and not held[n].startswith("no visible")]
+    if not cands or not share < 1:
+        return {}
+    idx = ctx.ident.fit_idx
+    raw = sol.columns[:, 0]
+    r = (ctx.y - sol.columns @ sol.coef)[idx]
+    energy = float(r @ r)
+    S = sensitivities(ctx, list(free) + cands, values, raw) * float(sol.coef[0])
+    Q, _ = np.linalg.qr(np.column_stack([sol.columns[idx], S[:, :len(free)]]))
+    r = r - Q @ (Q.T @ r)
+    C = S[:, len(free):]
+    C = C - Q @ (Q.T @ C)
+    limit = math.log(config.get("diagnosis.spread"))
+    asked: dict[str, float] = {}
+    while energy > 0:
+        full = np.linalg.norm(S[:, len(free):], axis=0)
+        nc = np.linalg.norm(C, axis=0)
+        proj = C.T @ r
+        step = proj / np.maximum(nc ** 2, 1e-300)
+        gain = proj ** 2 / np.maximum(nc ** 2, 1e-300) / energy
+        ok = (nc >= 0.1 * full) & (np.abs(step) <= limit) & (gain >= share)
+        ok[[cands.index(n) for n in asked]] = False
+        if not ok.any():
+            break
+        j = int(np.argmax(np.where(ok, gain, -1.0)))
+        asked[cands[j]] = math.exp(step[j])
+        q = C[:, j] / nc[j]
+        r = r - q * (q @ r)
+        C = C - np.outer(q, q @ C)
+    return asked
 
 
 def _delay_identifiable(ctx: Context, S: np.ndarray, names: Sequence[str], free: Sequence[str], nominal: dict,
@@ -349,6 +394,19 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
         held["output delay"] = f"it went to its search bound (±{MAX_DELAY:g} recorded samples): a model error, not a delay"
         values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, drift=drift)
     ctx.set_delay(delay)
+    asked = residual_asks(ctx, names, free, held, values, sol)
+    if asked:    # the delay stays at its solved value (ctx); the fit goes on from this one
+        say(f"the residual asks for {', '.join(f'{n} ×{f:.3g}' for n, f in asked.items())}: calibrating "
+            f"{'it' if len(asked) == 1 else 'them'} too")
+        for n in asked:
+            held.pop(n)
+        free = free + list(asked)
+        bounds.update({n: param_bounds(ctx, n, nominal[n]) for n in asked})
+        specs = [Param(n, nominal[n], *bounds[n]) for n in free]
+        start = {**values, **{n: values[n] * f for n, f in asked.items()}}
+        z1 = np.array([s.to_z(start[s.name]) for s in specs])
+        values, _, raw, sol, route = _fit(ctx, specs, nominal, z1, starts=[np.array([s.to_z(s.start) for s in specs])],
+                                          drift=drift)
     if drift:
         rate = float(sol.coef[2]) / max(0.5 * ctx.span, 1e-300)
         ctx.remove_drift(rate)
