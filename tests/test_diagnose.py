@@ -605,6 +605,7 @@ def test_a_second_modes_damping_is_calibrated_beside_a_sharp_first_mode():
     data, true = t215_null_noise()
     rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2, chain=False)
     assert rep.calibration["params"]["zeta_2"] == pytest.approx(true["zeta_2"], rel=0.05)
+    assert any(n.startswith("zeta_2 calibrated after all") for n in rep.notes), rep.notes
     assert rep.cause == "none", rep.steps[0].why
 
 

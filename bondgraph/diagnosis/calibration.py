@@ -396,8 +396,10 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     ctx.set_delay(delay)
     asked = residual_asks(ctx, names, free, held, values, sol)
     if asked:    # the delay stays at its solved value (ctx); the fit goes on from this one
-        say(f"the residual asks for {', '.join(f'{n} ×{f:.3g}' for n, f in asked.items())}: calibrating "
-            f"{'it' if len(asked) == 1 else 'them'} too")
+        what = f"{', '.join(asked)} calibrated after all: the first calibration's residual asks for " \
+               f"{'it' if len(asked) == 1 else 'them'} ({', '.join(f'a step ×{f:.3g}' for f in asked.values())})"
+        say(what)
+        ctx.notes.append(what)
         for n in asked:
             held.pop(n)
         free = free + list(asked)
