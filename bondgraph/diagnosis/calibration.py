@@ -124,6 +124,10 @@ def sensitivities(ctx: Context, names: Sequence[str], values: dict, raw: np.ndar
     return S - Q @ (Q.T @ S)
 
 
+#: why :func:`select` holds a parameter whose sensitivity is nil (the residual cannot ask for it)
+NO_EFFECT = "no visible effect on the output in these data"
+
+
 def select(S: np.ndarray, names: Sequence[str], priority: Sequence[str], tol: float, scale: float):
     """Greedy pivoted selection of identifiable columns (see the module docstring).
     Returns (kept names, {held name: reason})."""
@@ -137,7 +141,7 @@ def select(S: np.ndarray, names: Sequence[str], priority: Sequence[str], tol: fl
             r -= b * (b @ r)
         nr = float(np.linalg.norm(r))
         if norms[j] <= 1e-6 * scale:
-            held[names[j]] = "no visible effect on the output in these data"
+            held[names[j]] = NO_EFFECT
         elif nr < tol * ref or nr < 1e-6 * scale:
             corr = [names[k] for k in kept if abs(S[:, k] @ S[:, j]) > 0.5 * norms[k] * norms[j]]
             held[names[j]] = ("its effect is a pure output scale (the sensor gain)" if not corr else
@@ -159,7 +163,7 @@ def residual_asks(ctx: Context, names: Sequence[str], free: Sequence[str], held:
     and hides a second mode's damping that the data plainly show (a missing parameter a
     structural cause would then stand in for)."""
     share = config.get("diagnosis.residual_share")
-    cands = [n for n in held if n in names and not held[n].startswith("no visible")]
+    cands = [n for n in held if n in names and held[n] != NO_EFFECT]
     if not cands or not share < 1:
         return {}
     idx = ctx.ident.fit_idx
