@@ -170,15 +170,17 @@ def residual_asks(ctx: Context, names: Sequence[str], free: Sequence[str], held:
     raw = sol.columns[:, 0]
     r = (ctx.y - sol.columns @ sol.coef)[idx]
     energy = float(r @ r)
+    if energy <= 0:
+        return {}
     S = sensitivities(ctx, list(free) + cands, values, raw) * float(sol.coef[0])
     Q, _ = np.linalg.qr(np.column_stack([sol.columns[idx], S[:, :len(free)]]))
     r = r - Q @ (Q.T @ r)
     C = S[:, len(free):]
+    full = np.linalg.norm(C, axis=0)
     C = C - Q @ (Q.T @ C)
     limit = math.log(config.get("diagnosis.spread"))
     asked: dict[str, float] = {}
-    while energy > 0:
-        full = np.linalg.norm(S[:, len(free):], axis=0)
+    while True:    # ends: each round asks for one more parameter or stops
         nc = np.linalg.norm(C, axis=0)
         proj = C.T @ r
         step = proj / np.maximum(nc ** 2, 1e-300)
