@@ -417,6 +417,30 @@ def test_a_mode_on_the_models_own_must_beat_the_reference():
     assert not weak.passed
 
 
+
+
+def steps_through_saturation(sat=0.6, levels=9, n=6000, fs=500.0, noise=0.002, seed=3):
+    """The lag behind a static saturation u_eff = sat·tanh(u/sat), driven by steps held at
+    ``levels`` levels in random order, each reached once: no memory anywhere."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / fs
+    u = np.repeat(rng.permutation(np.linspace(-1.0, 1.0, levels)), n // levels + 1)[:n]
+    truth = bg.simulate(lag_model(0.025), t, {"u": bg.PiecewiseLinear(t, sat * np.tanh(u / sat))}, rtol=1e-9)
+    return Dataset(t, {"u": u, "y": truth["y"] + rng.normal(0, noise, n)})
+
+
+def test_a_saturation_on_steps_is_not_named_hysteresis():
+    """On steps each level is reached once, so a play sum fits the levels as a shape: its
+    loops must beat the static curve there too (they do not: gain < 1), and only the
+    saturation is named, at no step of the chain hysteresis (it was its second step when
+    the twin was skipped on steps)."""
+    from library.extensions.drive import InputHysteresis, InputSaturation
+    rep = diagnose(lag_model(), steps_through_saturation(), candidates=[InputHysteresis(), InputSaturation()],
+                   workers=1)
+    assert rep.causes == ["saturation"]
+    pi = next(c for c in rep.steps[0].candidates if c.cause == "hysteresis")
+    assert pi.gain > 3 and pi.gain_static < 1.0 and not pi.passed
+    assert "static curve" in pi.verdict
 # ---- Ctrl-C -------------------------------------------------------------------------------------
 def _children(pid):
     out = []

@@ -36,16 +36,14 @@ def dwell_levels(d: np.ndarray, bins: int = 100) -> int:
     return int(np.count_nonzero(h >= 0.002 * h.sum()))
 
 
-def static_curve(view, pieces: int):
+def static_curve(view, pieces: int) -> np.ndarray:
     """The best static curve of the drive with ``pieces`` parameters, through the linear core:
-    odd and even ramps about the drive's centre, knees spread over its half-range; the twin a
-    memory effect must beat (of the base drive, beside the effects named before, as the memory
-    effect is fitted).  None when the drive dwells at too few levels (steps with holds):
-    a curve with this many pieces then passes through every level it holds, whatever the
-    history that led there, and cannot tell memory from shape."""
+    odd and even ramps about the drive's centre, knees spread evenly over its half-range; the
+    twin a memory effect must beat (of the base drive, beside the effects named before, as the
+    memory effect is fitted).  Asked on every drive: on steps held at a few levels, memory shows
+    only where a level is reached from both sides, and loops that do not beat a static curve
+    there have shown no memory (a saturation on steps reproduced by a play sum is a shape)."""
     d = np.asarray(view.additive.base)
-    if dwell_levels(d) <= 2 * pieces:
-        return None
     c, half = 0.5 * (d.max() + d.min()), 0.5 * float(np.ptp(d))
     knees = np.linspace(0.0, half, pieces // 2, endpoint=False)[1:]
     dev = d - c
@@ -92,9 +90,9 @@ class InputHysteresis(_DriveCandidate):
     q·h·((d − c)/h)² about the drive's centre c (half range h): play sums alone only make
     point-symmetric loops, and a stack's loops over part of its field range are not (the
     asymmetric PI of Gu, Zhu & Su, IEEE Trans. Ind. Electron. 61(3) (2014) 1583–1595, adds
-    such a polynomial); only on drives whose loops can be told from a static curve (not on
-    steps held at a few levels, see :func:`static_curve`).  Additive: it replaces the base drive's own term (its r = 0 play is
-    the drive) beside the effects named before."""
+    such a polynomial); only on drives that pass through their range (not on steps held at a
+    few levels, where it would add a shape at the held levels).  Additive: it replaces the base
+    drive's own term (its r = 0 play is the drive) beside the effects named before."""
 
     cause = "hysteresis"
     label = "Prandtl-Ishlinskii operator on the drive"
@@ -111,8 +109,8 @@ class InputHysteresis(_DriveCandidate):
         names = [f"H.w{i + 1}" for i in range(len(r))]
         b0, reach = float(base[0]), float(r[-1]) or 1.0
         centre, half = 0.5 * (float(base.max()) + float(base.min())), 0.5 * float(np.ptp(base)) or 1.0
-        # the even term only where loops can be told from a static curve (see static_curve):
-        # on a drive held at a few levels it would be a static shape the memory test cannot check
+        # the even term only on drives that pass through their range: on a drive held at a few
+        # levels it would be a shape at those levels (an end stop on steps), not part of a loop
         asymmetric = dwell_levels(base) > 2 * self.n_plays
         even = [half * ((base - centre) / half) ** 2] if asymmetric else []
         names = names + ["H.q"] if asymmetric else names
