@@ -441,6 +441,33 @@ def test_a_saturation_on_steps_is_not_named_hysteresis():
     pi = next(c for c in rep.steps[0].candidates if c.cause == "hysteresis")
     assert pi.gain > 3 and pi.gain_static < 1.0 and not pi.passed
     assert "static curve" in pi.verdict
+
+def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
+    """The lag record under a drive of low sines plus a weak broadband part, with output noise:
+    near 3 Hz the output is the drive's response (coherence ~1); well above, the lag passes a
+    tenth of a drive part 30x weaker and the noise dominates.  A mode there would fit noise the
+    drive happens to correlate with: it is refused as not resolved, though the drive has power
+    there; one at 3 Hz is not refused on that ground."""
+    from bondgraph.diagnosis import View
+    from bondgraph.diagnosis.calibration import calibrate
+    from bondgraph.diagnosis.context import Context
+    from library.extensions.modes import mode_implausible
+    rng = np.random.default_rng(7)
+    n, fs = 6000, 500.0
+    t = np.arange(n) / fs
+    u = sum(np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi)) for f in (0.5, 1.3, 3.1, 7.9)) / 2
+    u = u + 0.03 * rng.normal(size=n)
+    y = bg.simulate(lag_model(0.025), t, {"u": bg.PiecewiseLinear(t, u)}, rtol=1e-9)["y"]
+    ctx = Context(lag_model(), Dataset(t, {"u": u, "y": y + rng.normal(0, 0.01, n)}))
+    state, cal, _ = calibrate(ctx)
+    view = View(ctx, state, cal.free)
+    high = 0.3 * view.fs   # the record may be decimated: well inside its band
+    assert high > 20.0 and view.coherence_near(2 * np.pi * 3.1) > 0.99
+    assert view.coherence_near(2 * np.pi * high) < view.resolved_coherence
+    assert "does not resolve the response near" in mode_implausible(view, 2 * np.pi * high, 0.02)
+    assert "resolve" not in mode_implausible(view, 2 * np.pi * 3.1, 0.02)
+
+
 # ---- Ctrl-C -------------------------------------------------------------------------------------
 def _children(pid):
     out = []

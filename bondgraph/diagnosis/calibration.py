@@ -220,15 +220,27 @@ def _delay_identifiable(ctx: Context, S: np.ndarray, names: Sequence[str], free:
     return nr >= config.get("diagnosis.identifiable") * ref and nr >= 0.1 * full and nr >= 1e-6 * scale
 
 
+#: a frequency whose output is at most this coherent with the input (magnitude-squared: as much
+#: noise as response) is not resolved by the record
+RESOLVED_COHERENCE = 0.5
+
+
+def coherence_spectrum(u: np.ndarray, y: np.ndarray, fs: float):
+    """(ω rad/s, magnitude-squared coherence of output and input) from Welch estimates
+    (detrended segments), at every frequency above 0."""
+    f, coh = signal.coherence(u, y, fs, nperseg=welch_length(len(u), 8, 15), detrend="linear")
+    return 2 * np.pi * f[1:], coh[1:]
+
+
 def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
-    """(ω rad/s, H, coherence) of output/input from Welch estimates (detrended segments)."""
-    n = len(u)
-    nper = welch_length(n, 8, 15)
-    f, Puu = signal.welch(u, fs, nperseg=nper, detrend="linear")
+    """(ω rad/s, H, coherence) of output/input from Welch estimates (detrended segments), at the
+    frequencies the record resolves (coherence above :data:`RESOLVED_COHERENCE`)."""
+    nper = welch_length(len(u), 8, 15)
+    _, Puu = signal.welch(u, fs, nperseg=nper, detrend="linear")
     _, Puy = signal.csd(u, y, fs, nperseg=nper, detrend="linear")
-    _, coh = signal.coherence(u, y, fs, nperseg=nper, detrend="linear")
-    keep = (f > 0) & (Puu > 1e-8 * Puu.max()) & (coh > 0.5)
-    return 2 * np.pi * f[keep], (Puy / np.maximum(Puu, 1e-300))[keep], coh[keep]
+    w, coh = coherence_spectrum(u, y, fs)
+    keep = (Puu[1:] > 1e-8 * Puu.max()) & (coh > RESOLVED_COHERENCE)
+    return w[keep], (Puy[1:] / np.maximum(Puu[1:], 1e-300))[keep], coh[keep]
 
 
 def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarray, H: np.ndarray,

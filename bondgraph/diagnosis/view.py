@@ -13,7 +13,7 @@ import sympy as sp
 from ..graph import Model
 from ..identify import Identification, Spec
 from ..lti import LTI
-from .calibration import score
+from .calibration import RESOLVED_COHERENCE, coherence_spectrum, empirical_frf, score
 from .additive import AdditiveDrive, Term
 from .context import Context, State
 from .projection import Param, projected_fit, simulation_deadline
@@ -179,8 +179,19 @@ class View:
 
     def empirical_frf(self):
         """(ω rad/s, H, coherence) of the measured output over the input (Welch)."""
-        from .calibration import empirical_frf
         return empirical_frf(self._ctx.u_recorded, self._ctx.y, self._ctx.fs)
+
+    #: coherence above which the record resolves the response (the empirical FRF's bins)
+    resolved_coherence = RESOLVED_COHERENCE
+
+    def coherence_near(self, omega: float, width: float = 0.03) -> float:
+        """Median magnitude-squared coherence of the measured output with the input within
+        ±``width`` (relative) of ``omega`` (rad/s; the nearest Welch bin if none is that
+        close): above :attr:`resolved_coherence` the record resolves the response there,
+        below it the noise is as large as the response."""
+        w, coh = coherence_spectrum(self._ctx.u_recorded, self._ctx.y, self._ctx.fs)
+        near = np.abs(w - omega) <= width * omega
+        return float(np.median(coh[near])) if near.any() else float(coh[int(np.argmin(np.abs(w - omega)))])
 
     def score(self, raw: np.ndarray) -> tuple[float, float, float, float]:
         """(sensor gain, offset, RMS fit part, RMS validation part) of a raw prediction."""

@@ -53,6 +53,10 @@ def mode_implausible(view, omega: float, zeta: float) -> str:
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
     if not near.any() or P[near].max() < 1e-6 * P.max():
         return f"the drive does not excite {f:.4g} Hz"
+    coh = view.coherence_near(omega)
+    if coh < view.resolved_coherence:
+        return (f"the record does not resolve the response near {f:.4g} Hz (coherence {coh:.2g} < "
+                f"{view.resolved_coherence:g}: as much noise as response there)")
     if zeta > 0.3:
         return f"it is not a resonance (damping ratio {zeta:.2g})"
     return ""
