@@ -11,9 +11,12 @@ The engine, in order:
    it by its quasi-static contribution (time-scale separation, :func:`bondgraph.lti.residualise`;
    with none left, the static route); decimate while the drive's band and the band where the
    output stands above its noise floor stay well below the new Nyquist frequency; estimate
-   the noise floor where the drive has no power; treat the drive as the band-limited signal it
+   the noise floor where the drive has no power; read the drive as the band-limited signal it
    was sampled from (its linear interpolation compensated); split into fit and validation
-   blocks.
+   blocks.  When reading it as linear between its samples instead (a DAC that interpolates,
+   a simulation with a first-order hold) changes the calibrated model's output by more than
+   ``diagnosis.reading_gap`` of the noise floor, the whole diagnosis runs under both readings
+   and the one whose final model fits better is kept (fewer causes when they fit alike).
 2. **Calibrate** (:mod:`.calibration`): the null is the best *linear* explanation: every
    identifiable linear parameter, the sensor gain and offset, and the output's delay behind
    the drive when the data separate it.  When that needs values outside the parameters'

@@ -293,7 +293,7 @@ def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, 
     def frf_of(z):
         vals = dict(values)
         vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
-        Hm = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w)
+        Hm = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w) * ctx.reading_factor(w)
         return Hm * np.exp(-1j * w * z[-1] * ctx.dt) if delay else Hm
 
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)

@@ -23,6 +23,12 @@ from ..simulate import Simulator
 
 SENSOR_GAIN = "sensor.gain"
 
+#: readings of the recorded drive between its samples: ``band-limited`` (the samples of a smooth
+#: analog signal, as an anti-aliased acquisition records it; the first-order hold's sinc² loss is
+#: compensated) and ``linear`` (the analog drive is the linear interpolation of its samples, as a
+#: DAC with linear interpolation or a simulation with a first-order hold makes it)
+READINGS = ("band-limited", "linear")
+
 
 @dataclass
 class State:
@@ -61,8 +67,12 @@ class Context:
 
     def __init__(self, model: Model, data: Dataset, input: str | None = None, output: str | None = None,
                  data_input: str | None = None, data_output: str | None = None, validation: float = 0.3,
-                 say=None):
+                 say=None, reading: str = "band-limited"):
         say = say or (lambda s: None)
+        if reading not in READINGS:
+            raise ValueError(f"unknown drive reading {reading!r}: one of {', '.join(READINGS)}")
+        #: how the recorded drive is read between its samples (see :data:`READINGS`)
+        self.reading = reading
         self.notes: list[str] = []
         self.nominal_model = model
         eqs0 = derive(model)
@@ -141,11 +151,31 @@ class Context:
         #: parameter names of the working model (the linear core of every chain state)
         self.core_parameters = frozenset(p.name for p in self.eqs.params)
 
-    def drive_with_delay(self, delay: float) -> np.ndarray:
-        """The recorded drive as the exact route must see it: compensated for its linear
-        interpolation (it was sampled from a band-limited signal) and delayed by ``delay``
-        samples (the measurement chain's delay of the output behind the drive)."""
-        return interpolation_compensated(self.u_recorded, delay)
+    def drive_with_delay(self, delay: float, reading: str | None = None) -> np.ndarray:
+        """The recorded drive as the exact route must see it, read as ``reading`` (default the
+        context's; band-limited: compensated for the route's linear interpolation) and delayed
+        by ``delay`` samples (the measurement chain's delay of the output behind the drive)."""
+        reading = reading or self.reading
+        return interpolation_compensated(self.u_recorded, delay, edge=0.45 if reading == "band-limited" else 0.0)
+
+    def reading_factor(self, omega: np.ndarray) -> np.ndarray | float:
+        """What the drive's reading multiplies a continuous frequency response by at ``omega``
+        (rad/s): 1 band-limited, sinc²(f/fs) linear between samples."""
+        if self.reading == "band-limited":
+            return 1.0
+        return np.sinc(np.asarray(omega, float) * self.dt / (2 * math.pi)) ** 2
+
+    def reading_gap(self, values: dict, gain: float) -> float:
+        """RMS difference on the validation part between the outputs of the model at ``values``
+        (sensor gain ``gain``) under the two readings of the drive: what the choice of reading
+        can change (0 off the exact linear route)."""
+        if self.lti is None:
+            return 0.0
+        other = next(r for r in READINGS if r != self.reading)
+        raw = self.ident.predict(values)
+        alt = self.ident.predict(values, drive=self.drive_with_delay(self.delay, other))
+        d = gain * (alt - raw)[self.ident.val_mask]
+        return float(np.sqrt(np.mean(d ** 2)))
 
     def set_delay(self, delay: float) -> None:
         """Use the drive delayed by ``delay`` samples from now on (data, identification, u)."""
@@ -295,6 +325,17 @@ def noise_psd(y: np.ndarray, u: np.ndarray, fs: float, band: float) -> float | N
     if np.count_nonzero(quiet) < 4:
         return None
     return float(np.median(Pyy[quiet]))
+
+
+def residual_floor(e: np.ndarray, fs: float, share: float = 0.05) -> float:
+    """RMS of the white noise whose density is the ``share`` quantile of the residual ``e``'s
+    Welch spectrum below 0.9× Nyquist: the floor under what a model misses in a few bands (an
+    upper estimate of the measurement noise when the drive leaves no quiet band for
+    :func:`noise_psd`)."""
+    nper = welch_length(len(e), 8, 14)
+    f, P = signal.welch(e, fs, nperseg=nper, detrend="linear")
+    keep = (f > 0) & (f < 0.9 * fs / 2)
+    return float(math.sqrt(np.quantile(P[keep], share) * fs / 2)) if keep.any() else float(np.std(e))
 
 
 def output_band(y: np.ndarray, fs: float, noise_density: float | None, above: float = 10.0) -> float | None:

@@ -17,7 +17,7 @@ from ..graph import Model
 from ..simulate import SimulationError
 from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
-from .context import SENSOR_GAIN, Context, State
+from .context import SENSOR_GAIN, Context, State, residual_floor
 from .decision import Comparison, Verdict, compare, judge, reference_prediction, regress
 from .pool import Pool, single_threaded_blas
 from .projection import time_budget
@@ -300,27 +300,64 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     settings = {} if drift is None else {"diagnosis.drift": bool(drift)}
     run = functools.partial(_diagnose, model, data, candidates, calibrate_first, input, output, data_input,
                             data_output, validation, workers, chain, progress, source, equations, tolerance)
+    say = getattr(progress, "note", None) or progress or (lambda s: None)
+    started = time.time()
     with single_threaded_blas(), config.override(settings):
-        out = run()
-        if isinstance(out, str):   # a drift passed for the first cause: again, with the drift solved
-            with config.override({"diagnosis.drift": True}):
-                rep = run()
-            rep.notes.append(out)
-            return rep
-        return out
+        first = _with_drift(run, "band-limited")
+        gap, floor = first.data["reading_gap_rms"], first.data["reading_floor_rms"]
+        if gap <= config.get("diagnosis.reading_gap") * floor:
+            return first
+        say(f"the two readings of the drive between its samples change the calibrated model's output by "
+            f"{gap / floor:.2g}× the noise floor: diagnosed with the drive read as linear between its samples too")
+        rep = _better_reading(first, _with_drift(run, "linear"))
+        rep.seconds = time.time() - started
+        return rep
+
+
+def _with_drift(run, reading: str) -> Report:
+    """``run(reading)``, again with a sensor drift solved when a drift passed for the first cause."""
+    out = run(reading)
+    if isinstance(out, str):
+        with config.override({"diagnosis.drift": True}):
+            rep = run(reading)
+        rep.notes.append(out)
+        return rep
+    return out
+
+
+def _better_reading(a: Report, b: Report) -> Report:
+    """Of two diagnoses of one record under different readings of its drive, the one whose final
+    model fits the validation part better; when the two are within ``diagnosis.equivalent`` of
+    each other, the one naming fewer causes (the data cannot tell the readings apart, and a
+    cause must not be credited with what a reading explains), else the better fit."""
+    alike = max(a.extended_rms, b.extended_rms) <= config.get("diagnosis.equivalent") * min(a.extended_rms, b.extended_rms)
+    if alike and len(a.causes) != len(b.causes):
+        best, other = (a, b) if len(a.causes) < len(b.causes) else (b, a)
+        why = "fits as well and names fewer causes"
+    else:
+        best, other = (a, b) if a.extended_rms <= b.extended_rms else (b, a)
+        why = "fits the validation part better"
+    best.notes.append(f"drive read as {best.data['drive_reading']} between its samples: the diagnosis under that "
+                      f"reading {why} (final validation RMS {best.extended_rms:.4g}, causes "
+                      f"{' -> '.join(best.causes) or 'none'}) than under the {other.data['drive_reading']} reading "
+                      f"({other.extended_rms:.4g}, causes {' -> '.join(other.causes) or 'none'})")
+    return best
 
 
 def _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output, validation,
-              workers, chain, progress, source, equations, tolerance) -> Report | str:
-    """The diagnosis (see :func:`diagnose`), or the note to add when a sensor drift explains
-    the record as well as the first cause found (the caller then runs it with the drift solved)."""
+              workers, chain, progress, source, equations, tolerance, reading) -> Report | str:
+    """The diagnosis (see :func:`diagnose`) with the drive read as ``reading`` between its
+    samples, or the note to add when a sensor drift explains the record as well as the first
+    cause found (the caller then runs it with the drift solved)."""
     started = time.time()
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     tick = getattr(progress, "advance", None)
     cands = list(candidates) if candidates is not None else load_candidates()
-    ctx = Context(model, data, input, output, data_input, data_output, validation, say)
+    ctx = Context(model, data, input, output, data_input, data_output, validation, say, reading)
     state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance)
     plausible = (pstate, cal.plausible) if pstate is not state else None
+    gap = ctx.reading_gap(state.values, state.gain)
+    floor = ctx.noise or residual_floor(ctx.y - state.prediction, ctx.fs)
     say(f"calibrated in {time.time() - started:.1f} s: validation RMS {cal.rms_validation:.4g}")
     steps: list[Step] = []
     folds: list[Context] = []   # the second fold's context, made when first needed
@@ -381,7 +418,8 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                     {"file": data.path or "", "model": source, "samples": len(ctx.t), "rate_hz": ctx.fs,
                      "source_samples": ctx.source_samples, "source_rate_hz": ctx.source_rate,
                      "validation_share": validation, "blocks": ctx.n_blocks, "input": ctx.input, "output": ctx.output,
-                     "drive_band_hz": ctx.band_hz},
+                     "drive_band_hz": ctx.band_hz, "drive_reading": ctx.reading, "reading_gap_rms": gap,
+                     "reading_floor_rms": floor},
                     list(ctx.notes), noise=ctx.noise)
     report.predictions = {"t": ctx.t, "u": ctx.u_recorded, "y": ctx.y, "baseline": baseline.prediction}
     if causes:

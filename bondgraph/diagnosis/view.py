@@ -171,11 +171,13 @@ class View:
 
     def frequency_response(self, omega: np.ndarray, values: Mapping[str, float] | None = None) -> np.ndarray:
         """The linear core's frequency response at ``omega`` (rad/s), sensor gain 1, with the
-        measurement chain's delay of the output behind the drive (as :meth:`respond` sees it)."""
+        drive's reading and the measurement chain's delay of the output behind the drive (as
+        :meth:`respond` sees it)."""
         ctx = self._ctx
         th = self.theta_values(values)
         omega = np.asarray(omega, float)
-        return ctx.lti.state_space(th, ctx.cut).frequency_response(omega) * np.exp(-1j * omega * ctx.delay * ctx.dt)
+        return (ctx.lti.state_space(th, ctx.cut).frequency_response(omega) * ctx.reading_factor(omega)
+                * np.exp(-1j * omega * ctx.delay * ctx.dt))
 
     def empirical_frf(self):
         """(ω rad/s, H, coherence) of the measured output over the input (Welch)."""
