@@ -131,6 +131,6 @@ def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: f
         return result
     causes, gains = _chain(out)
     result.update(cause=normalise(out.get("cause")), causes=causes, gains=gains, gain=out.get("gain"),
-                  steps=_verdicts(out))
+                  steps=_verdicts(out), reading=(out.get("data") or {}).get("drive_reading"))
     result.update(score(record.causes, record.ordered, result["cause"], causes))
     return result
