@@ -298,8 +298,11 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
     the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
     settings = {} if drift is None else {"diagnosis.drift": bool(drift)}
-    run = functools.partial(_diagnose, model, data, candidates, calibrate_first, input, output, data_input,
-                            data_output, validation, workers, chain, progress, source, equations, tolerance)
+
+    def run(reading: str, chain: bool = chain):
+        return _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
+                         validation, workers, chain, progress, source, equations, tolerance, reading)
+
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     started = time.time()
     with single_threaded_blas(), config.override(settings):
@@ -308,8 +311,14 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
         if gap <= config.get("diagnosis.reading_gap") * floor:
             return first
         say(f"the two readings of the drive between its samples change the calibrated model's output by "
-            f"{gap / floor:.2g}× the noise floor: diagnosed with the drive read as linear between its samples too")
-        rep = _better_reading(first, _with_drift(run, "linear"))
+            f"{gap / floor:.2g}× the noise floor: its first step with the drive read as linear between samples")
+        probe = _with_drift(functools.partial(run, chain=False), "linear")
+        keep, why = _better_reading(_first_step(first), _first_step(probe))
+        if keep == 0:
+            rep = first
+        else:
+            rep = probe if not chain else _with_drift(run, "linear")
+        rep.notes.append(f"drive read as {rep.data['drive_reading']} between its samples: {why}")
         rep.seconds = time.time() - started
         return rep
 
@@ -325,23 +334,26 @@ def _with_drift(run, reading: str) -> Report:
     return out
 
 
-def _better_reading(a: Report, b: Report) -> Report:
-    """Of two diagnoses of one record under different readings of its drive, the one whose final
-    model fits the validation part better; when the two are within ``diagnosis.equivalent`` of
-    each other, the one naming fewer causes (the data cannot tell the readings apart, and a
-    cause must not be credited with what a reading explains), else the better fit."""
-    alike = max(a.extended_rms, b.extended_rms) <= config.get("diagnosis.equivalent") * min(a.extended_rms, b.extended_rms)
-    if alike and len(a.causes) != len(b.causes):
-        best, other = (a, b) if len(a.causes) < len(b.causes) else (b, a)
-        why = "fits as well and names fewer causes"
+def _first_step(rep: Report) -> tuple[str, str, float]:
+    """(reading, cause, validation RMS) after a diagnosis' first step."""
+    s = rep.steps[0] if rep.steps else None
+    return rep.data["drive_reading"], s.cause if s else "none", s.rms if s else rep.baseline_rms
+
+
+def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float]) -> tuple[int, str]:
+    """Which of two first steps (:func:`_first_step`) under different readings of the drive to
+    go on from (0: ``a``, 1: ``b``) and why: the better fit; when the two are within
+    ``diagnosis.equivalent`` of each other and only one names a cause, the one naming none (the
+    data cannot tell the readings apart, and a cause must not be credited with what a reading
+    explains)."""
+    alike = max(a[2], b[2]) <= config.get("diagnosis.equivalent") * min(a[2], b[2])
+    if alike and (a[1] == "none") != (b[1] == "none"):
+        k, why = (0 if a[1] == "none" else 1), "fits as well without a cause"
     else:
-        best, other = (a, b) if a.extended_rms <= b.extended_rms else (b, a)
-        why = "fits the validation part better"
-    best.notes.append(f"drive read as {best.data['drive_reading']} between its samples: the diagnosis under that "
-                      f"reading {why} (final validation RMS {best.extended_rms:.4g}, causes "
-                      f"{' -> '.join(best.causes) or 'none'}) than under the {other.data['drive_reading']} reading "
-                      f"({other.extended_rms:.4g}, causes {' -> '.join(other.causes) or 'none'})")
-    return best
+        k, why = (0 if a[2] <= b[2] else 1), "fits the validation part better"
+    best, other = (a, b) if k == 0 else (b, a)
+    return k, (f"its first step {why} (validation RMS {best[2]:.4g}, {best[1]}) than under the {other[0]} "
+               f"reading ({other[2]:.4g}, {other[1]})")
 
 
 def _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output, validation,
