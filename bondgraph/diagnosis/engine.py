@@ -316,8 +316,8 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
         keep, why = _better_reading(_first_step(first), _first_step(probe))
         if keep == 0:
             rep = first
-        else:
-            rep = probe if not chain else _with_drift(run, "linear")
+        else:   # a first step that names nothing ends the chain: the probe is then the whole answer
+            rep = probe if not chain or not probe.causes else _with_drift(run, "linear")
         rep.notes.append(f"drive read as {rep.data['drive_reading']} between its samples: {why}")
         rep.seconds = time.time() - started
         return rep
