@@ -156,7 +156,9 @@ class Context:
         context's; band-limited: compensated for the route's linear interpolation) and delayed
         by ``delay`` samples (the measurement chain's delay of the output behind the drive)."""
         reading = reading or self.reading
-        return interpolation_compensated(self.u_recorded, delay, edge=0.45 if reading == "band-limited" else 0.0)
+        if reading == "band-limited":
+            return interpolation_compensated(self.u_recorded, delay)
+        return interpolation_compensated(self.u_recorded, delay, edge=0.0)
 
     def reading_factor(self, omega: np.ndarray) -> np.ndarray | float:
         """What the drive's reading multiplies a continuous frequency response by at ``omega``
