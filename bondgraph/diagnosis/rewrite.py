@@ -7,7 +7,7 @@ from typing import Callable, Mapping
 
 import sympy as sp
 
-from ..elements import C, E, F, I, P, Q, R
+from ..elements import C, E, F, I, J1, P, Q, R, Se
 from ..errors import ModelError
 from ..graph import Model
 
@@ -77,6 +77,32 @@ def junction_of(model: Model, element: str) -> str:
         raise ModelError(f"{model.name}: '{element}' is not a one-port element with one bond")
     b = bonds[0]
     return b.tail[0] if b.head[0] == element else b.head[0]
+
+
+def parameters_of(model: Model, element: str) -> list[str]:
+    """Names of the model parameters in the element's law, sorted."""
+    el = model.elements[element]
+    law = getattr(el, "law", None)
+    if law is None:
+        law = getattr(el, "conductance_law", None)
+    known = set(model.all_parameters())
+    return sorted(str(s) for s in sp.sympify(law).free_symbols if str(s) in known) if law is not None else []
+
+
+def drive_loop(model: Model, input: str) -> tuple[str, list[str]] | None:
+    """(1-junction, resistances on it) of the loop driven by the effort source whose effort is
+    ``input`` itself (e.g. a voltage source): the junction where the source, its series
+    resistances and the load share one flow (the drive current of an electrical port); None
+    when the model has no such source (an input that enters scaled, e.g. as modal forces)."""
+    symbol = model.inputs[input].symbol
+    for name, el in model.elements.items():
+        if isinstance(el, Se) and sp.sympify(el.effort) == symbol:
+            j = junction_of(model, name)
+            if isinstance(model.elements[j], J1):
+                rs = [n for n in neighbours(model, name)
+                      if isinstance(model.elements[n], R) and model.elements[n].form == "resistance"]
+                return j, rs
+    return None
 
 
 def add_to_output(model: Model, output: str, term) -> None:

@@ -1,0 +1,71 @@
+"""The drive's own electrical loop: a series inductance (a long cable, an inductive amplifier
+output) in the loop where the amplifier drives the actuator's capacitance, the loop's series
+resistance refitted with it.  The loop keeps the actuator's current, so the stage feels the
+actuator's electromechanical admittance: the exact form of what :class:`~.drive.InputRLC`
+approximates by a stage on the drive that does not."""
+from __future__ import annotations
+
+import numpy as np
+
+from bondgraph import I
+from bondgraph.diagnosis import LINEAR, Candidate, Extension
+from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
+from bondgraph.identify import Spec
+
+from .drive import NOT_A_DRIVE
+
+#: inductances scanned for the start, and the fit's bounds (H): from bond wires to a large
+#: output transformer
+SCAN_H = np.geomspace(1e-9, 1e3, 25)
+
+
+class LoopInductance(Candidate):
+    """A series inductance L (H) in the loop of the drive's voltage source (the 1-junction where
+    source, series resistance and the actuator's electrical port share the drive current),
+    u_source = R·i + L·di/dt + u_actuator, with the loop's resistances refitted (×/÷ 3 down,
+    ×30 up: an added series resistance is the same cause)."""
+
+    cause = "electrical-rc"
+    label = "series inductance in the drive's loop, its resistance refitted"
+    kind = LINEAR
+
+    def applies(self, view):
+        if view.drive is None:
+            return NOT_A_DRIVE
+        if view.reduced:
+            return "the model's fast states were residualised"
+        if not view.exact:
+            return "needs a model linear in its states"
+        if drive_loop(view.core(), view.input) is None:
+            return "the drive is not a voltage source in a loop of the model"
+        return True
+
+    @staticmethod
+    def build(view, model, L: float):
+        """``model`` with the inductance added to the drive's loop (located on the nominal model)."""
+        junction, _ = drive_loop(view.core(), view.input)
+        p = model.parameter("loop.L", L, "H", "series inductance in the drive's loop", bounds=(0, 1e12))
+        model.add(I("loop.Ls", p))
+        model.bond(junction, "loop.Ls")
+        return model
+
+    def fit(self, view):
+        core = view.core()
+        _, resistors = drive_loop(core, view.input)
+        rs = [n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values[n] > 0]
+        drive = view.drive if view.on_core else None   # fitted on the linear core, as it sees the drive
+        model = self.build(view, core if drive is not None else view.rewrite(), float(SCAN_H[0]))
+        ident = view.identification(model)
+        scores = []
+        for L in SCAN_H:
+            raw = ident.predict({**view.values, "loop.L": float(L)}, **({"drive": drive} if drive is not None else {}))
+            if drive is not None and view.extra is not None:
+                raw = raw + view.extra
+            scores.append(view.score(raw)[2] if np.all(np.isfinite(raw)) else np.inf)
+        L0 = float(SCAN_H[int(np.argmin(scores))])
+        specs = [Spec("loop.L", L0, float(SCAN_H[0]), float(SCAN_H[-1]), log=True)]
+        specs += [Spec(n, view.values[n], view.values[n] / 3, view.values[n] * 30, log=True) for n in rs]
+        values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=30, drive=drive)
+        model = self.build(view, view.rewrite(), values["loop.L"])
+        model.values.update({n: values[n] for n in rs})
+        return Extension(model, values, ["loop.L"] + rs, raw, None, None, at, ok, msg)
