@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph import I
+from bondgraph import I, config
 from bondgraph.diagnosis import LINEAR, Candidate, Extension
 from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
 from bondgraph.identify import Spec
@@ -22,8 +22,10 @@ SCAN_H = np.geomspace(1e-9, 1e3, 25)
 class LoopInductance(Candidate):
     """A series inductance L (H) in the loop of the drive's voltage source (the 1-junction where
     source, series resistance and the actuator's electrical port share the drive current),
-    u_source = R·i + L·di/dt + u_actuator, with the loop's resistances refitted (×/÷ 3 down,
-    ×30 up: an added series resistance is the same cause)."""
+    u_source = R·i + L·di/dt + u_actuator, with the loop's resistances refitted within a
+    device's spread (``diagnosis.tolerance``).  When the inductance adds nothing to that refit
+    (the record fits as well with it at its lower bound), the extension is the model's own
+    resistance recalibrated, and it must beat the flexible linear reference to be named."""
 
     cause = "electrical-rc"
     label = "series inductance in the drive's loop, its resistance refitted"
@@ -49,23 +51,44 @@ class LoopInductance(Candidate):
         model.bond(junction, "loop.Ls")
         return model
 
+    @staticmethod
+    def _predictor(view, model):
+        """values -> raw prediction of ``model`` (an extension of the core when the current model
+        is a drive transform of it, driven by what the core sees, plus the output outside it)."""
+        ident = view.identification(model)
+        if not view.on_core:
+            return ident.predict
+        extra = 0.0 if view.extra is None else view.extra
+        return lambda values: ident.predict(values, drive=view.drive) + extra
+
+    def _base(self, view):
+        return self.build(view, view.core() if view.on_core else view.rewrite(), float(SCAN_H[0]))
+
     def fit(self, view):
         core = view.core()
         _, resistors = drive_loop(core, view.input)
         rs = [n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values[n] > 0]
-        drive = view.drive if view.on_core else None   # fitted on the linear core, as it sees the drive
-        model = self.build(view, core if drive is not None else view.rewrite(), float(SCAN_H[0]))
-        ident = view.identification(model)
+        model = self._base(view)
+        predict = self._predictor(view, model)
         scores = []
         for L in SCAN_H:
-            raw = ident.predict({**view.values, "loop.L": float(L)}, **({"drive": drive} if drive is not None else {}))
-            if drive is not None and view.extra is not None:
-                raw = raw + view.extra
+            raw = predict({**view.values, "loop.L": float(L)})
             scores.append(view.score(raw)[2] if np.all(np.isfinite(raw)) else np.inf)
         L0 = float(SCAN_H[int(np.argmin(scores))])
         specs = [Spec("loop.L", L0, float(SCAN_H[0]), float(SCAN_H[-1]), log=True)]
-        specs += [Spec(n, view.values[n], view.values[n] / 3, view.values[n] * 30, log=True) for n in rs]
-        values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=30, drive=drive)
+        spread = float(config.get("diagnosis.tolerance"))
+        specs += [Spec(n, view.values[n], view.values[n] / spread, view.values[n] * spread, log=True) for n in rs]
+        values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=30,
+                                                  drive=view.drive if view.on_core else None)
         model = self.build(view, view.rewrite(), values["loop.L"])
         model.values.update({n: values[n] for n in rs})
         return Extension(model, values, ["loop.L"] + rs, raw, None, None, at, ok, msg)
+
+    def mimics_recalibration(self, view, ext):
+        predict = self._predictor(view, self._base(view))
+        with_l = view.score(predict(ext.values))[3]
+        without = view.score(predict({**ext.values, "loop.L": float(SCAN_H[0])}))[3]
+        if without <= float(config.get("diagnosis.equivalent")) * with_l:
+            return (f"its inductance adds nothing to a refit of the loop's resistance (validation RMS "
+                    f"{without:.3g} without it, {with_l:.3g} with it)")
+        return ""
