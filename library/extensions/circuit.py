@@ -67,7 +67,7 @@ class LoopInductance(Candidate):
     def fit(self, view):
         core = view.core()
         _, resistors = drive_loop(core, view.input)
-        rs = [n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values[n] > 0]
+        rs = [n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values.get(n, 0.0) > 0]
         model = self._base(view)
         predict = self._predictor(view, model)
         scores = []
