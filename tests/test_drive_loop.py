@@ -19,7 +19,7 @@ from bondgraph import C, I, J0, J1, Model, R, Se
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose
 from bondgraph.diagnosis.engine import model_file_options
-from bondgraph.diagnosis.rewrite import drive_loop
+from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
 from bondgraph.modelfile import load_model
 from library.extensions import LoopInductance
 from library.piezo import layer_extension, linear_polarization, piezo_layer
@@ -65,6 +65,7 @@ def cable_record(fs=10_000.0, T=0.6, noise=2e-3, seed=7) -> Dataset:
 def test_the_drive_loop_is_found_only_where_the_input_is_a_voltage_source():
     apa = load_model(MODELS / "apa120ml.py").model
     assert drive_loop(apa, "V") == ("i", ["Re"])
+    assert parameters_of(apa, "Re") == ["Re"] and parameters_of(apa, "amp") == []
     bimorph = load_model(MODELS / "bimorph_t215.py").model   # the voltage enters as modal forces
     assert drive_loop(bimorph, next(iter(bimorph.inputs))) is None
 

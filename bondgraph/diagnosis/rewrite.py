@@ -81,10 +81,7 @@ def junction_of(model: Model, element: str) -> str:
 
 def parameters_of(model: Model, element: str) -> list[str]:
     """Names of the model parameters in the element's law, sorted."""
-    el = model.elements[element]
-    law = getattr(el, "law", None)
-    if law is None:
-        law = getattr(el, "conductance_law", None)
+    law = getattr(model.elements[element], "law", None)
     known = set(model.all_parameters())
     return sorted(str(s) for s in sp.sympify(law).free_symbols if str(s) in known) if law is not None else []
 
