@@ -299,26 +299,36 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
     settings = {} if drift is None else {"diagnosis.drift": bool(drift)}
 
-    def run(reading: str, chain: bool = chain):
+    def run(reading: str, chain: bool = chain, decide=None):
         return _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
-                         validation, workers, chain, progress, source, equations, tolerance, reading)
+                         validation, workers, chain, progress, source, equations, tolerance, reading, decide)
 
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     started = time.time()
-    with single_threaded_blas(), config.override(settings):
-        first = _with_drift(run, "band-limited")
-        gap, floor = first.data["reading_gap_rms"], first.data["reading_floor_rms"]
+    chosen = {}
+
+    def decide(gap: float, floor: float, step: tuple[str, str, float]) -> bool:
+        """After the band-limited reading's first step: whether its chain goes on.  When the two
+        readings change the calibrated output beyond the noise, the linear reading is tried
+        too, and its chain goes on instead when its first step is the better one."""
         if gap <= config.get("diagnosis.reading_gap") * floor:
-            return first
+            return True
         say(f"the two readings of the drive between its samples change the calibrated model's output by "
             f"{gap / floor:.2g}× the noise floor: its first step with the drive read as linear between samples")
-        probe = _with_drift(functools.partial(run, chain=False), "linear")
-        keep, why = _better_reading(_first_step(first), _first_step(probe))
-        if keep == 0:
-            rep = first
-        else:   # a first step that names nothing ends the chain: the probe is then the whole answer
-            rep = probe if not chain or not probe.causes else _with_drift(run, "linear")
-        rep.notes.append(f"drive read as {rep.data['drive_reading']} between its samples: {why}")
+
+        def linear_goes_on(_gap, _floor, linear_step) -> bool:
+            chosen["keep"], chosen["why"] = _better_reading(step, linear_step)
+            return chosen["keep"] == 1
+
+        chosen["probe"] = _with_drift(functools.partial(run, decide=linear_goes_on), "linear")
+        return chosen["keep"] == 0
+
+    with single_threaded_blas(), config.override(settings):
+        first = _with_drift(functools.partial(run, decide=decide), "band-limited")
+        if not chosen:
+            return first
+        rep = first if chosen["keep"] == 0 else chosen["probe"]
+        rep.notes.append(f"drive read as {rep.data['drive_reading']} between its samples: {chosen['why']}")
         rep.seconds = time.time() - started
         return rep
 
@@ -334,15 +344,9 @@ def _with_drift(run, reading: str) -> Report:
     return out
 
 
-def _first_step(rep: Report) -> tuple[str, str, float]:
-    """(reading, cause, validation RMS) after a diagnosis' first step."""
-    s = rep.steps[0] if rep.steps else None
-    return rep.data["drive_reading"], s.cause if s else "none", s.rms if s else rep.baseline_rms
-
-
 def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float]) -> tuple[int, str]:
-    """Which of two first steps (:func:`_first_step`) under different readings of the drive to
-    go on from (0: ``a``, 1: ``b``) and why: the better fit; when the two are within
+    """Which of two first steps, (reading, cause, validation RMS), under different readings of
+    the drive to go on from (0: ``a``, 1: ``b``) and why: the better fit; when the two are within
     ``diagnosis.equivalent`` of each other and only one names a cause, the one naming none (the
     data cannot tell the readings apart, and a cause must not be credited with what a reading
     explains)."""
@@ -357,10 +361,12 @@ def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float]) -> tup
 
 
 def _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output, validation,
-              workers, chain, progress, source, equations, tolerance, reading) -> Report | str:
+              workers, chain, progress, source, equations, tolerance, reading, decide=None) -> Report | str:
     """The diagnosis (see :func:`diagnose`) with the drive read as ``reading`` between its
     samples, or the note to add when a sensor drift explains the record as well as the first
-    cause found (the caller then runs it with the drift solved)."""
+    cause found (the caller then runs it with the drift solved).  ``decide(gap, floor,
+    first_step)``, when given, is asked after the first step whether the chain goes on
+    (``first_step``: the reading, the cause named or "none", the validation RMS after it)."""
     started = time.time()
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     tick = getattr(progress, "advance", None)
@@ -420,6 +426,8 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                         f"(gain {winner.result.gain:.3g}): solved with the calibration as a sensor drift")
             steps.append(step)
             say(f"step {k + 1}: {step.why}")
+            if k == 0 and decide is not None and not decide(gap, floor, (ctx.reading, step.cause, step.rms)):
+                break
             if winner is None:
                 break
             state = advance(ctx, state, winner, view)
