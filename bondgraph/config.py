@@ -87,6 +87,9 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.candidate_seconds": Default(60.0, "a candidate's fits stop at their best point after this many seconds "
                                                 "(reported as not converged), within a simulation on the stiff "
                                                 "integrators too"),
+    "diagnosis.candidate_limit": Default(180.0, "every simulation of a candidate stops after this many seconds from "
+                                               "its start, its first optimiser evaluation and final prediction "
+                                               "included: the candidate is then reported as failed"),
     "diagnosis.max_fit_points": Default(20000, "samples of the fit part used by the optimisers (evenly thinned)"),
     "diagnosis.confirm_margin": Default(1.0, "a candidate whose gain passes but whose z falls short of min_z by less "
                                              "than this is fitted on a second fold (other validation blocks) and "

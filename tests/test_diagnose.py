@@ -306,8 +306,8 @@ def test_batches_of_a_slowly_varying_error_count_less():
 
 
 def test_a_slow_simulation_stops_at_the_fits_budget():
-    """Inside a candidate's time budget, a simulation in an optimiser evaluation gets the
-    budget's deadline once the optimiser has a point to stop at: the first evaluation always
+    """Inside a candidate's time budget (no limit), a simulation in an optimiser evaluation gets
+    the budget's deadline once the optimiser has a point to stop at: the first evaluation
     finishes, a later one that would outlast the budget stops, the fit returns its best point
     so far as not converged, and the final prediction runs without a deadline."""
     import time
@@ -333,6 +333,54 @@ def test_a_slow_simulation_stops_at_the_fits_budget():
     assert time.monotonic() - started < 5.0
     assert seen[0] is None and any(d is not None for d in seen) and seen[-1] is None
     assert not sol.success and "time budget" in sol.message and sol.z[0] == pytest.approx(1.0)
+
+
+def test_a_first_evaluation_that_cannot_finish_stops_at_the_limit():
+    """With a limit, the first evaluation (which has no point to fall back on) runs against it,
+    and a simulation that would outlast it ends the fit with the SimulationTimeout."""
+    import time
+    from bondgraph.diagnosis.projection import projected_fit, simulation_deadline, time_budget
+    from bondgraph.simulate import SimulationTimeout
+    t = np.linspace(0.0, 1.0, 200)
+    seen = []
+
+    def columns(z, rows):
+        deadline = simulation_deadline()
+        seen.append(deadline)
+        while time.monotonic() <= deadline:     # a run far longer than the limit
+            time.sleep(0.005)
+        raise SimulationTimeout("the run passed its deadline")
+
+    started = time.monotonic()
+    with time_budget(0.1, limit=0.3):
+        with pytest.raises(SimulationTimeout):
+            projected_fit(columns, np.exp(-3.0 * t), np.arange(t.size), [1.0], [0.1], [10.0], [-np.inf], [np.inf])
+    assert len(seen) == 1 and seen[0] == pytest.approx(started + 0.3, abs=0.05)
+    assert time.monotonic() - started < 5.0
+
+
+def test_a_candidate_whose_simulation_passes_the_limit_is_reported_failed():
+    """A candidate's simulations obey ``diagnosis.candidate_limit`` (here already passed when
+    it integrates the model on a stiff solver, which checks it at every step): the outcome is
+    a failure naming the timeout, not a hang."""
+    from bondgraph import config
+    from bondgraph.diagnosis import Candidate, Extension
+    from bondgraph.diagnosis.calibration import calibrate
+    from bondgraph.diagnosis.context import Context
+    from bondgraph.diagnosis.engine import run_candidate
+
+    class Integrates(Candidate):
+        cause, label = "test", "integrates the current model"
+
+        def fit(self, view):
+            view.states()
+            return Extension(view.model, dict(view.values), [], None, None, None, [], True, "")
+
+    ctx = Context(lag_model(), lag_record())
+    state, cal, _ = calibrate(ctx)
+    with config.override({"diagnosis.candidate_limit": 1e-9, "simulate.explicit_step_limit": 0}):
+        oc = run_candidate(ctx, state, cal.free, Integrates())
+    assert oc.extension is None and "SimulationTimeout" in oc.result.error
 
 
 def test_the_second_fold_holds_out_other_blocks():

@@ -52,7 +52,7 @@ def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: C
     else:
         view = View(ctx, state, calibrated, effort=effort)
     try:
-        with time_budget(config.get("diagnosis.candidate_seconds")):
+        with time_budget(config.get("diagnosis.candidate_seconds"), config.get("diagnosis.candidate_limit")):
             return _fit_candidate(cand, view, res)
     except (BondGraphError, SimulationError, np.linalg.LinAlgError, ValueError, FloatingPointError,
             ZeroDivisionError) as exc:

@@ -22,29 +22,40 @@ from ..simulate import SimulationTimeout
 
 #: the time (time.monotonic) after which fits in this context stop at their best point so far
 _DEADLINE: contextvars.ContextVar[float | None] = contextvars.ContextVar("deadline", default=None)
+#: the time after which every simulation in this context stops (a SimulationTimeout)
+_LIMIT: contextvars.ContextVar[float | None] = contextvars.ContextVar("limit", default=None)
 
 
 @contextlib.contextmanager
-def time_budget(seconds: float | None) -> Iterator[None]:
+def time_budget(seconds: float | None, limit: float | None = None) -> Iterator[None]:
     """Within the block, :func:`projected_fit` stops at the best point it has found once
-    ``seconds`` have passed (reported as not converged)."""
-    token = _DEADLINE.set(None if seconds is None else time.monotonic() + seconds)
+    ``seconds`` have passed (reported as not converged), and every simulation that asks
+    :func:`simulation_deadline` stops once ``limit`` seconds have passed (a
+    :class:`~bondgraph.simulate.SimulationTimeout`: the first evaluation of a fit, which has no
+    point to fall back on, and the final prediction included)."""
+    now = time.monotonic()
+    token = _DEADLINE.set(None if seconds is None else now + seconds)
+    hard = _LIMIT.set(None if limit is None else now + limit)
     try:
         yield
     finally:
         _DEADLINE.reset(token)
+        _LIMIT.reset(hard)
 
 
-#: the deadline a simulation inside an optimiser's evaluation obeys: set only once the optimiser
-#: has a point to stop at (its first evaluation always finishes)
+#: the deadline a simulation inside an optimiser's evaluation obeys once the optimiser has a
+#: point to stop at (before that, its first evaluation obeys only the limit)
 _STOP_AT: contextvars.ContextVar[float | None] = contextvars.ContextVar("stop_at", default=None)
 
 
 def simulation_deadline() -> float | None:
-    """The deadline (time.monotonic) for a simulation run inside an optimiser's evaluation in
-    this context, or None: :meth:`~bondgraph.simulate.Simulator.run` stops there, and the fit
-    stops at its best point so far (a single slow simulation must not outlast the budget)."""
-    return _STOP_AT.get()
+    """The deadline (time.monotonic) for a simulation run in this context, or None: inside an
+    optimiser's evaluation with a point to stop at, the fit's budget (the fit then stops at its
+    best point so far: a single slow simulation must not outlast the budget); else the
+    context's limit (see :func:`time_budget`).  :meth:`~bondgraph.simulate.Simulator.run`
+    stops there."""
+    stop = _STOP_AT.get()
+    return stop if stop is not None else _LIMIT.get()
 
 
 class _OutOfTime(Exception):
@@ -111,6 +122,8 @@ def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray]
         try:
             Ai = columns(z, idx)
         except SimulationTimeout:
+            if seen["z"] is None:   # the limit, on the first evaluation: nothing to fall back on
+                raise
             raise _OutOfTime from None
         finally:
             _STOP_AT.reset(token)

@@ -359,11 +359,11 @@ class View:
         known = {p.name for p in ident.sim.eqs.params}
         vals = {k: v for k, v in values.items() if k in known}
         if max_steps is None:
-            return ident.predict(vals)
+            return ident.predict(vals, deadline=simulation_deadline())
         ident = self._ctx.ident.like(model, rtol=1e-6, method="dopri5")
         ident.lti = None
         with config.override({"simulate.max_steps": int(max_steps)}):
-            return ident.predict(vals)
+            return ident.predict(vals, deadline=simulation_deadline())
 
     def fit_model(self, model: Model, new: Sequence[Spec], max_nfev: int = 20, refit: bool = True,
                   start: Mapping[str, float] | None = None,
@@ -449,7 +449,8 @@ class View:
         ident = self.identification(self.model, integrate=True)
         known = {p.name for p in ident.sim.eqs.params}
         vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
-        res = ident.sim.run(self._ctx.t, {self.input: ident.signal}, params=vals, rtol=1e-5)
+        res = ident.sim.run(self._ctx.t, {self.input: ident.signal}, params=vals, rtol=1e-5,
+                            deadline=simulation_deadline())
         out = dict(res.states)
         out["output rate"] = np.gradient(res.outputs[self.output], self._ctx.t)
         return out
