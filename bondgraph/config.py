@@ -87,6 +87,9 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.candidate_seconds": Default(60.0, "a candidate's fits stop at their best point after this many seconds "
                                                 "(reported as not converged), within a simulation on the stiff "
                                                 "integrators too"),
+    "diagnosis.chain_seconds": Default(180.0, "no further chain step is started once the diagnosis has run this "
+                                              "many seconds (the report says so): every record is answered in "
+                                              "minutes"),
     "diagnosis.candidate_limit": Default(180.0, "every simulation of a candidate stops after this many seconds from "
                                                "its start, its first optimiser evaluation and final prediction "
                                                "included: the candidate is then reported as failed"),

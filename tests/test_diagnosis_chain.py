@@ -117,3 +117,13 @@ def test_the_extended_graph_reproduces_the_chain(compound):
 def test_each_effect_alone(hysteresis, creep, expected):
     rep = diagnose(lag_model(), record(hysteresis, creep), candidates=CANDIDATES, workers=1)
     assert rep.causes == expected, [s.why for s in rep.steps]
+
+
+def test_no_step_starts_past_the_time_budget(compound):
+    """The same compound record with ``diagnosis.chain_seconds`` spent before the second step:
+    the first cause is named as before, the chain stops there and the report says why."""
+    from bondgraph import config
+    with config.override({"diagnosis.chain_seconds": 0.0}):
+        rep = diagnose(lag_model(), record(), candidates=CANDIDATES, workers=1)
+    assert rep.causes == compound.causes[:1] == ["hysteresis"] and len(rep.steps) == 1
+    assert any("diagnosis.chain_seconds" in n for n in rep.notes) and rep.as_json()["stop"] is None

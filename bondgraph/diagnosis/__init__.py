@@ -34,6 +34,9 @@ The engine, in order:
    again on it until none passes (compound effects: e.g. hysteresis, then creep).  Drive-side
    effects that act side by side are kept as one sum whose earlier weights are refitted with
    every later effect (:mod:`.additive`), so a step is credited only with what it adds.
+   Time is bounded: a candidate's fits stop at ``diagnosis.candidate_seconds``, its
+   simulations at ``diagnosis.candidate_limit``, and no step starts past
+   ``diagnosis.chain_seconds``.
 6. **Report** (:mod:`.report`): every step, every candidate's verdict, why ``none``.
 
 Candidates are found through the entry point group ``bondgraph.diagnosis`` (``library``

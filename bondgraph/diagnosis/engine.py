@@ -301,7 +301,8 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
 
     def run(reading: str, chain: bool = chain, decide=None):
         return _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
-                         validation, workers, chain, progress, source, equations, tolerance, reading, decide)
+                         validation, workers, chain, progress, source, equations, tolerance, reading, decide,
+                         started)
 
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     started = time.time()
@@ -361,12 +362,14 @@ def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float]) -> tup
 
 
 def _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output, validation,
-              workers, chain, progress, source, equations, tolerance, reading, decide=None) -> Report | str:
+              workers, chain, progress, source, equations, tolerance, reading, decide=None,
+              since: float | None = None) -> Report | str:
     """The diagnosis (see :func:`diagnose`) with the drive read as ``reading`` between its
     samples, or the note to add when a sensor drift explains the record as well as the first
     cause found (the caller then runs it with the drift solved).  ``decide(gap, floor,
     first_step)``, when given, is asked after the first step whether the chain goes on
-    (``first_step``: the reading, the cause named or "none", the validation RMS after it)."""
+    (``first_step``: the reading, the cause named or "none", the validation RMS after it).
+    ``since``: when the whole diagnosis started (``time.time()``), for ``diagnosis.chain_seconds``."""
     started = time.time()
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     tick = getattr(progress, "advance", None)
@@ -382,6 +385,14 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
     baseline = state
     with Pool(ctx, cal.free, cands, workers) as pool:
         for k in range(int(config.get("diagnosis.max_chain")) if chain else 1):
+            spent = time.time() - (started if since is None else since)
+            if k and spent > config.get("diagnosis.chain_seconds"):
+                note = (f"the chain stopped after step {k}: {spent:.0f} s spent, past the diagnosis' time budget "
+                        f"(setting diagnosis.chain_seconds, {config.get('diagnosis.chain_seconds'):g} s); "
+                        f"further causes were not examined")
+                say(note)
+                ctx.notes.append(note)
+                break
             pending = [i for i, c in enumerate(cands) if c.cause not in state.causes]
             if not pending:
                 break
