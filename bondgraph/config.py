@@ -108,8 +108,8 @@ DEFAULTS: dict[str, Default] = {
     "diagnosis.reading_gap": Default(0.5, "when the two readings of the drive between its samples (band-limited, "
                                           "linear) change the calibrated model's output by more than this share "
                                           "of the noise floor (RMS; where the drive leaves no quiet band, the "
-                                          "floor of the calibrated model's residual spectrum), the record is diagnosed under both and the "
-                                          "better is kept"),
+                                          "floor of the calibrated model's residual spectrum), its first step is taken under both and "
+                                          "the better one's chain goes on"),
     "diagnosis.drift": Default(False, "solve a linear sensor drift (output units per second) with the calibration and "
                                       "remove it from the record before any effect is sought: a thermal or "
                                       "sensor drift must not pass for creep or an opening loop (off: a drift is "

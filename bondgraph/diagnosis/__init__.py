@@ -15,8 +15,9 @@ The engine, in order:
    was sampled from (its linear interpolation compensated); split into fit and validation
    blocks.  When reading it as linear between its samples instead (a DAC that interpolates,
    a simulation with a first-order hold) changes the calibrated model's output by more than
-   ``diagnosis.reading_gap`` of the noise floor, the whole diagnosis runs under both readings
-   and the one whose final model fits better is kept (fewer causes when they fit alike).
+   ``diagnosis.reading_gap`` of the noise floor, the first step runs under both readings and
+   the chain goes on under the one whose first step fits better (the one naming no cause
+   when they fit alike).
 2. **Calibrate** (:mod:`.calibration`): the null is the best *linear* explanation: every
    identifiable linear parameter, the sensor gain and offset, and the output's delay behind
    the drive when the data separate it.  When that needs values outside the parameters'
