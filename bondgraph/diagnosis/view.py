@@ -365,6 +365,21 @@ class View:
         with config.override({"simulate.max_steps": int(max_steps)}):
             return ident.predict(vals, deadline=simulation_deadline())
 
+    def predictor(self, model: Model, drive: np.ndarray | None = None):
+        """(values -> raw prediction of ``model`` on every sample, the parameter names it
+        knows): by the exact linear route, driven by ``drive`` when given (for an extension
+        of :meth:`core`: the drive it sees, ``self.drive``; the output part outside the core,
+        ``extra``, is added), else by the compiled integrator within the context's time
+        limits (:func:`~bondgraph.diagnosis.projection.simulation_deadline`)."""
+        ident = self.identification(model)
+        known = {p.name for p in ident.sim.eqs.params}
+        if ident.lti is None:     # the integrator: one slow run must not outlast the fit's budget
+            return (lambda values: ident.predict(values, deadline=simulation_deadline())), known
+        if drive is None:
+            return ident.predict, known
+        extra = 0.0 if self.extra is None else self.extra
+        return (lambda values: ident.predict(values, drive=drive) + extra), known
+
     def fit_model(self, model: Model, new: Sequence[Spec], max_nfev: int = 20, refit: bool = True,
                   start: Mapping[str, float] | None = None,
                   predict: Callable[[Mapping[str, float]], np.ndarray] | None = None,
@@ -377,18 +392,7 @@ class View:
         a bound).  ``drive``: for an extension of :meth:`core`, the drive it sees (``self.drive``);
         the output part outside the core (``extra``) is added."""
         if predict is None:
-            ident = self.identification(model)
-            known = {p.name for p in ident.sim.eqs.params}
-            predict = ident.predict
-            if drive is not None and ident.lti is not None:
-                extra = 0.0 if self.extra is None else self.extra
-
-                def predict(values):
-                    return ident.predict(values, drive=drive) + extra
-            elif ident.lti is None:     # the integrator: one slow run must not outlast the fit's budget
-
-                def predict(values):
-                    return ident.predict(values, deadline=simulation_deadline())
+            predict, known = self.predictor(model, drive)
         else:
             known = set(model.all_parameters())
         base = {k: v for k, v in {**self.values, **(start or {})}.items() if k in known}

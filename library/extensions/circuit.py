@@ -51,16 +51,6 @@ class LoopInductance(Candidate):
         model.bond(junction, "loop.Ls")
         return model
 
-    @staticmethod
-    def _predictor(view, model):
-        """values -> raw prediction of ``model`` (an extension of the core when the current model
-        is a drive transform of it, driven by what the core sees, plus the output outside it)."""
-        ident = view.identification(model)
-        if not view.on_core:
-            return ident.predict
-        extra = 0.0 if view.extra is None else view.extra
-        return lambda values: ident.predict(values, drive=view.drive) + extra
-
     def _base(self, view):
         return self.build(view, view.core() if view.on_core else view.rewrite(), float(SCAN_H[0]))
 
@@ -69,7 +59,7 @@ class LoopInductance(Candidate):
         _, resistors = drive_loop(core, view.input)
         rs = [n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values.get(n, 0.0) > 0]
         model = self._base(view)
-        predict = self._predictor(view, model)
+        predict = view.predictor(model, view.drive if view.on_core else None)[0]
         scores = []
         for L in SCAN_H:
             raw = predict({**view.values, "loop.L": float(L)})
@@ -85,7 +75,7 @@ class LoopInductance(Candidate):
         return Extension(model, values, ["loop.L"] + rs, raw, None, None, at, ok, msg)
 
     def mimics_recalibration(self, view, ext):
-        predict = self._predictor(view, self._base(view))
+        predict = view.predictor(self._base(view), view.drive if view.on_core else None)[0]
         with_l = view.score(predict(ext.values))[3]
         without = view.score(predict({**ext.values, "loop.L": float(SCAN_H[0])}))[3]
         if without <= float(config.get("diagnosis.equivalent")) * with_l:
