@@ -355,15 +355,14 @@ class View:
         with ``max_steps``, by the compiled explicit integrator within that many steps (a
         :class:`~bondgraph.simulate.SimulationError` beyond: a bounded cost for a fallback)."""
         from .. import config
-        ident = self.identification(model)
-        known = {p.name for p in ident.sim.eqs.params}
-        vals = {k: v for k, v in values.items() if k in known}
         if max_steps is None:
-            return ident.predict(vals, deadline=simulation_deadline())
+            predict, known = self.predictor(model)
+            return predict({k: v for k, v in values.items() if k in known})
         ident = self._ctx.ident.like(model, rtol=1e-6, method="dopri5")
         ident.lti = None
+        known = {p.name for p in ident.sim.eqs.params}
         with config.override({"simulate.max_steps": int(max_steps)}):
-            return ident.predict(vals, deadline=simulation_deadline())
+            return ident.predict({k: v for k, v in values.items() if k in known}, deadline=simulation_deadline())
 
     def predictor(self, model: Model, drive: np.ndarray | None = None):
         """(values -> raw prediction of ``model`` on every sample, the parameter names it

@@ -51,6 +51,12 @@ class LoopInductance(Candidate):
         model.bond(junction, "loop.Ls")
         return model
 
+    @staticmethod
+    def _core_drive(view):
+        """The drive an extension of the core sees (None when the current model is not a drive
+        transform of its core)."""
+        return view.drive if view.on_core else None
+
     def _base(self, view):
         return self.build(view, view.core() if view.on_core else view.rewrite(), float(SCAN_H[0]))
 
@@ -59,7 +65,7 @@ class LoopInductance(Candidate):
         _, resistors = drive_loop(core, view.input)
         rs = [n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values.get(n, 0.0) > 0]
         model = self._base(view)
-        predict = view.predictor(model, view.drive if view.on_core else None)[0]
+        predict = view.predictor(model, self._core_drive(view))[0]
         scores = []
         for L in SCAN_H:
             raw = predict({**view.values, "loop.L": float(L)})
@@ -69,13 +75,13 @@ class LoopInductance(Candidate):
         spread = float(config.get("diagnosis.tolerance"))
         specs += [Spec(n, view.values[n], view.values[n] / spread, view.values[n] * spread, log=True) for n in rs]
         values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=30,
-                                                  drive=view.drive if view.on_core else None)
+                                                  drive=self._core_drive(view))
         model = self.build(view, view.rewrite(), values["loop.L"])
         model.values.update({n: values[n] for n in rs})
         return Extension(model, values, ["loop.L"] + rs, raw, None, None, at, ok, msg)
 
     def mimics_recalibration(self, view, ext):
-        predict = view.predictor(self._base(view), view.drive if view.on_core else None)[0]
+        predict = view.predictor(self._base(view), self._core_drive(view))[0]
         with_l = view.score(predict(ext.values))[3]
         without = view.score(predict({**ext.values, "loop.L": float(SCAN_H[0])}))[3]
         if without <= float(config.get("diagnosis.equivalent")) * with_l:
