@@ -64,6 +64,11 @@ class Candidate(ABC):
     kind: str = NONLINEAR
     #: relative cost; costly candidates start first so parallel workers finish together
     cost: int = 1
+    #: for a linear cause, the share of what the flexible linear reference explains that it
+    #: must explain (None: the setting ``diagnosis.linear_share``); a cause of the reference's
+    #: own form (lags of the drive) asks for nearly all of it, since any linear mismatch gives
+    #: such a cause a part to explain
+    linear_share: float | None = None
 
     def applies(self, view) -> bool | str:
         """True, or a short reason why the candidate does not apply to this model and data."""

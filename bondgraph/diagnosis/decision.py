@@ -18,6 +18,11 @@ is not dominated by the spread of error levels between regimes (sines, holds, a 
 lags of its drive, G·(c0 + Σ c_k/(1 + sτ_k)), the lags τ_k spread from two samples to a third
 of the record: a rational correction of modest order on the input side, fitted by linear least
 squares.  What it gains over the calibrated model bounds what a linear mismatch explains.
+The least squares ignore directions whose singular value is below ``RCOND`` of the largest
+(columns scaled to unit norm): a narrow-band drive (one sine) makes every lag of it nearly a
+combination of the others, and such a direction, unresolved by the fit part, would otherwise
+carry huge cancelling coefficients that blow up wherever the columns differ slightly (the
+record's ends) and make the reference worse than the model it extends.
 
 **Rules** (thresholds in :mod:`bondgraph.config`, section ``diagnosis``): a candidate passes
 when it lowers the validation error significantly (``min_z``) and by a useful factor
@@ -29,7 +34,8 @@ parameter on a search bound, and
   ``min_gain_reference`` with z ≥ ``min_z_reference`` (a second-stage test: that it explains
   something is established against the calibrated model; this asks that it is not linear);
 * a linear structural cause explains at least ``linear_share`` of what the reference
-  explains, and its fitted values are physically plausible (the candidate says); one that may
+  explains (more if the candidate asks: one of the reference's own form, lags of the drive),
+  and its fitted values are physically plausible (the candidate says); one that may
   be the model's own structure recalibrated (a mode placed on one of the model's modes: the
   candidate says) must also beat the reference as a nonlinear cause must, since the free
   calibration under the reference has had every chance to recalibrate that structure.
@@ -125,11 +131,15 @@ def reference_taus(dt: float, span: float) -> np.ndarray:
     return np.geomspace(2 * dt, max(span / 3, 4 * dt), n)
 
 
+#: relative singular value below which :func:`regress` leaves a direction out (module docstring)
+RCOND = 1e-5
+
+
 def regress(columns: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """Least-squares fit of ``columns`` (and a constant) to ``y`` on ``idx``; the fitted series."""
     A = np.column_stack([columns, np.ones(len(y))])
     norms = np.maximum(np.linalg.norm(A[idx], axis=0), 1e-300)
-    coef, *_ = np.linalg.lstsq(A[idx] / norms, y[idx], rcond=1e-7)
+    coef, *_ = np.linalg.lstsq(A[idx] / norms, y[idx], rcond=RCOND)
     return A @ (coef / norms)
 
 
@@ -142,10 +152,12 @@ class Verdict:
 
 
 def judge(kind: str, base: Comparison, versus_reference: Comparison | None, share: float | None,
-          at_bounds: list[str], implausible: str, later: bool = False, recalibration: str = "") -> Verdict:
+          at_bounds: list[str], implausible: str, later: bool = False, recalibration: str = "",
+          need_share: float | None = None) -> Verdict:
     """Apply the rules of the module docstring to one candidate (``later``: in a chain step
     after the first, where ``diagnosis.min_gain_chain`` replaces ``diagnosis.min_gain``;
-    ``recalibration``: why a linear cause may be the model's own structure recalibrated)."""
+    ``recalibration``: why a linear cause may be the model's own structure recalibrated;
+    ``need_share``: the candidate's own ``linear_share``, if it has one)."""
     min_z = config.get("diagnosis.min_z")
     min_gain = config.get("diagnosis.min_gain_chain" if later else "diagnosis.min_gain")
     if at_bounds:
@@ -161,7 +173,7 @@ def judge(kind: str, base: Comparison, versus_reference: Comparison | None, shar
         if not beyond:
             return Verdict(False, f"does not beat the linear reference (gain {vr.gain:.3g}, z = {vr.z:.2g})")
     else:
-        need = config.get("diagnosis.linear_share")
+        need = config.get("diagnosis.linear_share") if need_share is None else need_share
         if share is not None and share < need:
             return Verdict(False, f"explains {share:.0%} of the linear mismatch (< {need:.0%})")
         if implausible:

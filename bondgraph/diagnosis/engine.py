@@ -79,6 +79,7 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
     if cand.kind == LINEAR:
         res.implausible = cand.implausible(view, ext)
         res.recalibration = cand.mimics_recalibration(view, ext)
+        res.need_share = cand.linear_share
     ext.prediction = None
     refit = view.refit_linear(ext.values, additive=ext.additive is not None)
     static = cand.without_memory(view)
@@ -152,7 +153,7 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
         explained_ref = before ** 2 - min(rms_ref, rms_state) ** 2
         r.share = (before ** 2 - r.rms_validation ** 2) / explained_ref if explained_ref > 0 else None
         v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], r.implausible,
-                  later=bool(state.causes), recalibration=r.recalibration)
+                  later=bool(state.causes), recalibration=r.recalibration, need_share=r.need_share)
         if v.passed and oc.static is not None and np.all(np.isfinite(oc.static)):
             # both with the reference's freedom: loops that only mimic a linear lag are no memory
             e_static = y - regress(np.column_stack([oc.static, ref_cols]), y, idx)

@@ -43,6 +43,8 @@ class CandidateResult:
     #: for a linear cause, why it may be a recalibration of the model's own structure ('' if
     #: not): it must then beat the flexible linear reference too
     recalibration: str = ""
+    #: for a linear cause, the share of the reference's gain it must explain (None: the setting)
+    need_share: float | None = None
     #: for a memory effect, its gain over the same freedom without memory (a static curve)
     gain_static: float | None = None
     #: z on a second fold (other validation blocks), when the first was borderline; ``z`` is
