@@ -61,7 +61,7 @@ DEFAULTS: dict[str, Default] = {
                                              "sensitivity alone explains this share of the calibrated model's residual "
                                              "energy (with a step within the spread)"),
     "diagnosis.fast_factor": Default(10.0, "modes faster than this many times the data's Nyquist frequency are "
-                                           "residualised (replaced by their static contribution)"),
+                                           "residualised (replaced by their static contribution and the lag term)"),
     "diagnosis.decimate_margin": Default(8.0, "records are decimated while the new Nyquist frequency stays this many "
                                               "times above the drive's band (and 1.25 times above the band where the "
                                               "output stands above its noise floor)"),

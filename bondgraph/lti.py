@@ -11,10 +11,15 @@ sample.
 
 **Residualisation** (:func:`residualise`): the modes faster than a cut-off frequency are
 separated from the slow ones by an ordered real Schur form and a Sylvester equation (block
-diagonalisation), and replaced by their quasi-static (DC) contribution, D_r = D − C_f·A_f⁻¹·B_f.
+diagonalisation), and replaced by their quasi-static (DC) contribution, D_r = D − C_f·A_f⁻¹·B_f,
+plus its first-order term in frequency, a feedthrough of the input's rate
+D_1 = −C_f·A_f⁻²·B_f (C_f(sI − A_f)⁻¹B_f = −C_f A_f⁻¹B_f − s·C_f A_f⁻²B_f − ...): the
+lag of the fast modes at the data's frequencies (ω/ω_f of a radian), which is far below what
+those modes show of themselves yet, at a high signal-to-noise ratio, well above the noise.
 The slow poles are kept exactly and the static gain is exact: the singular-perturbation
 approximation of the fast subsystem, which is what data sampled far below those modes can
-see of them.  With every mode fast the model reduces to its static gain.
+see of them.  With every mode fast the model reduces to its static gain and the rate term.
+The input's rate at the samples is their central difference (one-sided at the ends).
 """
 from __future__ import annotations
 
@@ -86,13 +91,15 @@ def recursion_rows(Ad, Bd, Cd, Dd, x0, u, Y):
 
 @dataclass(frozen=True)
 class StateSpace:
-    """Numeric single-input single-output (A, B, C, D); ``fast`` modes were residualised."""
+    """Numeric single-input single-output (A, B, C, D); ``fast`` modes were residualised, and
+    ``D1`` (output per unit input rate, s) is their first-order term (module docstring)."""
 
     A: np.ndarray
     B: np.ndarray
     C: np.ndarray
     D: np.ndarray
     fast: int = 0
+    D1: float = 0.0
 
     @property
     def n(self) -> int:
@@ -102,7 +109,8 @@ class StateSpace:
         return np.linalg.eigvals(self.A) if self.n else np.zeros(0, complex)
 
     def frequency_response(self, omega) -> np.ndarray:
-        return frequency_response(self.A, self.B, self.C, self.D, omega)
+        H = frequency_response(self.A, self.B, self.C, self.D, omega)
+        return H + 1j * np.atleast_1d(np.asarray(omega, float)) * self.D1 if self.D1 else H
 
     def response(self, dt: float, U: np.ndarray, x0: np.ndarray | None = None,
                  rows: np.ndarray | None = None) -> np.ndarray:
@@ -112,14 +120,18 @@ class StateSpace:
         U = np.asarray(U, float)
         U = np.ascontiguousarray(U.reshape(-1, 1) if U.ndim == 1 else U)
         if self.n == 0:
-            return self.D[0, 0] * (U if rows is None else U[rows])
-        Phi, Gam, G1 = foh(self.A, self.B, dt)
-        x0 = np.zeros(self.n) if x0 is None else np.asarray(x0, float)
-        rows = np.arange(U.shape[0]) if rows is None else np.ascontiguousarray(rows, np.int64)
-        Y = np.empty((rows.size, U.shape[1]))
-        # the discrete state is ξ = x − Γ1·u (as in scipy.signal.cont2discrete, method 'foh')
-        X0 = np.ascontiguousarray(x0[:, None] - G1[:, :1] * U[0][None, :])
-        recursion(Phi, Gam, np.ascontiguousarray(self.C), self.D + self.C @ G1, X0, U, rows, Y)
+            Y = self.D[0, 0] * (U if rows is None else U[rows])
+        else:
+            Phi, Gam, G1 = foh(self.A, self.B, dt)
+            x0 = np.zeros(self.n) if x0 is None else np.asarray(x0, float)
+            rows = np.arange(U.shape[0]) if rows is None else np.ascontiguousarray(rows, np.int64)
+            Y = np.empty((rows.size, U.shape[1]))
+            # the discrete state is ξ = x − Γ1·u (as in scipy.signal.cont2discrete, method 'foh')
+            X0 = np.ascontiguousarray(x0[:, None] - G1[:, :1] * U[0][None, :])
+            recursion(Phi, Gam, np.ascontiguousarray(self.C), self.D + self.C @ G1, X0, U, rows, Y)
+        if self.D1 and U.shape[0] > 1:
+            rate = np.gradient(U, dt, axis=0)
+            Y = Y + self.D1 * (rate if rows is None else rate[rows])
         return Y
 
     def response_rows(self, dt: float, u: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
@@ -257,14 +269,16 @@ def residualise(A, B, C, D, cut: float) -> StateSpace:
     T, Z, k = schur(A, output="real", sort=lambda re, im: np.hypot(re, im) <= cut)
     Bt, Ct = Z.T @ B, C @ Z
     if k == 0:
+        static = np.linalg.solve(T, Bt)
         return StateSpace(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
-                          D - Ct @ np.linalg.solve(T, Bt), fast=n)
+                          D - Ct @ static, fast=n, D1=float(-(Ct @ np.linalg.solve(T, static))[0, 0]))
     T11, T12, T22 = T[:k, :k], T[:k, k:], T[k:, k:]
     X = solve_sylvester(T11, -T22, -T12)
     B1, B2 = Bt[:k] - X @ Bt[k:], Bt[k:]
     C1, C2 = Ct[:, :k], Ct[:, :k] @ X + Ct[:, k:]
+    static = np.linalg.solve(T22, B2)
     return StateSpace(np.ascontiguousarray(T11), np.ascontiguousarray(B1), np.ascontiguousarray(C1),
-                      D - C2 @ np.linalg.solve(T22, B2), fast=n - k)
+                      D - C2 @ static, fast=n - k, D1=float(-(C2 @ np.linalg.solve(T22, static))[0, 0]))
 
 
 def foh(A: np.ndarray, B: np.ndarray, dt: float):
