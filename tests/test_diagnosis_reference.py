@@ -3,11 +3,14 @@ own form.
 
 The record: an effect-free APA of the independent truth generator (bench seed 3372: one sine
 at 25 Hz on an offset, linear parameters drawn away from the model file's, pink sensor noise
-with mains hum).  Every lag of a single sine is nearly a combination of the others; before the
-reference's least squares left such directions out, their huge cancelling coefficients blew
-up at the record's end and made the reference 2.2x worse than the calibrated model on the
-validation part, which switched the share rule off, and creep (a fast cell for the phase
-error at the drive's frequency, a slow one for the noise's wander) was named with gain 1.19.
+with mains hum), decimated to 417 Hz.  Every lag of a single sine is nearly a combination of
+the others; before the reference's least squares left such directions out, their huge
+cancelling coefficients blew up at the record's end and made the reference 2.2x worse than
+the calibrated model on the validation part, which switched the share rule off, and creep (a
+fast cell for the phase error at the drive's frequency, a slow one for the noise's wander) was
+named with gain 1.19 (it explained 78 % of what the reference then explained, creep must
+explain 90 %).  Since the residualised modes keep their lag (:func:`bondgraph.lti.residualise`)
+that phase error is gone and creep gains 1.08.
 """
 from __future__ import annotations
 
@@ -37,13 +40,11 @@ def test_the_reference_is_never_worse_than_the_model_it_extends(single_sine_null
         assert step.reference_rms <= step.rms_before
 
 
-def test_creep_must_explain_nearly_all_the_reference_does(single_sine_null):
+def test_the_single_sine_null_is_none_and_creep_asks_for_its_own_share(single_sine_null):
     rep = single_sine_null
     assert rep.cause == "none", rep.steps[-1].why
     creep = next(r for r in rep.steps[0].candidates if r.cause == "creep" and r.params)
-    assert creep.gain > 1.1 and creep.z > 3                   # it does explain something ...
-    assert 0.7 < creep.share < 0.9                            # ... most of a linear mismatch, not all
-    assert "of the linear mismatch (< 90%)" in creep.verdict
+    assert not creep.passed and creep.need_share == 0.9
 
 
 def test_a_candidate_may_ask_for_a_larger_share_than_the_setting():
