@@ -66,29 +66,6 @@ def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
             r += 1
 
 
-@njit(cache=True)
-def recursion_rows(Ad, Bd, Cd, Dd, x0, u, Y):
-    """x[k+1] = Ad x[k] + Bd u[k], Y[k, r] = Cd[r] x[k] + Dd[r] u[k]: one input, several outputs."""
-    n = Ad.shape[0]
-    N = u.shape[0]
-    p = Cd.shape[0]
-    x = x0.copy()
-    xn = np.empty(n)
-    for k in range(N):
-        for r in range(p):
-            acc = Dd[r, 0] * u[k]
-            for i in range(n):
-                acc += Cd[r, i] * x[i]
-            Y[k, r] = acc
-        for i in range(n):
-            s = Bd[i, 0] * u[k]
-            for l in range(n):
-                s += Ad[i, l] * x[l]
-            xn[i] = s
-        for i in range(n):
-            x[i] = xn[i]
-
-
 @dataclass(frozen=True)
 class StateSpace:
     """Numeric single-input single-output (A, B, C, D); ``fast`` modes were residualised, and
@@ -132,41 +109,6 @@ class StateSpace:
         if self.D1 and U.shape[0] > 1:
             rate = np.gradient(U, dt, axis=0)
             Y = Y + self.D1 * (rate if rows is None else rate[rows])
-        return Y
-
-    def response_rows(self, dt: float, u: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
-        """Outputs C[r]·x + D[r]·u of this system's states (its A and B) driven from rest by the
-        samples ``u`` (linear in between): an array (len(u), rows), one state recursion for all."""
-        return self.sampled(dt, C, D).response(u)
-
-    def sampled(self, dt: float, C: np.ndarray, D: np.ndarray) -> "Sampled":
-        """The first-order-hold discretisation of this system's states with output rows C, D,
-        to drive with many sample sequences (see :meth:`response_rows`)."""
-        C, D = np.atleast_2d(np.asarray(C, float)), np.asarray(D, float).reshape(-1, 1)
-        if self.n == 0:
-            return Sampled(None, None, C, D, None)
-        Phi, Gam, G1 = foh(self.A, self.B, dt)
-        return Sampled(Phi, Gam, np.ascontiguousarray(C), np.ascontiguousarray(D + C @ G1), G1)
-
-
-@dataclass(frozen=True)
-class Sampled:
-    """A discretised single-input system with several output rows: ξ[k+1] = Φξ[k] + Γu[k],
-    y[k] = Cξ[k] + Dd·u[k] (Dd = D + C·Γ1), from rest (ξ[0] = −Γ1·u[0])."""
-
-    Phi: np.ndarray | None
-    Gam: np.ndarray | None
-    C: np.ndarray
-    Dd: np.ndarray
-    G1: np.ndarray | None
-
-    def response(self, u: np.ndarray) -> np.ndarray:
-        """Outputs (len(u), rows) for the input samples ``u``."""
-        u = np.ascontiguousarray(u, float)
-        if self.Phi is None:
-            return u[:, None] * self.Dd[:, 0]
-        Y = np.empty((u.size, self.C.shape[0]))
-        recursion_rows(self.Phi, self.Gam, self.C, self.Dd, -self.G1[:, 0] * u[0], u, Y)
         return Y
 
 

@@ -146,22 +146,6 @@ def test_the_rate_term_keeps_the_lag_of_the_residualised_modes():
     assert err(red) < 2e-4
 
 
-def test_several_outputs_of_one_state_recursion_equal_one_recursion_each():
-    """StateSpace.response_rows (one recursion, several C rows; the Lur'e route's) against
-    StateSpace.response of each output alone, on a two-mass system driven by a random signal."""
-    from bondgraph.lti import StateSpace
-    rng = np.random.default_rng(4)
-    A = np.array([[0.0, 1.0, 0.0, 0.0], [-400.0, -4.0, 400.0, 0.0], [0.0, 0.0, 0.0, 1.0], [200.0, 0.0, -900.0, -2.0]])
-    B = np.array([[0.0], [1.0], [0.0], [0.0]])
-    C = rng.normal(size=(3, 4))
-    D = rng.normal(size=(3, 1))
-    u = np.cumsum(rng.normal(size=2000)) * 1e-2
-    rows = StateSpace(A, B, C, D).response_rows(1e-3, u, C, D)
-    for r in range(3):
-        alone = StateSpace(A, B, C[r:r + 1], D[r:r + 1]).response(1e-3, u)[:, 0]
-        np.testing.assert_allclose(rows[:, r], alone, rtol=1e-12, atol=1e-12 * np.max(np.abs(alone)))
-
-
 @given(rows=st.integers(1, 30), cols=st.integers(1, 12), seed=st.integers(0, 10_000))
 @settings(max_examples=60, deadline=None)
 def test_bounded_least_squares_on_any_shape(rows, cols, seed):
