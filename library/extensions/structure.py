@@ -25,7 +25,9 @@ class _Centred(Candidate):
     one coefficient c ≥ 0 per element, centred on the data's amplitude by r² (see the
     subclasses).  The coefficient is scanned upwards on a log grid of its scale, each point
     refitting the linear parameters briefly (a nonlinear resonance moves with the
-    calibration), then fitted with the calibration from the best point."""
+    calibration), then fitted with the calibration from the best point.  An element whose
+    coefficient ends on its upper bound (past it the law is no longer plausible) is held at 0
+    and the others are fitted again without it, unless no element would be left."""
 
     role = ""
     prefix = ""
@@ -138,8 +140,18 @@ class _Centred(Candidate):
             raise SimulationError(f"{self.cause}: the extended model could not be simulated")
         start = {k: v for k, v in best[2].items() if k not in names}
         values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
-        kept = [(n, el) for n, el in zip(names, els) if el not in held]
         at = [n for n in at if values[n] > 0]   # a coefficient of 0 is no such effect, not a search limit
+        stuck = [el for n, el in zip(names, els) if n in at]
+        if stuck and len(stuck) + len(held) < len(els):
+            # beyond the bound the term is no longer plausible (a softening whose tangent
+            # stiffness turns negative at the peak): that element's term stands in for something
+            # else, so it is held at 0 and the others are refitted without it
+            held += stuck
+            values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
+            at = [n for n in at if values[n] > 0]
+            msg = (f"{', '.join(f'{self.prefix}_{el}' for el in stuck)} went to its search bound and "
+                   f"{'is' if len(stuck) == 1 else 'are'} held at 0; {msg}")
+        kept = [(n, el) for n, el in zip(names, els) if el not in held]
         terms = [(el, partners[el], self.term, values[n], r2s[el]) for n, el in kept]
         return Extension(self.build(view, {el: values[n] for n, el in kept}, r2s), values, [n for n, _ in kept],
                          raw, None, None, at, ok, msg, terms=terms)
