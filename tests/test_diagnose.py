@@ -259,6 +259,10 @@ def test_a_close_race_is_decided_by_converged_fits():
     assert after.params["pw.p"] == pytest.approx(2.0, rel=0.01) and after.params["pw.a"] == pytest.approx(0.4, rel=0.02)
     assert "fitted again, 10× the evaluations" in polished.text()
     assert polished.causes == rough.causes == ["square-law"]
+    # the strongest other cause that passes too is what the data could not rule out
+    other = max((c for c in polished.steps[0].candidates if c.passed and c.cause != "square-law"),
+                key=lambda c: c.gain)
+    assert f"{other.cause} passes too (×{other.gain:.3g}" in polished.steps[0].why
 
 
 def test_first_declared_input_and_output_by_default():

@@ -232,6 +232,11 @@ def _why(winner, outcomes, rms_state, rms_ref, noise) -> str:
         r = winner.result
         extra = (f", {r.gain_reference:.3g}× over the flexible linear reference" if r.kind != LINEAR
                  else f", {r.share:.0%} of what a linear correction explains" if r.share is not None else "")
+        others = [oc.result for oc in outcomes if oc.result.passed and oc.result.cause != r.cause]
+        if others:   # what the data could not rule out: the strongest other cause that passes too
+            o = max(others, key=lambda o: o.gain)
+            extra += (f"; {o.cause} passes too (×{o.gain:.3g}, validation RMS "
+                      f"{o.rms_validation / max(r.rms_validation, 1e-300):.3g}× the named one's)")
         return (f"named: validation RMS {r.gain:.3g}× lower (z = {r.z:.1f}, {r.n_eff:.0f} effective samples)"
                 f"{extra}")
     parts = []
