@@ -101,7 +101,12 @@ class Context:
         self.slow_hz: list[float] = []
         #: the lightly damped ones among them (damping ratio < 0.5): the model's resonances
         self.resonance_hz: list[float] = []
+        #: the lowest resonance of the whole nominal model, kept or residualised (None without one)
+        self.lowest_resonance_hz: float | None = None
         if lti.exact:
+            full = lti.state_space(th0).poles()
+            light = [abs(p) / (2 * math.pi) for p in full if p.imag != 0 and abs(p.real) < 0.5 * abs(p)]
+            self.lowest_resonance_hz = min(light) if light else None
             data, fs = self._decimate(lti, th0, data, fs, output_band(y, fs, noise_density))
             self.cut = config.get("diagnosis.fast_factor") * math.pi * fs
             ss = lti.state_space(th0, self.cut)

@@ -92,6 +92,9 @@ class View:
         self.modes_hz = tuple(ctx.slow_hz)
         #: ... and those of its resonances (complex poles with damping ratio < 0.5)
         self.resonances_hz = tuple(ctx.resonance_hz)
+        #: the lowest resonance (Hz) of the whole nominal model, resolved or residualised (None
+        #: without one)
+        self.lowest_resonance_hz = ctx.lowest_resonance_hz
         #: the part of the current output that does not pass through the linear core (e.g. an
         #: added parallel mode), sensor gain 1; drive-side fits keep it
         self.extra = None

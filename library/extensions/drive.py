@@ -38,17 +38,21 @@ def dwell_levels(d: np.ndarray, bins: int = 100) -> int:
 
 def static_curve(view, pieces: int) -> np.ndarray:
     """The best static curve of the drive with ``pieces`` parameters, through the linear core:
-    odd and even ramps about the drive's centre, knees spread evenly over its half-range; the
+    a line and a kink at the drive's centre, and on each side of it ramps from knees at
+    quantiles of that side's excursions (each ramp is carried by a fifth or more of its side's
+    samples, so no coefficient is set by a few extreme ones and extrapolated from there); the
     twin a memory effect must beat (of the base drive, beside the effects named before, as the
     memory effect is fitted).  Asked on every drive: on steps held at a few levels, memory shows
     only where a level is reached from both sides, and loops that do not beat a static curve
     there have shown no memory (a saturation on steps reproduced by a play sum is a shape)."""
     d = np.asarray(view.additive.base)
-    c, half = 0.5 * (d.max() + d.min()), 0.5 * float(np.ptp(d))
-    knees = np.linspace(0.0, half, pieces // 2, endpoint=False)[1:]
-    dev = d - c
-    basis = [dev, np.abs(dev)] + [np.sign(dev) * np.maximum(np.abs(dev) - k, 0.0) for k in knees] + \
-        [np.maximum(np.abs(dev) - k, 0.0) for k in knees]
+    dev = d - 0.5 * (d.max() + d.min())
+    levels = np.arange(1, pieces // 2) / (pieces // 2)
+    basis = [dev, np.abs(dev)]
+    for side in (dev, -dev):
+        out = side[side > 0]
+        knees = np.unique(np.quantile(out, levels)) if out.size else []
+        basis += [np.maximum(side - k, 0.0) for k in knees]
     fit = view.fit_drive(basis, [-np.inf] * len(basis), [np.inf] * len(basis), identity=False,
                          names=[f"static.k{i}" for i in range(len(basis))])
     return fit.prediction

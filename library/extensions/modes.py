@@ -48,6 +48,10 @@ def mode_implausible(view, omega: float, zeta: float) -> str:
     f = omega / (2 * math.pi)
     if f > 0.45 * view.fs:
         return f"its frequency ({f:.4g} Hz) is beyond the data's Nyquist frequency"
+    low = view.lowest_resonance_hz
+    if low is not None and f < 0.5 * low:
+        return (f"its frequency ({f:.4g} Hz) is below half the model's lowest mode ({low:.4g} Hz): not a "
+                f"higher mode of this structure")
     d = np.asarray(view.drive if view.drive is not None else view.u)
     fr, P = signal.welch(d, view.fs, nperseg=int(min(len(d), 4096)), detrend="linear")
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
