@@ -149,8 +149,8 @@ class _Centred(Candidate):
             held += stuck
             values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
             at = [n for n in at if values[n] > 0]
-            msg = (f"{', '.join(f'{self.prefix}_{el}' for el in stuck)} went to its search bound and "
-                   f"{'is' if len(stuck) == 1 else 'are'} held at 0; {msg}")
+            msg = (f"{', '.join(f'{self.prefix}_{el}' for el in stuck)} went to "
+                   f"{'its search bound and is' if len(stuck) == 1 else 'their search bounds and are'} held at 0; {msg}")
         kept = [(n, el) for n, el in zip(names, els) if el not in held]
         terms = [(el, partners[el], self.term, values[n], r2s[el]) for n, el in kept]
         return Extension(self.build(view, {el: values[n] for n, el in kept}, r2s), values, [n for n, _ in kept],
