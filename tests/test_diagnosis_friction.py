@@ -4,7 +4,9 @@ The truth is written here: a mass on a spring and a damper (40 Hz, damping ratio
 model says 38 Hz and 0.03) with a Coulomb force F·(2/π)·arctan(v/v_s) in the damper (an
 arctan, not the candidate's tanh; v_s 1 % of the peak velocity; F such that at the peak
 velocity the friction's equivalent viscous damping equals the viscous one), driven through
-its resonance by a 10 → 70 Hz chirp, 2 kHz × 2 s, white noise of 0.5 % of the stroke.
+its resonance by a 10 → 70 Hz chirp, 2 kHz × 2 s, white noise of 0.5 % of the stroke.  The
+truth is integrated by the compiled explicit method at rtol 1e-9 (within 1.7e-6 of the stroke
+of scipy's Radau at the same tolerance, 3000× below the noise, in a hundredth of the time).
 
 Asserted: the cause is nonlinear damping, named through the friction candidate (damping that
 falls with amplitude, where the cubic forms' rises); the same record without friction is
@@ -52,7 +54,7 @@ def record(friction=True, seed=2):
         force = c * vpk * math.pi / 4            # 4F/(π v_pk) = c at the peak velocity
         vs = 0.01 * vpk
         modify_law(truth, "c", lambda f, old: old + force * 2 / math.pi * sp.atan(f / vs))
-    x = bg.simulate(truth, t, {"F": bg.PiecewiseLinear(t, u)}, rtol=1e-9, method="radau")["x"]
+    x = bg.simulate(truth, t, {"F": bg.PiecewiseLinear(t, u)}, rtol=1e-9, method="dopri5")["x"]
     rng = np.random.default_rng(seed)
     return Dataset(t, {"F": u, "x": x + 0.005 * np.ptp(x) * rng.standard_normal(t.size)})
 
