@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 from numba import njit
-from scipy.linalg import expm, schur, solve_sylvester
+from scipy.linalg import expm, matrix_balance, schur, solve_sylvester
 
 from .equations import Equations
 from .errors import UsageError, did_you_mean
@@ -187,12 +187,26 @@ def first_output(eqs: Equations) -> str:
     return next(iter(eqs.outputs))
 
 
+#: eigenvector matrices worse conditioned than this are not used for the modal sum
+MODAL_COND = 1e6
+
+
 def frequency_response(A, B, C, D, omega) -> np.ndarray:
-    """H(jω) = C (jωI − A)⁻¹ B + D of a single-input single-output model at ``omega`` (rad/s)."""
+    """H(jω) = C (jωI − A)⁻¹ B + D of a single-input single-output model at ``omega`` (rad/s).
+
+    As the modal sum Σ_k r_k/(jω − λ_k) (A = VΛV⁻¹ after balancing the states' scales,
+    r_k = (CV)_k (V⁻¹B)_k): one eigendecomposition instead of a solve per frequency; by a
+    solve per frequency when the eigenvectors are ill-conditioned (near-defective A, more
+    than :data:`MODAL_COND`)."""
     omega = np.atleast_1d(np.asarray(omega, float))
     n = A.shape[0]
     if n == 0:
         return np.full(omega.size, complex(D[0, 0]))
+    Ab, (scale, _) = matrix_balance(A, permute=False, separate=True)   # states in comparable units
+    lam, V = np.linalg.eig(Ab)
+    if np.all(np.isfinite(lam)) and np.linalg.cond(V) <= MODAL_COND:
+        r = ((C[0] * scale) @ V) * np.linalg.solve(V, (B[:, 0] / scale).astype(complex))
+        return (r[None, :] / (1j * omega[:, None] - lam[None, :])).sum(axis=1) + D[0, 0]
     M = 1j * omega[:, None, None] * np.eye(n)[None] - A[None]
     X = np.linalg.solve(M, np.broadcast_to(B.astype(complex), (omega.size, n, B.shape[1])))
     return (C[None] @ X)[:, 0, 0] + D[0, 0]

@@ -158,7 +158,6 @@ class InputBoucWen(_DriveCandidate):
 
     cause = "hysteresis"
     label = "Bouc-Wen state on the drive"
-    cost = 2
 
     def applies(self, view):
         if view.drive is None or view.additive.base_expr != view.input_symbol:

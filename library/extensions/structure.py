@@ -228,6 +228,7 @@ class FrictionDamping(NonlinearDamping):
     terms)."""
 
     label = "Coulomb friction (smoothed) in the damping elements"
+    cost = 4          # up to three smoothing velocities, each a fit on the exact route
     upper = 300.0
     grid = (1.0, 8.0, 64.0)
     #: smoothing velocities tried, as shares of the data's peak velocity (the best fit is kept)

@@ -2,6 +2,8 @@
 weights, the Bouc–Wen variable along a path."""
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 from scipy.optimize import nnls
@@ -73,6 +75,41 @@ def fit_pi_weights(v, y, thresholds, offset: bool = False):
 
 
 @numba.njit(cache=True)
+def _relax(x):
+    """(1 − e^(−x))/x, 1 at x = 0."""
+    return -math.expm1(-x) / x if abs(x) > 1e-8 else 1.0 - 0.5 * x
+
+
+@numba.njit(cache=True)
+def _bouc_wen_exact(v, beta, gamma, z0, out):
+    """Exponent 1: along a monotone piece of the path (|Δv| = U, σ = sign Δv) ζ = σz obeys
+    dζ/du = 1 − (β ± γ)·ζ (+ for ζ ≥ 0), a linear law on each side of ζ = 0, solved in closed form;
+    ζ crosses 0 at most once, upwards."""
+    z = z0
+    out[0] = z
+    b = beta + gamma
+    a = beta - gamma
+    for k in range(1, v.shape[0]):
+        dv = v[k] - v[k - 1]
+        if dv != 0.0:
+            sg = 1.0 if dv > 0 else -1.0
+            zeta = sg * z
+            U = abs(dv)
+            if zeta < 0.0:
+                x = -a * zeta
+                u0 = -zeta * (math.log1p(x) / x if abs(x) > 1e-8 else 1.0 - 0.5 * x) if x > -1.0 else math.inf
+                if u0 >= U:
+                    zeta = zeta * math.exp(-a * U) + U * _relax(a * U)
+                else:
+                    rem = U - u0
+                    zeta = rem * _relax(b * rem)
+            else:
+                zeta = zeta * math.exp(-b * U) + U * _relax(b * U)
+            z = sg * zeta
+        out[k] = z
+
+
+@numba.njit(cache=True)
 def _bouc_wen_path(v, beta, gamma, n, z0, out):
     z = z0
     out[0] = z
@@ -90,8 +127,13 @@ def _bouc_wen_path(v, beta, gamma, n, z0, out):
 def bouc_wen_response(v, beta: float, gamma: float, n: float, z0: float = 0.0) -> np.ndarray:
     """Bouc–Wen variable z along a sampled input path (rate independent):
     dz = dv − β·|dv|·|z|^(n−1)·z − γ·dv·|z|^n, from z0 (units of v; z saturates near
-    (β + γ)^(−1/n)).  For identification: z depends on the path only, not on time."""
+    (β + γ)^(−1/n)).  For identification: z depends on the path only, not on time.  Exponent 1
+    (the usual one): exact between samples, the path being linear there; others: explicit
+    sub-steps small against the loop's curvature."""
     v = np.ascontiguousarray(v, dtype=np.float64)
     out = np.empty_like(v)
-    _bouc_wen_path(v, float(beta), float(gamma), float(n), float(z0), out)
+    if n == 1.0:
+        _bouc_wen_exact(v, float(beta), float(gamma), float(z0), out)
+    else:
+        _bouc_wen_path(v, float(beta), float(gamma), float(n), float(z0), out)
     return out

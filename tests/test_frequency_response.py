@@ -1,0 +1,46 @@
+"""The frequency response as a modal sum (one eigendecomposition of the balanced state matrix)
+against a solve at every frequency, on the model files' own linear dynamics (state units from
+coulombs to metres, modes from hertz to hundreds of kilohertz), and on a defective matrix,
+where the modal sum does not exist and the solve is used, against the analytic 1/(s + a)²."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.linalg import matrix_balance
+
+import bondgraph as bg
+from bondgraph import lti as lti_module
+from bondgraph.lti import LTI, StateSpace
+from bondgraph.modelfile import load_model
+from conftest import MODELS
+
+
+def solved(A, B, C, D, w):
+    M = 1j * w[:, None, None] * np.eye(A.shape[0])[None] - A[None]
+    return (C[None] @ np.linalg.solve(M, np.broadcast_to(B.astype(complex), (w.size, A.shape[0], 1))))[:, 0, 0] + D[0, 0]
+
+
+@pytest.mark.parametrize("name", ["stack", "apa120ml", "bimorph_t215", "bimorph_t226", "bender_highfield"])
+def test_the_modal_sum_is_the_solve_on_every_model_file(name):
+    lm = load_model(MODELS / f"{name}.py")
+    eqs = bg.derive(lm.model)
+    lin = LTI(eqs)
+    table = lm.model.parameter_table()
+    A, B, C, D = lin.matrices(np.array([float(table.get(p, 0)) for p in eqs.params]))
+    Ab, _ = matrix_balance(A, permute=False, separate=True)
+    assert np.linalg.cond(np.linalg.eig(Ab)[1]) < lti_module.MODAL_COND     # the modal route is taken
+    top = np.max(np.abs(np.linalg.eigvals(A)))
+    w = np.geomspace(1e-3, 10 * top, 2000)
+    ref = solved(A, B, C, D, w)
+    H = StateSpace(A, B, C, D).frequency_response(w)
+    assert np.max(np.abs(H - ref) / np.abs(ref)) < 1e-8
+
+
+def test_a_defective_matrix_falls_back_to_the_solve():
+    a = 30.0
+    A = np.array([[-a, 1.0], [0.0, -a]])          # a Jordan block: one eigenvector
+    B, C, D = np.array([[0.0], [1.0]]), np.array([[1.0, 0.0]]), np.zeros((1, 1))
+    w = np.geomspace(0.1, 1e4, 200)
+    assert np.linalg.cond(np.linalg.eig(A)[1]) > lti_module.MODAL_COND
+    H = StateSpace(A, B, C, D).frequency_response(w)
+    assert np.allclose(H, 1 / (1j * w + a) ** 2, rtol=1e-12)
