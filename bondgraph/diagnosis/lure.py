@@ -260,7 +260,7 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     """Sample-by-sample first-order-hold stepping of the augmented model (inputs: drive, then
     the n_el nonlinear terms; output rows: output, element variables, partners); at each
     sample Newton's method (with a backtracking line search) on w − term(x(w), a(w)) = 0 from
-    the previous two samples' w extrapolated (w = 0 throughout unless ``active``).  False when a step does not
+    the previous sample's w (w = 0 throughout unless ``active``).  False when a step does not
     converge."""
     n = Phi.shape[0]
     N = u.shape[0]
@@ -268,7 +268,6 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     xi = np.zeros(n)
     xn = np.zeros(n)
     w = np.zeros(n_el)
-    w_last = np.zeros(n_el)
     g = np.zeros(n_el)
     J = np.zeros((n_el, n_el))
     step = np.zeros(n_el)
@@ -286,10 +285,6 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
             row[r] = acc
         converged = not active
         if active:
-            for j in range(n_el):            # start from the last two samples' trend
-                dw = w[j] - w_last[j]
-                w_last[j] = w[j]
-                w[j] += dw
             res = _residual(w, row, Dd, a_rows, P, HG, n_el, g, J, True)
             scale = max(scale, res[1])
         for it in range(60 if active else 0):
