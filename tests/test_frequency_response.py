@@ -15,13 +15,8 @@ from bondgraph.modelfile import load_model
 from conftest import MODELS
 
 
-def solved(A, B, C, D, w):
-    M = 1j * w[:, None, None] * np.eye(A.shape[0])[None] - A[None]
-    return (C[None] @ np.linalg.solve(M, np.broadcast_to(B.astype(complex), (w.size, A.shape[0], 1))))[:, 0, 0] + D[0, 0]
-
-
 @pytest.mark.parametrize("name", ["stack", "apa120ml", "bimorph_t215", "bimorph_t226", "bender_highfield"])
-def test_the_modal_sum_is_the_solve_on_every_model_file(name):
+def test_the_modal_sum_is_the_solve_on_every_model_file(name, monkeypatch):
     lm = load_model(MODELS / f"{name}.py")
     eqs = bg.derive(lm.model)
     lin = LTI(eqs)
@@ -31,8 +26,9 @@ def test_the_modal_sum_is_the_solve_on_every_model_file(name):
     assert np.linalg.cond(np.linalg.eig(Ab)[1]) < lti_module.MODAL_COND     # the modal route is taken
     top = np.max(np.abs(np.linalg.eigvals(A)))
     w = np.geomspace(1e-3, 10 * top, 2000)
-    ref = solved(A, B, C, D, w)
     H = StateSpace(A, B, C, D).frequency_response(w)
+    monkeypatch.setattr(lti_module, "MODAL_COND", -1.0)           # the solve at every frequency
+    ref = StateSpace(A, B, C, D).frequency_response(w)
     assert np.max(np.abs(H - ref) / np.abs(ref)) < 1e-8
 
 

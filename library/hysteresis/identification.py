@@ -81,6 +81,12 @@ def _relax(x):
 
 
 @numba.njit(cache=True)
+def _log_ratio(x):
+    """ln(1 + x)/x, 1 at x = 0."""
+    return math.log1p(x) / x if abs(x) > 1e-8 else 1.0 - 0.5 * x
+
+
+@numba.njit(cache=True)
 def _bouc_wen_exact(v, beta, gamma, z0, out):
     """Exponent 1: along a monotone piece of the path (|Δv| = U, σ = sign Δv) ζ = σz obeys
     dζ/du = 1 − (β ± γ)·ζ (+ for ζ ≥ 0), a linear law on each side of ζ = 0, solved in closed form;
@@ -97,7 +103,7 @@ def _bouc_wen_exact(v, beta, gamma, z0, out):
             U = abs(dv)
             if zeta < 0.0:
                 x = -a * zeta
-                u0 = -zeta * (math.log1p(x) / x if abs(x) > 1e-8 else 1.0 - 0.5 * x) if x > -1.0 else math.inf
+                u0 = -zeta * _log_ratio(x) if x > -1.0 else math.inf
                 if u0 >= U:
                     zeta = zeta * math.exp(-a * U) + U * _relax(a * U)
                 else:
