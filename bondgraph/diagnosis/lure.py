@@ -182,7 +182,7 @@ def polynomial_term(term: Callable, partner: bool):
     return _TERMS[key]
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _poly(P, HG, k, x, a):
     """(f, ∂f/∂x, ∂f/∂a) of f = Σ P[k, i, j]·x^i·a^j + HG[k, 0]·tanh(HG[k, 1]·x)."""
     f = fx = fa = 0.0
@@ -206,7 +206,7 @@ def _poly(P, HG, k, x, a):
     return f, fx, fa
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _solve_in_place(J, g, m):
     """g ← J⁻¹g by Gaussian elimination with partial pivoting (m is small); J is overwritten."""
     for c in range(m):
@@ -230,7 +230,7 @@ def _solve_in_place(J, g, m):
         g[c] = acc / J[c, c]
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _residual(w, row, Dd, a_rows, P, HG, n_el, g, J, jac):
     """g = w − term(x(w), a(w)) (and its Jacobian J) at one sample; returns (|g|², largest
     |term|)."""
@@ -284,6 +284,7 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
                 acc += C[r, i] * xi[i]
             row[r] = acc
         converged = not active
+        full, last = False, 0.0              # was the last step a full Newton step, its size
         if active:
             res = _residual(w, row, Dd, a_rows, P, HG, n_el, g, J, True)
             scale = max(scale, res[1])
@@ -296,7 +297,9 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
                 change = max(change, abs(step[j]))
             if not np.isfinite(change):
                 return False
-            if change <= 1e-12 * scale:
+            # converged: the step is below the tolerance, or, after a full step, quadratic
+            # convergence (next ≈ change²/last) puts the step after this one below it
+            if change <= 1e-12 * scale or (full and change ** 3 <= 1e-12 * scale * last * last):
                 for j in range(n_el):
                     w[j] -= step[j]
                 converged = True
@@ -316,6 +319,7 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
                 break
             for j in range(n_el):
                 w[j] = trial[j]
+            full, last = lam == 1.0, change
             scale = max(scale, res[1])
             if lam * change <= 1e-12 * scale:
                 converged = True
