@@ -206,7 +206,7 @@ def frequency_response(A, B, C, D, omega) -> np.ndarray:
     lam, V = np.linalg.eig(Ab)
     if np.all(np.isfinite(lam)) and np.linalg.cond(V) <= MODAL_COND:
         r = ((C[0] * scale) @ V) * np.linalg.solve(V, (B[:, 0] / scale).astype(complex))
-        return (r[None, :] / (1j * omega[:, None] - lam[None, :])).sum(axis=1) + D[0, 0]
+        return np.reciprocal(1j * omega[:, None] - lam[None, :]) @ r + D[0, 0]
     M = 1j * omega[:, None, None] * np.eye(n)[None] - A[None]
     X = np.linalg.solve(M, np.broadcast_to(B.astype(complex), (omega.size, n, B.shape[1])))
     return (C[None] @ X)[:, 0, 0] + D[0, 0]
