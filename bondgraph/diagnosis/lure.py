@@ -298,7 +298,7 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
             if not np.isfinite(change):
                 return False
             # converged: the step is below the tolerance, or, after a full step, quadratic
-            # convergence (next ≈ change²/last) puts the step after this one below it
+            # convergence (next ≈ change³/last²) puts the step after this one below it
             if change <= 1e-12 * scale or (full and change ** 3 <= 1e-12 * scale * last * last):
                 for j in range(n_el):
                     w[j] -= step[j]
