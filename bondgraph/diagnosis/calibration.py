@@ -40,7 +40,7 @@ from scipy.optimize import least_squares
 
 from .. import config
 from ..errors import UsageError
-from .context import SENSOR_GAIN, Context, State, welch_length
+from .context import SENSOR_GAIN, Context, State, welch, welch_length
 from .projection import Param, projected_fit
 
 
@@ -225,22 +225,32 @@ def _delay_identifiable(ctx: Context, S: np.ndarray, names: Sequence[str], free:
 RESOLVED_COHERENCE = 0.5
 
 
+def cross_spectra(u: np.ndarray, y: np.ndarray, fs: float):
+    """(f Hz, Puu, Pyy, Puy): the input's, the output's and their cross density (:func:`welch`,
+    segments of an eighth of the record up to 2**15 samples)."""
+    nper = welch_length(len(u), 8, 15)
+    f, Puu = welch(u, fs, nper)
+    return f, Puu, welch(y, fs, nper)[1], welch(u, fs, nper, y)[1]
+
+
 def coherence_spectrum(u: np.ndarray, y: np.ndarray, fs: float):
-    """(ω rad/s, magnitude-squared coherence of output and input) from Welch estimates
-    (detrended segments), at every frequency above 0."""
-    f, coh = signal.coherence(u, y, fs, nperseg=welch_length(len(u), 8, 15), detrend="linear")
-    return 2 * np.pi * f[1:], coh[1:]
+    """(ω rad/s, magnitude-squared coherence of output and input) from :func:`cross_spectra`, at
+    every frequency above 0."""
+    f, Puu, Pyy, Puy = cross_spectra(u, y, fs)
+    return 2 * np.pi * f[1:], _coherence(Puu, Pyy, Puy)[1:]
+
+
+def _coherence(Puu, Pyy, Puy):
+    return np.abs(Puy) ** 2 / np.maximum(Puu * Pyy, 1e-300)
 
 
 def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
-    """(ω rad/s, H, coherence) of output/input from Welch estimates (detrended segments), at the
-    frequencies the record resolves (coherence above :data:`RESOLVED_COHERENCE`)."""
-    nper = welch_length(len(u), 8, 15)
-    _, Puu = signal.welch(u, fs, nperseg=nper, detrend="linear")
-    _, Puy = signal.csd(u, y, fs, nperseg=nper, detrend="linear")
-    w, coh = coherence_spectrum(u, y, fs)
+    """(ω rad/s, H, coherence) of output/input from :func:`cross_spectra`, at the frequencies the
+    record resolves (coherence above :data:`RESOLVED_COHERENCE`)."""
+    f, Puu, Pyy, Puy = cross_spectra(u, y, fs)
+    coh = _coherence(Puu, Pyy, Puy)[1:]
     keep = (Puu[1:] > 1e-8 * Puu.max()) & (coh > RESOLVED_COHERENCE)
-    return w[keep], (Puy[1:] / np.maximum(Puu[1:], 1e-300))[keep], coh[keep]
+    return 2 * np.pi * f[1:][keep], (Puy[1:] / np.maximum(Puu[1:], 1e-300))[keep], coh[keep]
 
 
 def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarray, H: np.ndarray,

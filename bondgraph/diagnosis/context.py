@@ -272,11 +272,32 @@ def welch_length(n: int, parts: float, top: int) -> int:
     return int(min(n, 2 ** max(8, min(top, int(math.log2(max(n, 256) / parts))))))
 
 
+def welch(x: np.ndarray, fs: float, nper: int, y: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(f Hz, density) of ``x``, or the cross density of ``x`` and ``y``: Welch, half-overlapping
+    Hann segments of ``nper`` samples, each detrended, averaged over two segmentations of the
+    record, one from its first sample and one ending at its last.  One segmentation alone stops
+    up to half a segment short of the end, which for a sweep drops its last frequencies."""
+    n = len(x)
+    nper = int(min(nper, n))
+    step = nper - nper // 2
+
+    def density(a, b):
+        if b is None:
+            return signal.welch(a, fs, nperseg=nper, detrend="linear")
+        return signal.csd(a, b, fs, nperseg=nper, detrend="linear")
+
+    f, P = density(x, y)
+    off = (n - nper) % step
+    if off:
+        P = (P + density(x[off:], None if y is None else y[off:])[1]) / 2
+    return f, P
+
+
 def drive_band(u: np.ndarray, fs: float, share: float = 1e-4) -> float:
     """Frequency (Hz) below which all but ``share`` of the drive's (detrended) power lies."""
     n = len(u)
     nper = welch_length(n, 4, 16)
-    f, P = signal.welch(u, fs, nperseg=nper, detrend="linear")
+    f, P = welch(u, fs, nper)
     c = np.cumsum(P[1:])
     if c.size == 0 or c[-1] <= 0:
         return fs / 2
@@ -288,7 +309,7 @@ def drive_peak(u: np.ndarray, fs: float) -> float:
     """Frequency (Hz) where the drive's (detrended) power spectrum peaks."""
     n = len(u)
     nper = welch_length(n, 4, 16)
-    f, P = signal.welch(u, fs, nperseg=nper, detrend="linear")
+    f, P = welch(u, fs, nper)
     return float(f[1 + int(np.argmax(P[1:]))]) if f.size > 1 else 0.0
 
 
@@ -326,8 +347,8 @@ def noise_psd(y: np.ndarray, u: np.ndarray, fs: float, band: float) -> float | N
     reach (above 5× its band, where only noise is left), or None if there is no such band."""
     n = len(y)
     nper = welch_length(n, 8, 14)
-    f, Pyy = signal.welch(y, fs, nperseg=nper, detrend="linear")
-    _, Puu = signal.welch(u, fs, nperseg=nper, detrend="linear")
+    f, Pyy = welch(y, fs, nper)
+    _, Puu = welch(u, fs, nper)
     quiet = (f > 5 * band) & (f < 0.9 * fs / 2) & (Puu < 1e-6 * Puu.max())
     if np.count_nonzero(quiet) < 4:
         return None
@@ -340,7 +361,7 @@ def residual_floor(e: np.ndarray, fs: float, share: float = 0.05) -> float:
     upper estimate of the measurement noise when the drive leaves no quiet band for
     :func:`noise_psd`)."""
     nper = welch_length(len(e), 8, 14)
-    f, P = signal.welch(e, fs, nperseg=nper, detrend="linear")
+    f, P = welch(e, fs, nper)
     keep = (f > 0) & (f < 0.9 * fs / 2)
     return float(math.sqrt(np.quantile(P[keep], share) * fs / 2)) if keep.any() else float(np.std(e))
 
@@ -352,7 +373,7 @@ def output_band(y: np.ndarray, fs: float, noise_density: float | None, above: fl
         return None
     n = len(y)
     nper = welch_length(n, 8, 14)
-    f, Pyy = signal.welch(y, fs, nperseg=nper, detrend="linear")
+    f, Pyy = welch(y, fs, nper)
     loud = np.nonzero(Pyy[1:] > above * noise_density)[0]
     return float(f[1 + loud[-1]]) if loud.size else float(f[1])
 

@@ -9,6 +9,7 @@ from scipy import signal
 
 from bondgraph import C, I, J0, J1, Quantity, R, Se
 from bondgraph.diagnosis import LINEAR, Candidate, Extension
+from bondgraph.diagnosis.context import welch
 from bondgraph.diagnosis.filters import resonator
 from bondgraph.diagnosis.rewrite import junction_of, slope
 from bondgraph.identify import Spec
@@ -53,7 +54,7 @@ def mode_implausible(view, omega: float, zeta: float) -> str:
         return (f"its frequency ({f:.4g} Hz) is below half the model's lowest mode ({low:.4g} Hz): not a "
                 f"higher mode of this structure")
     d = np.asarray(view.drive if view.drive is not None else view.u)
-    fr, P = signal.welch(d, view.fs, nperseg=int(min(len(d), 4096)), detrend="linear")
+    fr, P = welch(d, view.fs, 4096)
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
     if not near.any() or P[near].max() < 1e-6 * P.max():
         return f"the drive does not excite {f:.4g} Hz"
