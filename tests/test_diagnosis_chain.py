@@ -113,6 +113,23 @@ def test_the_extended_graph_reproduces_the_chain(compound):
     assert rep.extended_rms_integrated == pytest.approx(rep.extended_rms, rel=0.05)
 
 
+def test_a_creep_ratio_refitted_to_zero_leaves_a_regular_graph(compound):
+    """A later step refits the earlier weights of the drive's sum, a creep ratio possibly to its
+    bound 0 (the held-out record 3675: creep, then hysteresis): the cell must then drop out of
+    the extended graph, not divide by zero (its charge is weighted by the ratio; the cell is a
+    unit compliance on its τ)."""
+    rep = compound
+    model = rep.extended_model.copy()
+    cells = sorted(k for k in rep.extended_values if k.startswith("creep.c"))
+    model.values.update({k: v for k, v in rep.extended_values.items() if k in model.all_parameters()})
+    t = np.arange(int(T * FS)) / FS
+    u = bg.PiecewiseLinear(t, drive(t))
+    full = bg.simulate(model, t, {"u": u}, rtol=1e-7)["y"]
+    model.values[cells[0]] = 0.0
+    without = bg.simulate(model, t, {"u": u}, rtol=1e-7)["y"]
+    assert np.all(np.isfinite(without)) and not np.allclose(without, full)
+
+
 @pytest.mark.parametrize("hysteresis,creep,expected", [(0.15, 0.0, ["hysteresis"]), (0.0, 0.12, ["creep"])])
 def test_each_effect_alone(hysteresis, creep, expected):
     rep = diagnose(lag_model(), record(hysteresis, creep), candidates=CANDIDATES, workers=1)

@@ -491,14 +491,16 @@ def _drift_explains(ctx: Context, state: State, winner: Outcome) -> bool:
 
 def _integrated(ctx: Context, model: Model, state: State) -> float | None:
     """Validation RMS of the extended bond graph integrated by the compiled solver (second route);
-    None when it fails or needs more than ``diagnosis.check_max_steps`` steps (a stiff model)."""
+    None when it fails, needs more than ``diagnosis.check_max_steps`` steps (a stiff model) or
+    divides by a parameter a later step refitted to 0 (the check is a second route, never a
+    reason to lose the diagnosis)."""
     try:
         ident = ctx.ident.like(model, rtol=1e-7, method="dopri5")
         ident.lti = None
         known = {p.name for p in ident.sim.eqs.params}
         with config.override({"simulate.max_steps": config.get("diagnosis.check_max_steps")}):
             raw = ident.predict({k: v for k, v in state.values.items() if k in known and k != SENSOR_GAIN})
-    except (BondGraphError, SimulationError):
+    except (BondGraphError, SimulationError, ZeroDivisionError):
         return None
     return score(ctx, raw)[3]
 

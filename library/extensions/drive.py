@@ -210,12 +210,13 @@ class InputBoucWen(_DriveCandidate):
 
 class InputCreep(_DriveCandidate):
     """Creep: a generalized Kelvin–Voigt chain on the drive (Wood et al., eq. 1),
-    u = d + Σ q_n with cells q̇_n = (c_n·d − q_n)/τ_n, i.e. a step response
+    u = d + Σ c_n·q_n with cells q̇_n = (d − q_n)/τ_n, i.e. a step response
     d0·[1 + Σ c_n(1 − e^(−t/τ_n))]; the c_n ≥ 0 of a fixed relaxation spectrum (two time
     constants per decade, from well above the model's own time constants to three record
     lengths) are solved exactly, so log-time creep is represented as well as a few cells.
-    Cells are C_n = c_n, R_n = τ_n/c_n on a 0-junction, starting in equilibrium with the level
-    the device's history left them at (``creep.prior``, drive units; fitted on a grid).
+    Cells are C_n = 1, R_n = τ_n on a 0-junction, their charges weighted by the ratios c_n (a
+    ratio a later step refits to 0 leaves a regular model), starting in equilibrium with the
+    level the device's history left them at (``creep.prior``, drive units; fitted on a grid).
     Additive: the cells act on the base drive beside the effects named before.
     Creep is slower than the model's own dynamics and than the drive's main period (a faster
     lag is a phase lag, not creep): the spectrum starts at 10/ω of the slowest mode and at a
@@ -273,12 +274,12 @@ class InputCreep(_DriveCandidate):
             c = model.parameter(f"creep.c{k}", float(fit.coef[i]), "", f"creep ratio of cell {k}", bounds=(0, 1e3))
             tau = model.parameter(f"creep.tau{k}", float(taus[i]), "s", f"creep time constant of cell {k}",
                                   bounds=(0, 1e6))
-            model.add(J1(f"creep.cell{k}"), C(f"creep.C{k}", c, q0=c * prior), R(f"creep.R{k}", tau / c))
+            model.add(J1(f"creep.cell{k}"), C(f"creep.C{k}", 1.0, q0=prior), R(f"creep.R{k}", tau))
             model.bond("creep.node", f"creep.cell{k}")
             model.bond(f"creep.cell{k}", f"creep.C{k}")
             model.bond(f"creep.cell{k}", f"creep.R{k}")
             new[f"creep.c{k}"], new[f"creep.tau{k}"] = float(fit.coef[i]), float(taus[i])
-            qs.append(Quantity("q", f"creep.C{k}"))
+            qs.append(c * Quantity("q", f"creep.C{k}"))
         new["creep.prior"] = prior
         expr = view.additive_expr(sum(qs))
         view.with_drive(model, expr)
