@@ -35,7 +35,6 @@ from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
-from scipy import signal
 from scipy.optimize import least_squares
 
 from .. import config
