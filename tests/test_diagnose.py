@@ -619,6 +619,28 @@ def test_an_implausible_device_that_no_candidate_explains_is_said_so():
     assert json.loads(json.dumps(rep.as_json()))["unexplained"] == rep.unexplained
 
 
+def test_a_damping_beyond_its_search_bound_is_reached_through_a_held_parameter():
+    """Effect-free: an overdamped APA (damping ×12, stiffness ×0.8: the mode's slow pole at
+    43 Hz) under a 1.5 Hz sine, 0-100 V.  Decimated to the drive's band, the record sets only
+    the ratio of damping to stiffness (the stiffness is held as not separable), and the damping
+    alone stops on its ×10 search bound short of that ratio: a linear lag that every lag-shaped
+    candidate explained (creep was named, 3.4×).  The bound-stuck damping no longer hides what
+    the residual asks of the held parameters: one is calibrated after all, nothing is named."""
+    true = {"K": 10.77e6 * 0.8, "c": 3000.0 * 12}
+    lm = load_model(MODELS / "apa120ml.py", true)
+    fs, T = 10_000.0, 8.0
+    t = np.arange(int(T * fs)) / fs
+    V = 50 - 50 * np.cos(2 * np.pi * 1.5 * t)
+    x = bg.simulate(lm.model, t, {"V": bg.PiecewiseLinear(t, V)}, rtol=1e-8)["x"]
+    rng = np.random.default_rng(7)
+    data = Dataset(t, {"V": V, "x": x + 3e-3 * np.ptp(x) * rng.standard_normal(t.size)})
+    nominal = load_model(MODELS / "apa120ml.py")
+    rep = diagnose(nominal.model, data, **model_file_options(nominal.module), workers=2, chain=False)
+    assert any("calibrated after all" in n for n in rep.notes), rep.notes
+    assert "c" not in rep.calibration["at_bounds"]
+    assert rep.cause == "none", rep.steps[0].why
+
+
 # ---- the measurement chain's delay on a decimated record -------------------------------------
 def t215_slow_sine(delay_samples=3.0, fs=50_000.0, T=5.0, f=8.6, amp=34.0, level=1.7e-3, seed=1):
     """The T215 of its model file (first mode 4 % low, damping +15 %) driven by one 8.6 Hz sine,

@@ -160,7 +160,9 @@ def residual_asks(ctx: Context, names: Sequence[str], free: Sequence[str], held:
     ``diagnosis.spread``.  The pivot rule of :func:`select` compares sensitivities with each
     other, not with the data: a sharp mode's frequency moves the output by many times its size
     and hides a second mode's damping that the data plainly show (a missing parameter a
-    structural cause would then stand in for)."""
+    structural cause would then stand in for).  A kept parameter that ended on its search
+    bound is not projected out: it cannot move further, and a held parameter that duplicates it
+    (a stiffness beside a damping that sets only their ratio) can carry the fit past that bound."""
     share = config.get("diagnosis.residual_share")
     cands = [n for n in held if n in names and held[n] != NO_EFFECT]
     if not cands or not share < 1:
@@ -172,7 +174,8 @@ def residual_asks(ctx: Context, names: Sequence[str], free: Sequence[str], held:
     if energy <= 0:
         return {}
     S = sensitivities(ctx, list(free) + cands, values, raw) * float(sol.coef[0])
-    Q, _ = np.linalg.qr(np.column_stack([sol.columns[idx], S[:, :len(free)]]))
+    movable = [i for i in range(len(free)) if i not in sol.at_bounds]
+    Q, _ = np.linalg.qr(np.column_stack([sol.columns[idx], S[:, movable]]))
     r = r - Q @ (Q.T @ r)
     C = S[:, len(free):]
     full = np.linalg.norm(C, axis=0)
