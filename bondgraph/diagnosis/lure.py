@@ -3,7 +3,8 @@ simulated on the exact linear route.
 
 The model's elements ``el_k`` get laws law_k(x) + w_k with w_k = term(c_k, r2_k, x_k, a_k),
 x_k the element's own variable (q of a C, p of an I, f of an R) and a_k the displacement of a
-partner element (or None).  The model with the w_k as extra inputs is linear; its
+partner element, or the drive itself (partner :data:`DRIVE`: a law that moves with the field),
+or None.  The model with the w_k as extra inputs is linear; its
 first-order-hold discretisation (every input linear between samples, exact for the linear
 part) is stepped sample by sample in compiled code, and at each sample the small implicit
 equation w = term(x(w)) (x depends on w only through the hold's direct term) is solved by
@@ -30,6 +31,10 @@ from ..lti import LTI, foh
 from .rewrite import modify_law
 
 
+#: the partner that names the drive (the Lur'e model's input) instead of an element
+DRIVE = "<drive>"
+
+
 class NotConverged(BondGraphError, RuntimeError):
     """The fixed-point iteration of a Lur'e system did not converge."""
 
@@ -44,7 +49,8 @@ def _variable(model: Model, element: str) -> Quantity:
 
 class Lure:
     """``model`` (linear) with nonlinear terms on ``elements`` (see the module docstring);
-    ``partners[el]``: an element whose displacement the term of ``el`` uses, or None.
+    ``partners[el]``: an element whose displacement the term of ``el`` uses, :data:`DRIVE`
+    for the drive, or None.
     ``fixed``: terms already part of the model being extended, one (element, partner, term,
     c, r2) each, held as they are while the new elements' terms are fitted."""
 
@@ -65,7 +71,8 @@ class Lure:
             modify_law(aug, el, lambda x, old, w=w: old + w)
             aug.output(f"diag.x:{el}", _variable(model, el))
             if partners.get(el):
-                aug.output(f"diag.a:{el}", Quantity("q", partners[el]))
+                aug.output(f"diag.a:{el}", model.inputs[input].symbol if partners[el] == DRIVE
+                           else Quantity("q", partners[el]))
         eqs = derive(aug)
         self.outputs = [output] + [f"diag.x:{el}" for el in elements] + \
             [f"diag.a:{el}" for el in elements if partners.get(el)]

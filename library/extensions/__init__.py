@@ -9,8 +9,9 @@ may miss, each rewriting the model with the element of the papers that produces 
   refitted): a linear rewrite that keeps the actuator's current, fitted on the exact linear route;
 * :mod:`.modes` — a mode the model lacks (a resonator on the output, or a compliant output
   stage on the element tagged ``inertia``): linear rewrites, fitted on the exact linear route;
-* :mod:`.structure` — nonlinear laws of the elements tagged ``stiffness`` and ``damping``,
-  fitted with the compiled integrator.
+* :mod:`.structure` — nonlinear laws of the elements tagged ``stiffness`` (amplitude- or
+  field-dependent) and ``damping``, fitted on the exact Lur'e route or with the compiled
+  integrator.
 
 They use only :mod:`bondgraph.diagnosis`'s public contract and are registered through the
 entry point ``bondgraph.diagnosis`` → ``piezo = library.extensions:candidates``.
@@ -18,11 +19,12 @@ entry point ``bondgraph.diagnosis`` → ``piezo = library.extensions:candidates`
 from .circuit import LoopInductance
 from .drive import InputBoucWen, InputCreep, InputExpansion, InputHysteresis, InputRC, InputRLC, InputSaturation
 from .modes import OutputMode, ParallelMode
-from .structure import FrictionDamping, NonlinearDamping, StiffnessSoftening
+from .structure import FieldStiffness, FrictionDamping, NonlinearDamping, StiffnessSoftening
 
 
 def candidates() -> list:
     """The piezo candidate set."""
     return [InputHysteresis(), InputBoucWen(), InputCreep(), InputSaturation(), InputExpansion(), InputRC(), InputRLC(),
-            LoopInductance(), ParallelMode(), OutputMode(), StiffnessSoftening(), NonlinearDamping(), NonlinearDamping(velocity=True),
+            LoopInductance(), ParallelMode(), OutputMode(), StiffnessSoftening(), FieldStiffness(),
+            NonlinearDamping(), NonlinearDamping(velocity=True),
             FrictionDamping()]

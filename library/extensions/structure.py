@@ -14,7 +14,7 @@ import sympy as sp
 
 from bondgraph import Quantity
 from bondgraph.diagnosis import Candidate, Extension
-from bondgraph.diagnosis.lure import NotConverged
+from bondgraph.diagnosis.lure import DRIVE, NotConverged
 from bondgraph.diagnosis.rewrite import modify_law, neighbours, slope
 from bondgraph.identify import Spec
 from bondgraph.simulate import SimulationError
@@ -64,7 +64,7 @@ class _Centred(Candidate):
             c = model.parameter(f"{self.prefix}_{el}", coefs[el], "", f"{self.label}: {el}", bounds=(0, 1e40))
             r2 = model.parameter(f"{self.prefix}_r2_{el}", r2s[el], "", f"centring amplitude² of {el}")
             p = self.partner(model, el)
-            a = Quantity("q", p) if p else None
+            a = view.drive_expr if p == DRIVE else Quantity("q", p) if p else None
             modify_law(model, el, lambda x, old, c=c, r2=r2, a=a: old + self.term(c, r2, x, a))
         return model
 
@@ -80,7 +80,8 @@ class _Centred(Candidate):
         else:
             st = view.states()
             xs = {el: st[view.state_of(el)] if self.role == "stiffness" else st["output rate"] for el in els}
-            az = {el: st[view.state_of(partners[el])] if partners[el] else None for el in els}
+            az = {el: np.asarray(view.drive) if partners[el] == DRIVE else
+                  st[view.state_of(partners[el])] if partners[el] else None for el in els}
         refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
         r2s = {el: refs[el][1] for el in els}
         if lure is not None and len(els) > 1:
@@ -175,6 +176,32 @@ class StiffnessSoftening(_Centred):
     def refs(self, view, el, x, a):
         peak = float(np.max(np.abs(x))) or 1.0
         return abs(slope(view.model, el, view.values)) / peak ** 2, 1.5 * float(np.mean(x ** 2))
+
+
+class FieldStiffness(_Centred):
+    """Field-dependent stiffness: the stiffness of a piezoelectric layer softens with the field
+    across it (the bender's k_a(E), Wood, Steltz & Fearing, ICRA 2005, Sec. III-B): every element tagged
+    ``stiffness`` gets e = law(q) − k_E·q·(d² − r²), d the drive as the linear core sees it,
+    r² = ⟨d²⟩ of the record, so that the stiffness at the record's mean-square field stays the
+    calibrated one and k_E (≥ 0) softens it where the field is larger (even in the field: either
+    polarity softens).  Inside the dynamics: near a resonance it moves the resonance with the
+    drive's level, which a drive-side curve (a quasi-static k_a(E)) cannot."""
+
+    cause = "softening"
+    label = "field-dependent stiffness of the stiffness elements"
+    role, prefix, upper = "stiffness", "soft.kE", 0.5
+    grid = (0.003, 0.01, 0.03, 0.1, 0.3)
+
+    def partner(self, model, el):
+        return DRIVE
+
+    @staticmethod
+    def term(c, r2, x, a):
+        return -c * x * (a ** 2 - r2)
+
+    def refs(self, view, el, x, a):
+        peak = float(np.max(np.abs(a))) or 1.0
+        return abs(slope(view.model, el, view.values)) / peak ** 2, float(np.mean(a ** 2))
 
 
 class NonlinearDamping(_Centred):
