@@ -5,7 +5,8 @@ compiled Dormand–Prince solver (two independent routes to one answer).
 
 The test model is a mass on a spring and a damper driven by a force, x the spring's
 displacement (m = 1 kg, k = (2π·40 Hz)² N/m, c = 2·0.02·√(km)); the drive is a chirp through
-the resonance, sampled at 2 kHz, linear between samples for both routes.
+the resonance, sampled at 2 kHz, linear between samples for both routes.  A term's partner is
+another element's displacement or the drive itself (a law that moves with the field).
 """
 import math
 
@@ -14,7 +15,7 @@ import pytest
 import sympy as sp
 
 import bondgraph as bg
-from bondgraph.diagnosis.lure import Lure, NotConverged, polynomial_term
+from bondgraph.diagnosis.lure import DRIVE, Lure, NotConverged, polynomial_term
 from bondgraph.diagnosis.rewrite import modify_law
 
 K = (2 * math.pi * 40.0) ** 2
@@ -54,6 +55,7 @@ def integrated(model, t, u):
     ("k", softening, None, 0.3, K),       # stiffness 30 % lower at the peak displacement
     ("c", stanton, "k", 3.0, CD),         # damping x4 at the peak displacement
     ("c", stanton, None, 3.0, CD),        # velocity-cubic: damping x4 at the peak velocity
+    ("k", softening, DRIVE, 0.3, K),      # the drive's square moves the stiffness (a field law)
 ])
 def test_stepped_lure_agrees_with_the_integrated_rewrite(element, term, partner, change, base):
     t, u = drive()
@@ -64,7 +66,7 @@ def test_stepped_lure_agrees_with_the_integrated_rewrite(element, term, partner,
     r2 = 0.5 * float(np.mean(amp ** 2))
     y = lure.simulate({}, u, term, [(coef, r2)])
     rewritten = resonator()
-    partner_q = bg.Quantity("q", partner) if partner else None
+    partner_q = rewritten.inputs["F"].symbol if partner == DRIVE else bg.Quantity("q", partner) if partner else None
     modify_law(rewritten, element, lambda x, old: old + term(coef, r2, x, partner_q))
     ref = integrated(rewritten, t, u)
     linear = integrated(resonator(), t, u)
