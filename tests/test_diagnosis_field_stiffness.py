@@ -21,7 +21,8 @@ import bondgraph as bg
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose
 from bondgraph.diagnosis.rewrite import modify_law
-from library.extensions import FieldStiffness, InputExpansion, InputSaturation, NonlinearDamping, StiffnessSoftening
+from library.extensions import (FieldStiffness, FrictionDamping, InputExpansion, InputSaturation, NonlinearDamping,
+                                StiffnessSoftening)
 from test_diagnosis_friction import model_file_like, resonator
 
 FS, T = 2000.0, 4.0
@@ -60,3 +61,14 @@ def test_a_stiffness_that_softens_with_the_field_is_named_softening():
 def test_without_the_field_dependence_nothing_is_named():
     rep = diagnose(model_file_like(), record(field=False), candidates=CANDIDATES, workers=1, chain=False)
     assert rep.cause == "none", rep.steps[0].why
+
+
+def test_after_a_structural_cause_the_field_is_the_models_input():
+    """Once friction is named (a structural cause: no drive transform of a linear core is left),
+    the field law is written on the model's input; it was None there and ended the diagnosis
+    with an internal error.  The chain is the friction alone."""
+    from test_diagnosis_friction import record as friction_record
+    rep = diagnose(model_file_like(), friction_record(), candidates=[FrictionDamping(), FieldStiffness()], workers=1)
+    assert rep.causes == ["nonlinear-damping"], [s.why for s in rep.steps]
+    tried = [c for c in rep.steps[1].candidates if c.label == FieldStiffness.label]
+    assert tried and not tried[0].skipped and not tried[0].error

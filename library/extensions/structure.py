@@ -20,6 +20,15 @@ from bondgraph.identify import Spec
 from bondgraph.simulate import SimulationError
 
 
+def field(view) -> tuple:
+    """(expression, series) of the drive the structure sees: the drive into the linear core, or
+    the model's input once the model is no drive transform of a linear core (a structural cause
+    named before)."""
+    if view.drive_expr is not None and view.drive is not None:
+        return view.drive_expr, np.asarray(view.drive)
+    return view.input_symbol, np.asarray(view.u)
+
+
 class _Centred(Candidate):
     """A structural nonlinearity: each element of ``role`` gets law(x) + term(c, r², x, a),
     one coefficient c ≥ 0 per element, centred on the data's amplitude by r² (see the
@@ -64,7 +73,7 @@ class _Centred(Candidate):
             c = model.parameter(f"{self.prefix}_{el}", coefs[el], "", f"{self.label}: {el}", bounds=(0, 1e40))
             r2 = model.parameter(f"{self.prefix}_r2_{el}", r2s[el], "", f"centring amplitude² of {el}")
             p = self.partner(model, el)
-            a = view.drive_expr if p == DRIVE else Quantity("q", p) if p else None
+            a = field(view)[0] if p == DRIVE else Quantity("q", p) if p else None
             modify_law(model, el, lambda x, old, c=c, r2=r2, a=a: old + self.term(c, r2, x, a))
         return model
 
@@ -80,7 +89,7 @@ class _Centred(Candidate):
         else:
             st = view.states()
             xs = {el: st[view.state_of(el)] if self.role == "stiffness" else st["output rate"] for el in els}
-            az = {el: np.asarray(view.drive) if partners[el] == DRIVE else
+            az = {el: field(view)[1] if partners[el] == DRIVE else
                   st[view.state_of(partners[el])] if partners[el] else None for el in els}
         refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
         r2s = {el: refs[el][1] for el in els}
