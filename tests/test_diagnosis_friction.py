@@ -67,12 +67,18 @@ def model_file_like():
     return resonator(38.0, 0.03)
 
 
+def assert_named_through(rep, cause: str, label: str, min_gain: float = 1.5) -> None:
+    """The report names ``cause`` first, through the passing candidate ``label`` with the
+    highest gain, and that gain exceeds ``min_gain``."""
+    assert rep.cause == cause, rep.steps[0].why
+    named = max((c for c in rep.steps[0].candidates if c.passed), key=lambda c: c.gain)
+    assert named.label == label
+    assert named.gain > min_gain
+
+
 def test_friction_is_named_nonlinear_damping():
     rep = diagnose(model_file_like(), record(), candidates=CANDIDATES, workers=1, chain=False)
-    assert rep.cause == "nonlinear-damping", rep.steps[0].why
-    named = max((c for c in rep.steps[0].candidates if c.passed), key=lambda c: c.gain)
-    assert named.label == FrictionDamping.label
-    assert named.gain > 1.5
+    assert_named_through(rep, "nonlinear-damping", FrictionDamping.label)
 
 
 def test_without_friction_nothing_is_named():
