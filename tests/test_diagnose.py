@@ -518,6 +518,15 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     assert view.coherence_near(2 * np.pi * high) < view.resolved_coherence
     assert "does not resolve the response near" in mode_implausible(view, 2 * np.pi * high, 0.02)
     assert "resolve" not in mode_implausible(view, 2 * np.pi * 3.1, 0.02)
+    # a mode up there is still named when what it explains lies where the record resolves the
+    # response (its skirt in the drive's band), not when it explains the noise near itself
+    from scipy import signal
+    cut = lambda kind, f: signal.filtfilt(*signal.butter(4, f / (view.fs / 2), kind), view.residual)
+    skirt = state.prediction + cut("low", 5.0)
+    noise = state.prediction + cut("high", 0.6 * high)
+    assert view.resolved_share(skirt) > 0.9 and view.resolved_share(noise) < 0.1
+    assert "resolve" not in mode_implausible(view, 2 * np.pi * high, 0.02, skirt)
+    assert "0% of what it explains" in mode_implausible(view, 2 * np.pi * high, 0.02, noise)
 
 
 # ---- Ctrl-C -------------------------------------------------------------------------------------

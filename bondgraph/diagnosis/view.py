@@ -198,6 +198,19 @@ class View:
         near = np.abs(w - omega) <= width * omega
         return float(np.median(coh[near])) if near.any() else float(coh[int(np.argmin(np.abs(w - omega)))])
 
+    def resolved_share(self, raw: np.ndarray) -> float:
+        """The share (0-1) of the residual power a raw prediction removes (its sensor gain and
+        offset solved) that lies where the record resolves the response (coherence of output
+        and drive at least :attr:`resolved_coherence`); 0 when it removes none."""
+        from .calibration import coherence_spectrum, cross_spectra
+        g, b = self.score(raw)[:2]
+        u, y, fs = self._ctx.u_recorded, self._ctx.y, self._ctx.fs
+        _, coh = coherence_spectrum(u, y, fs)
+        before = cross_spectra(u, self.residual, fs)[2][1:]
+        after = cross_spectra(u, y - (g * np.asarray(raw) + b), fs)[2][1:]
+        drop = np.maximum(before - after, 0.0)
+        return float(drop[coh >= self.resolved_coherence].sum() / drop.sum()) if drop.sum() > 0 else 0.0
+
     def score(self, raw: np.ndarray) -> tuple[float, float, float, float]:
         """(sensor gain, offset, RMS fit part, RMS validation part) of a raw prediction."""
         return score(self._ctx, raw)

@@ -5,13 +5,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import sympy as sp
 from scipy import signal
 
 from bondgraph import C, I, J0, J1, Quantity, R, Se
 from bondgraph.diagnosis import LINEAR, Candidate, Extension
 from bondgraph.diagnosis.context import welch
 from bondgraph.diagnosis.filters import resonator
-from bondgraph.diagnosis.rewrite import junction_of, slope
+from bondgraph.diagnosis.rewrite import junction_of, law, modify_law
 from bondgraph.identify import Spec
 
 from .drive import NOT_A_DRIVE
@@ -44,8 +45,11 @@ def mode_on_own(view, omega: float) -> str:
     return ""
 
 
-def mode_implausible(view, omega: float, zeta: float) -> str:
-    """Why an added mode at ``omega`` (rad/s) with damping ratio ``zeta`` is not plausible."""
+def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = None) -> str:
+    """Why an added mode at ``omega`` (rad/s) with damping ratio ``zeta`` is not plausible.  A
+    mode where the record does not resolve the response is refused unless what it explains
+    (``raw``, the extended model's prediction) lies mostly where the record does resolve it
+    (its skirt below the drive's band, not noise near its own frequency)."""
     f = omega / (2 * math.pi)
     if f > 0.45 * view.fs:
         return f"its frequency ({f:.4g} Hz) is beyond the data's Nyquist frequency"
@@ -59,12 +63,34 @@ def mode_implausible(view, omega: float, zeta: float) -> str:
     if not near.any() or P[near].max() < 1e-6 * P.max():
         return f"the drive does not excite {f:.4g} Hz"
     coh = view.coherence_near(omega)
-    if coh < view.resolved_coherence:
+    share = None if raw is None or coh >= view.resolved_coherence else view.resolved_share(raw)
+    if coh < view.resolved_coherence and (share is None or share < 0.5):
         return (f"the record does not resolve the response near {f:.4g} Hz (coherence {coh:.2g} < "
-                f"{view.resolved_coherence:g}: as much noise as response there)")
+                f"{view.resolved_coherence:g}: as much noise as response there)"
+                + ("" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it"))
     if zeta > 0.3:
         return f"it is not a resonance (damping ratio {zeta:.2g})"
     return ""
+
+
+def resonance_trials(view) -> list[tuple[float, float, float]]:
+    """(residual sum of squares, ω rad/s, ζ) of a resonator driven by the drive and fitted by
+    its gain alone to the current residual, scanned around each frequency-response mismatch
+    peak, best first (each trial is one small recursion)."""
+    d = np.asarray(view.drive)
+    idx = view.fit_idx
+    r = view.residual[idx] - view.residual[idx].mean()
+    trials = []
+    for om0 in mismatch_peaks(view):
+        for om in om0 * np.geomspace(0.85, 1.15, 7):
+            for ze in (0.005, 0.02, 0.06):
+                q = resonator(d, view.dt, om, ze)[idx]
+                q = q - q.mean()
+                g = (q @ r) / max(q @ q, 1e-300)
+                trials.append((float(np.sum((r - g * q) ** 2)), float(om), ze))
+    if not trials:
+        raise ValueError("no frequency-response mismatch to place a mode at")
+    return sorted(trials)
 
 
 class ParallelMode(Candidate):
@@ -85,20 +111,7 @@ class ParallelMode(Candidate):
 
     def fit(self, view):
         d = np.asarray(view.drive)
-        idx = view.fit_idx
-        r = view.residual[idx] - view.residual[idx].mean()
-        trials = []
-        # scan frequency and damping around each mismatch peak: each trial is one small recursion
-        for om0 in mismatch_peaks(view):
-            for om in om0 * np.geomspace(0.85, 1.15, 7):
-                for ze in (0.005, 0.02, 0.06):
-                    q = resonator(d, view.dt, om, ze)[idx]
-                    q = q - q.mean()
-                    g = (q @ r) / max(q @ q, 1e-300)
-                    trials.append((float(np.sum((r - g * q) ** 2)), om, ze))
-        if not trials:
-            raise ValueError("no frequency-response mismatch to place a mode at")
-        trials.sort()
+        trials = resonance_trials(view)
         _, om, ze = trials[0]
         starts = [[math.log(t[1]), math.log(t[2])] for t in trials[1:3]]
         fit = view.fit_drive(direct=lambda z: [resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]))],
@@ -121,19 +134,20 @@ class ParallelMode(Candidate):
                          fit.at_bounds, fit.success, fit.message)
 
     def implausible(self, view, ext):
-        return mode_implausible(view, ext.values["hm.omega"], ext.values["hm.zeta"])
+        return mode_implausible(view, ext.values["hm.omega"], ext.values["hm.zeta"], ext.prediction)
 
     def mimics_recalibration(self, view, ext):
         return mode_on_own(view, ext.values["hm.omega"])
 
 
 class OutputMode(Candidate):
-    """A mode of the output structure: a mass m2 on a spring k2 with damper c2 riding on the
-    element tagged ``inertia`` (an amplified actuator's output plate or shell), the sensor on
-    m2: k2 = m2·ω², c2 = 2ζ·m2·ω."""
+    """A mode of the moving mass itself: the element tagged ``inertia`` (mass M, an amplified
+    actuator's shell and output plate) split into m1 = μ·M, driven by the actuator, and
+    m2 = (1 − μ)·M, carrying the sensor, joined by a spring k2 and damper c2 tuned to the
+    two-mass mode ω, ζ: k2 = ω²·m1·m2/M, c2 = 2ζω·m1·m2/M (the total mass is unchanged)."""
 
     cause = "higher-mode"
-    label = "compliant output stage (mass on a spring) on the inertia element"
+    label = "compliant moving mass (a share of it on a spring) on the inertia element"
     kind = LINEAR
 
     def applies(self, view):
@@ -145,14 +159,18 @@ class OutputMode(Candidate):
             return NOT_A_DRIVE
         return True if view.exact else "needs a model linear in its states"
 
-    def build(self, view, model, omega, zeta, m2):
-        """``model`` (the current model or its linear core) with the output stage added."""
+    def build(self, view, model, omega, zeta, mu):
+        """``model`` (the current model or its linear core) with its inertia split."""
         el = view.model.with_role("inertia")[0]
-        om = model.parameter("om.omega", omega, "rad/s", "natural frequency of the output stage")
-        ze = model.parameter("om.zeta", zeta, "", "damping ratio of the output stage")
-        m = model.parameter("om.m2", m2, "kg", "mass of the output stage")
-        model.add(J0("om.k"), C("om.spring", 1 / (m * om ** 2)), J1("om.plate"), I("om.mass", m),
-                  R("om.damper", 2 * ze * m * om))
+        x = sp.Dummy("p")
+        M = 1 / sp.diff(law(model, el)(x), x)
+        om = model.parameter("om.omega", omega, "rad/s", "natural frequency of the two-mass mode")
+        ze = model.parameter("om.zeta", zeta, "", "damping ratio of the two-mass mode")
+        share = model.parameter("om.mu", mu, "", "share of the inertia's mass on the actuator's side of the spring")
+        reduced = share * (1 - share) * M
+        modify_law(model, el, lambda p, old: old / share)
+        model.add(J0("om.k"), C("om.spring", 1 / (reduced * om ** 2)), J1("om.plate"), I("om.mass", (1 - share) * M),
+                  R("om.damper", 2 * ze * om * reduced))
         model.bond(junction_of(model, el), "om.k")
         model.bond("om.k", "om.spring")
         model.bond("om.k", "om.plate")
@@ -162,28 +180,36 @@ class OutputMode(Candidate):
         return model
 
     def fit(self, view):
-        el = view.model.with_role("inertia")[0]
-        M = 1.0 / slope(view.model, el, view.values)
         best = None
         on_core = view.on_core   # fitted on the linear core, driven by what it sees (exact route)
-        for om in mismatch_peaks(view)[:2]:
-            specs = [Spec("om.omega", om, om / 3, om * 3, log=True), Spec("om.zeta", 0.03, 1e-4, 1.0, log=True),
-                     Spec("om.m2", 0.2 * M, 1e-3 * M, 10 * M, log=True)]
-            model = self.build(view, view.core() if on_core else view.rewrite(), om, 0.03, 0.2 * M)
-            values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=20,
-                                                      drive=view.drive if on_core else None)
+        drive = view.drive if on_core else None
+        # starts: the resonator scan's best frequency and damping at each of the two largest
+        # mismatch peaks, with the mass share that fits best before any refit
+        peaks = []
+        for _, om, ze in resonance_trials(view):
+            if all(abs(om / p[0] - 1) > 0.2 for p in peaks):
+                peaks.append((om, max(ze, 0.01)))
+            if len(peaks) == 2:
+                break
+        for om, ze in peaks:
+            model = self.build(view, view.core() if on_core else view.rewrite(), om, ze, 0.5)
+            predict, known = view.predictor(model, drive)
+            base = {k: v for k, v in view.values.items() if k in known}
+            mu = min((0.1, 0.3, 0.5, 0.8, 0.95),
+                     key=lambda m: view.score(predict({**base, "om.omega": om, "om.zeta": ze, "om.mu": m}))[2])
+            specs = [Spec("om.omega", om, om / 3, om * 3, log=True), Spec("om.zeta", ze, 1e-4, 1.0, log=True),
+                     Spec("om.mu", mu, 0.02, 0.98)]
+            values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=20, drive=drive)
             rf = view.score(raw)[2]
             if best is None or rf < best[0]:
                 best = (rf, values, raw, ok, msg, at)
-        if best is None:
-            raise ValueError("no frequency-response mismatch to place a mode at")
         _, values, raw, ok, msg, at = best
-        model = self.build(view, view.rewrite(), values["om.omega"], values["om.zeta"], values["om.m2"])
-        new = ["om.omega", "om.zeta", "om.m2"]
+        model = self.build(view, view.rewrite(), values["om.omega"], values["om.zeta"], values["om.mu"])
+        new = ["om.omega", "om.zeta", "om.mu"]
         return Extension(model, values, new, raw, None, None, at, ok, msg)
 
     def implausible(self, view, ext):
-        return mode_implausible(view, ext.values["om.omega"], ext.values["om.zeta"])
+        return mode_implausible(view, ext.values["om.omega"], ext.values["om.zeta"], ext.prediction)
 
     def mimics_recalibration(self, view, ext):
         return mode_on_own(view, ext.values["om.omega"])
