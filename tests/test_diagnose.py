@@ -205,6 +205,30 @@ def test_third_party_candidate_silent_on_effect_free_data(monkeypatch):
     assert rep.steps[0].why.startswith("none")
 
 
+class Broken(Candidate):
+    """A third-party candidate with a defect: its fit raises a TypeError."""
+
+    cause = "broken"
+    label = "a candidate with a defect"
+
+    def applies(self, view):
+        return True
+
+    def fit(self, view):
+        return len(view.drive) + "x"
+
+
+def test_a_candidates_defect_is_its_failed_line_not_the_end_of_the_diagnosis():
+    """In the worker pool, a candidate raising an exception the engine does not expect is
+    reported FAILED with it; the others are judged as before (the worker used to die and end
+    the whole diagnosis)."""
+    rep = diagnose(lag_model(), lag_record(square=0.4), candidates=[Broken(), SquareLaw()], workers=2, chain=False)
+    assert rep.causes == ["square-law"]
+    broken = next(c for c in rep.steps[0].candidates if c.cause == "broken")
+    assert broken.error.startswith("TypeError") and not broken.passed
+    assert "FAILED: TypeError" in rep.text()
+
+
 class PowerLaw(Candidate):
     """u_eff = d + a·|d|^p with the exponent p searched from 3.5 on a deliberately tiny budget
     (two evaluations at effort 1), so that its first fit stops before converging."""
