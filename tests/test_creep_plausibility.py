@@ -42,3 +42,26 @@ def test_a_slow_cell_on_a_zero_mean_sine_creeps_by_its_integral_of_the_drive():
     r = InputCreep.creep_range(chain(d, [(tau, c)]))
     assert r == pytest.approx(np.ptp(q) / np.ptp(d), rel=1e-3)
     assert r < 0.02 < 1.0 < c * -math.expm1(-T[-1] / tau)
+
+
+def _nnls_weights(grid, response, t):
+    """Non-negative weights of the grid's cells whose summed step response fits ``response``."""
+    from scipy.optimize import nnls
+    A = np.column_stack([-np.expm1(-t / tau) for tau in grid])
+    return nnls(A, response)[0]
+
+
+def test_one_lag_is_one_lag_on_the_grid_and_log_time_creep_is_a_spectrum():
+    # two cells per decade, as the candidate's grid; step responses on a log-time axis
+    grid = np.geomspace(1e-4, 10.0, 11)
+    t = np.geomspace(1e-5, 30.0, 400)
+    lag = -np.expm1(-t / 3.7e-3)                       # one lag between two grid points
+    w = _nnls_weights(grid, lag, t)
+    assert InputCreep.spread(grid, grid, w) < 0.1
+    # log-time creep over three decades of the record: equal weight per third of a decade
+    fine = 10 ** np.arange(-4, -1 + 1e-9, 1 / 3)
+    creep = sum(-np.expm1(-t / tau) for tau in fine) / fine.size
+    w = _nnls_weights(grid, creep, t)
+    assert InputCreep.spread(grid, grid, w) > 0.5
+    # equal weights on five neighbouring points: all but two of five
+    assert InputCreep.spread(grid, grid[2:7], np.ones(5)) == pytest.approx(0.6)

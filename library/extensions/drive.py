@@ -218,10 +218,15 @@ class InputCreep(_DriveCandidate):
     ratio a later step refits to 0 leaves a regular model), starting in equilibrium with the
     level the device's history left them at (``creep.prior``, drive units; fitted on a grid).
     Additive: the cells act on the base drive beside the effects named before.
-    Creep is slower than the model's own dynamics and than the drive's main period (a faster
-    lag is a phase lag, not creep): the spectrum starts at 10/ω of the slowest mode and at a
-    quarter of the main period (or at 1 % of the record, for drives that hold, whose main
-    period is long).  It is small: piezoelectric stacks creep by 1–2 % of their
+    The spectrum spans every time scale the data resolve (five samples to three record
+    lengths): log-time and fractional creep relax over many decades, and on a periodic drive
+    the decades slower than its period average out while the faster ones show as a loss that
+    hardly depends on the frequency (a loop at every rate).  A lag faster than the model's own
+    dynamics or than a quarter of the drive's main period (1 % of the record for drives that
+    hold) is a phase lag, though, an electrical stage's or a misplaced damping's, unless it is
+    one of many: when most of the weight lies there, the spectrum must be broad (at least
+    ``min_spread`` of it outside its heaviest two neighbouring cells), not one lag.
+    It is small: piezoelectric stacks creep by 1–2 % of their
     stroke per decade of time, so cells that move by more than ``max_ratio`` of the elastic
     response within the record (:meth:`creep_range`) are not creep.  The chain is of the flexible linear
     reference's own form (lags of the drive), so any linear mismatch, a phase error at the
@@ -233,15 +238,23 @@ class InputCreep(_DriveCandidate):
     kind = LINEAR
     max_ratio = 0.5
     linear_share = 0.9
+    min_spread = 1 / 3
 
-    def taus(self, view) -> np.ndarray:
-        slow = [f for f in view.modes_hz if f > 0]
-        span = float(view.t[-1] - view.t[0])
-        lo = max(5 * view.dt, 10.0 / (2 * math.pi * min(slow)) if slow else 0.0,
-                 min(0.25 / view.main_hz if view.main_hz > 0 else 0.0, 0.01 * span))
-        hi = 3 * span
+    @staticmethod
+    def taus(view) -> np.ndarray:
+        """The relaxation times (s), two per decade from five samples to three record lengths."""
+        lo, hi = 5 * view.dt, 3 * float(view.t[-1] - view.t[0])
         n = max(2, int(round(math.log10(hi / lo) * 2)) + 1)
         return np.geomspace(lo, hi, n)
+
+    @staticmethod
+    def lag_limit(view) -> float:
+        """Cells faster than this (s) are phase lags unless the spectrum is broad: 10/ω of the
+        slowest mode, a quarter of the drive's main period (1 % of the record at most)."""
+        slow = [f for f in view.modes_hz if f > 0]
+        span = float(view.t[-1] - view.t[0])
+        return max(10.0 / (2 * math.pi * min(slow)) if slow else 0.0,
+                   min(0.25 / view.main_hz if view.main_hz > 0 else 0.0, 0.01 * span))
 
     def fit(self, view):
         taus = self.taus(view)
@@ -319,11 +332,23 @@ class InputCreep(_DriveCandidate):
         if within > self.max_ratio:
             return (f"it creeps by {within:.2g} of the elastic response within the record (more than "
                     f"{self.max_ratio:g})")
-        lo = self.taus(view)[0]
-        main = taus[int(np.argmax(cs))]
-        if main <= 1.01 * lo and len(cs) == 1:
-            return f"its only cell is as fast as creep may be (τ = {main:.3g} s): a lag, not creep"
+        cs, taus = np.asarray(cs), np.asarray(taus)
+        fast = float(cs[taus < self.lag_limit(view)].sum()) / float(cs.sum())
+        spread = self.spread(self.taus(view), taus, cs)
+        if fast > 0.5 and spread < self.min_spread:
+            return (f"{fast:.0%} of it is faster than creep may be (τ < {self.lag_limit(view):.3g} s) and it "
+                    f"is one lag, not a spectrum ({spread:.0%} outside its heaviest two neighbouring cells)")
         return ""
+
+    @staticmethod
+    def spread(grid: np.ndarray, taus: np.ndarray, cs: np.ndarray) -> float:
+        """Share of the weights ``cs`` of cells at ``taus`` (points of ``grid``) outside the
+        heaviest two neighbouring points of the grid: 0 for one lag (a time constant between
+        two grid points needs both), about 0.6 for equal weights over two decades."""
+        w = np.zeros(grid.size)
+        np.add.at(w, np.abs(np.log(taus)[:, None] - np.log(grid)[None, :]).argmin(axis=1), cs)
+        pair = float(np.max(w[1:] + w[:-1])) if w.size > 1 else float(w.sum())
+        return 1.0 - pair / float(w.sum())
 
 
 class _InputPolynomial(_DriveCandidate):
