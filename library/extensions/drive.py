@@ -332,11 +332,11 @@ class InputCreep(_DriveCandidate):
         if within > self.max_ratio:
             return (f"it creeps by {within:.2g} of the elastic response within the record (more than "
                     f"{self.max_ratio:g})")
-        cs, taus = np.asarray(cs), np.asarray(taus)
-        fast = float(cs[taus < self.lag_limit(view)].sum()) / float(cs.sum())
+        cs, taus, limit = np.asarray(cs), np.asarray(taus), self.lag_limit(view)
+        fast = float(cs[taus < limit].sum()) / float(cs.sum())
         spread = self.spread(self.taus(view), taus, cs)
         if fast > 0.5 and spread < self.min_spread:
-            return (f"{fast:.0%} of it is faster than creep may be (τ < {self.lag_limit(view):.3g} s) and it "
+            return (f"{fast:.0%} of it is faster than creep may be (τ < {limit:.3g} s) and it "
                     f"is one lag, not a spectrum ({spread:.0%} outside its heaviest two neighbouring cells)")
         return ""
 
