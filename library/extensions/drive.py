@@ -67,6 +67,23 @@ def best_on_grid(view, basis_of, grid, **fit_args):
     return min(grid, key=cost)
 
 
+def even_term(base) -> tuple[np.ndarray, float, float]:
+    """(column, c, h): the memoryless even term h·((d − c)/h)² of the drive d about the centre c
+    of its range (half range h), in drive units: what makes a loop or a static curve of the
+    drive asymmetric (its two ends bend by different amounts)."""
+    d = np.asarray(base, float)
+    centre, half = 0.5 * (float(d.max()) + float(d.min())), 0.5 * float(np.ptp(d)) or 1.0
+    return half * ((d - centre) / half) ** 2, centre, half
+
+
+def even_expr(model, prefix: str, q: float, centre: float, half: float, drive):
+    """The model's expression of :func:`even_term` with weight ``q`` (parameters prefix.q, .c, .h)."""
+    qs = model.parameter(f"{prefix}.q", q, "", "weight of the memoryless even term (asymmetry)")
+    cs = model.parameter(f"{prefix}.c", centre, "", "centre of the drive's range (the even term's origin)")
+    hs = model.parameter(f"{prefix}.h", half, "", "half the drive's range (the even term's scale)")
+    return qs * hs * ((drive - cs) / hs) ** 2
+
+
 def loop_area(r: np.ndarray, u: np.ndarray) -> float:
     """|∮ r du| normalised by the bounding box and the number of cycles: 0 for a
     single-valued residual, ~0.3 for a fat loop."""
@@ -112,11 +129,11 @@ class InputHysteresis(_DriveCandidate):
         r = threshold_grid(base, self.n_plays)
         names = [f"H.w{i + 1}" for i in range(len(r))]
         b0, reach = float(base[0]), float(r[-1]) or 1.0
-        centre, half = 0.5 * (float(base.max()) + float(base.min())), 0.5 * float(np.ptp(base)) or 1.0
+        column, centre, half = even_term(base)
         # the even term only on drives that pass through their range: on a drive held at a few
         # levels it would be a shape at those levels (an end stop on steps), not part of a loop
         asymmetric = dwell_levels(base) > 2 * self.n_plays
-        even = [half * ((base - centre) / half) ** 2] if asymmetric else []
+        even = [column] if asymmetric else []
         names = names + ["H.q"] if asymmetric else names
         bounds = dict(lower=[0.0] + [-np.inf] * (len(names) - 1), upper=[np.inf] * len(names), identity=False,
                       names=names)
@@ -136,11 +153,7 @@ class InputHysteresis(_DriveCandidate):
         B = view.additive.base_expr
         h = model.operator("H", PrandtlIshlinskii(r, fit.coef[:len(r)], prior), B)
         if asymmetric:
-            qs = model.parameter("H.q", float(fit.coef[-1]), "",
-                                 "weight of the memoryless even term (asymmetric loops)")
-            cs = model.parameter("H.c", centre, "", "centre of the drive's range (the even term's origin)")
-            hs = model.parameter("H.h", half, "", "half the drive's range (the even term's scale)")
-            h = h + qs * hs * ((B - cs) / hs) ** 2
+            h = h + even_expr(model, "H", float(fit.coef[-1]), centre, half, B)
         expr = view.additive_expr(h, identity=False)
         view.with_drive(model, expr)
         return self.extension(view, fit, model, {**dict(zip(names, map(float, fit.coef))), "H.prior": prior}, expr)
@@ -352,10 +365,12 @@ class InputCreep(_DriveCandidate):
 
 
 class _InputPolynomial(_DriveCandidate):
-    """Static odd nonlinearity of the drive: u = d + s·(a3·d³/V_r² + a5·d⁵/V_r⁴), a3, a5 ≥ 0."""
+    """Static odd nonlinearity of the drive: u = d + s·(a3·d³/V_r² + a5·d⁵/V_r⁴), a3, a5 ≥ 0,
+    with the even term q·h·((d − c)/h)² of :func:`even_term` (either sign) if ``asymmetric``."""
 
     sign = -1.0
     prefix = "sat"
+    asymmetric = False
     #: the prefixes of both polynomial candidates: once either is named, the other would only
     #: free the sign of the same terms
     prefixes = ("sat.", "exp.")
@@ -378,26 +393,32 @@ class _InputPolynomial(_DriveCandidate):
         Vr = drive_scale(view)
         d = np.asarray(view.additive.base)
         p = self.prefix
-        fit = view.fit_drive([self.sign * d ** 3 / Vr ** 2, self.sign * d ** 5 / Vr ** 4], [0.0, 0.0],
-                             [np.inf, np.inf], names=[f"{p}.a3", f"{p}.a5"])
+        names = [f"{p}.a3", f"{p}.a5"] + ([f"{p}.q"] if self.asymmetric else [])
+        column, centre, half = even_term(d)
+        basis = [self.sign * d ** 3 / Vr ** 2, self.sign * d ** 5 / Vr ** 4] + ([column] if self.asymmetric else [])
+        fit = view.fit_drive(basis, [0.0, 0.0, -np.inf][:len(names)], [np.inf] * len(names), names=names)
         model = view.rewrite()
         a3 = model.parameter(f"{p}.a3", float(fit.coef[0]), "", "cubic drive coefficient", bounds=(0, 1e6))
         a5 = model.parameter(f"{p}.a5", float(fit.coef[1]), "", "quintic drive coefficient", bounds=(0, 1e6))
         vr = model.parameter(f"{p}.Vr", Vr, "", "reference drive (largest |drive| of the data)")
         D = view.additive.base_expr
-        expr = view.additive_expr(self.sign * (a3 * D ** 3 / vr ** 2 + a5 * D ** 5 / vr ** 4))
+        curve = self.sign * (a3 * D ** 3 / vr ** 2 + a5 * D ** 5 / vr ** 4)
+        if self.asymmetric:
+            curve = curve + even_expr(model, p, float(fit.coef[2]), centre, half, D)
+        expr = view.additive_expr(curve)
         view.with_drive(model, expr)
-        return self.extension(view, fit, model, {f"{p}.a3": float(fit.coef[0]), f"{p}.a5": float(fit.coef[1])},
-                              expr)
+        return self.extension(view, fit, model, dict(zip(names, map(float, fit.coef))), expr)
 
 
 class InputSaturation(_InputPolynomial):
     """Saturation: the drive's effect compresses at high field (the polarization saturates,
-    P ≈ P_s·tanh(E/E_s) = E − E³/(3E_s²) + ...)."""
+    P ≈ P_s·tanh(E/E_s) = E − E³/(3E_s²) + ...), not necessarily alike at both ends of the
+    drive's range (the even term: a polarization that saturates sooner along the poling
+    direction than against it, a bimorph whose layers see the field with and against theirs)."""
 
     cause = "saturation"
     label = "compressive drive nonlinearity (saturating polarization)"
-    sign, prefix = -1.0, "sat"
+    sign, prefix, asymmetric = -1.0, "sat", True
 
 
 class InputExpansion(_InputPolynomial):
