@@ -539,6 +539,24 @@ def test_an_asymmetric_saturation_is_named_with_the_gain_of_the_shape():
     assert not pi.passed and "static curve" in pi.verdict
 
 
+def test_a_strong_saturation_under_a_sine_is_not_named_hysteresis():
+    """The lag behind u_eff = tanh(2u)/2 under a sine: a play sum, whose branches kink at
+    min + 2r and max − 2r, fits the curve 48x better than the model, where the cubic-quintic
+    saturation gains 5.6x.  Its loops must beat a static curve with as many knees (nine a
+    side): they do not (a twin with four knees a side lost to the plays by 1.16x, and
+    hysteresis was named)."""
+    from library.extensions.drive import InputHysteresis, InputSaturation
+    rng = np.random.default_rng(3)
+    t = np.arange(6000) / 500.0
+    u = np.sin(2 * np.pi * 1.7 * t)
+    y = bg.simulate(lag_model(0.025), t, {"u": bg.PiecewiseLinear(t, np.tanh(2 * u) / 2)}, rtol=1e-9)["y"]
+    data = Dataset(t, {"u": u, "y": y + rng.normal(0, 0.002, t.size)})
+    rep = diagnose(lag_model(), data, candidates=[InputHysteresis(), InputSaturation()], workers=1)
+    assert rep.causes == ["saturation"]
+    pi = next(c for c in rep.steps[0].candidates if c.cause == "hysteresis")
+    assert pi.gain > 20 and pi.gain_static < 1.0 and "static curve" in pi.verdict
+
+
 def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     """The lag record under a drive of low sines plus a weak broadband part, with output noise:
     near 3 Hz the output is the drive's response (coherence ~1); well above, the lag passes a

@@ -159,7 +159,15 @@ class InputHysteresis(_DriveCandidate):
         return self.extension(view, fit, model, {**dict(zip(names, map(float, fit.coef))), "H.prior": prior}, expr)
 
     def without_memory(self, view):
-        return static_curve(view, self.n_plays)
+        """The operator's static twin, with as many knees: on a drive that passes through its
+        range each of the n − 1 plays with r > 0 kinks once on each branch (at min + 2r rising,
+        max − 2r falling), so the sum is, loops aside, a curve with n − 1 knees on each side of
+        the centre, and a twin with fewer let the plays win as the more flexible curve (tanh
+        saturations under sines beat a 10-piece twin by 1.08x and 1.7x).  On a drive held at a
+        few levels the n-piece curve already passes through every level; more knees would only
+        fit the steps' transitions."""
+        through = dwell_levels(view.additive.base) > 2 * self.n_plays
+        return static_curve(view, 2 * self.n_plays if through else self.n_plays)
 
 
 class InputBoucWen(_DriveCandidate):
