@@ -402,8 +402,8 @@ class _InputPolynomial(_DriveCandidate):
         d = np.asarray(view.additive.base)
         p = self.prefix
         names = [f"{p}.a3", f"{p}.a5"] + ([f"{p}.q"] if self.asymmetric else [])
-        column, centre, half = even_term(d)
-        basis = [self.sign * d ** 3 / Vr ** 2, self.sign * d ** 5 / Vr ** 4] + ([column] if self.asymmetric else [])
+        even = even_term(d) if self.asymmetric else None
+        basis = [self.sign * d ** 3 / Vr ** 2, self.sign * d ** 5 / Vr ** 4] + ([even[0]] if even else [])
         fit = view.fit_drive(basis, [0.0, 0.0, -np.inf][:len(names)], [np.inf] * len(names), names=names)
         model = view.rewrite()
         a3 = model.parameter(f"{p}.a3", float(fit.coef[0]), "", "cubic drive coefficient", bounds=(0, 1e6))
@@ -411,8 +411,8 @@ class _InputPolynomial(_DriveCandidate):
         vr = model.parameter(f"{p}.Vr", Vr, "", "reference drive (largest |drive| of the data)")
         D = view.additive.base_expr
         curve = self.sign * (a3 * D ** 3 / vr ** 2 + a5 * D ** 5 / vr ** 4)
-        if self.asymmetric:
-            curve = curve + even_expr(model, p, float(fit.coef[2]), centre, half, D)
+        if even:
+            curve = curve + even_expr(model, p, float(fit.coef[2]), even[1], even[2], D)
         expr = view.additive_expr(curve)
         view.with_drive(model, expr)
         return self.extension(view, fit, model, dict(zip(names, map(float, fit.coef))), expr)
