@@ -132,7 +132,7 @@ class InputHysteresis(_DriveCandidate):
         column, centre, half = even_term(base)
         # the even term only on drives that pass through their range: on a drive held at a few
         # levels it would be a shape at those levels (an end stop on steps), not part of a loop
-        asymmetric = dwell_levels(base) > 2 * self.n_plays
+        asymmetric = self.passes_through(base)
         even = [column] if asymmetric else []
         names = names + ["H.q"] if asymmetric else names
         bounds = dict(lower=[0.0] + [-np.inf] * (len(names) - 1), upper=[np.inf] * len(names), identity=False,
@@ -166,8 +166,12 @@ class InputHysteresis(_DriveCandidate):
         saturations under sines beat a 10-piece twin by 1.08x and 1.7x).  On a drive held at a
         few levels the n-piece curve already passes through every level; more knees would only
         fit the steps' transitions."""
-        through = dwell_levels(view.additive.base) > 2 * self.n_plays
-        return static_curve(view, 2 * self.n_plays if through else self.n_plays)
+        return static_curve(view, 2 * self.n_plays if self.passes_through(view.additive.base) else self.n_plays)
+
+    def passes_through(self, base) -> bool:
+        """Whether the drive passes through its range (a sine, a triangle, a chirp), rather than
+        being held at a few levels: more dwelling levels than twice the operator's plays."""
+        return dwell_levels(base) > 2 * self.n_plays
 
 
 class InputBoucWen(_DriveCandidate):
