@@ -41,6 +41,9 @@ def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
     outputs are kept at the sample indices ``rows`` (ascending) only: Y[r, j] = y_j[rows[r]]."""
     n = Ad.shape[0]
     N, m = U.shape
+    if m == 1:
+        _one_column(Ad, Bd[:, 0].copy(), Cd[0].copy(), Dd[0, 0], X0[:, 0].copy(), U[:, 0], rows, Y[:, 0])
+        return
     x = X0.copy()
     xn = np.empty((n, m))
     r = 0
@@ -64,6 +67,30 @@ def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
                 x[i, j] = xn[i, j]
         if keep:
             r += 1
+
+
+@njit(cache=True)
+def _one_column(Ad, b, c, d, x, u, rows, y):
+    """:func:`recursion` for a single input column (vectors b, c, x, u, y; scalar d): the same
+    arithmetic in the same order, in a loop about twice as fast; ``x`` is overwritten."""
+    n = Ad.shape[0]
+    xn = np.empty(n)
+    r = 0
+    R = rows.shape[0]
+    for k in range(u.shape[0]):
+        if r < R and rows[r] == k:
+            acc = d * u[k]
+            for i in range(n):
+                acc += c[i] * x[i]
+            y[r] = acc
+            r += 1
+        for i in range(n):
+            s = b[i] * u[k]
+            for l in range(n):
+                s += Ad[i, l] * x[l]
+            xn[i] = s
+        for i in range(n):
+            x[i] = xn[i]
 
 
 @dataclass(frozen=True)

@@ -25,13 +25,15 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import bondgraph as bg
 from bondgraph import config
 from bondgraph.cli import main
 from bondgraph.data import Dataset, read_csv
 from bondgraph.diagnosis import LINEAR, Candidate, Extension, diagnose, model_file_options
-from bondgraph.diagnosis.decision import compare, judge, Comparison
+from bondgraph.diagnosis.decision import _batch_means, compare, judge, Comparison
 from bondgraph.modelfile import load_model
 from conftest import MODELS
 
@@ -310,6 +312,18 @@ def test_comparison_is_significant_only_for_a_real_improvement():
     assert better.z > 3 and better.gain > 3
     # a periodic error: its samples are worth about a few per period, not one each
     assert better.n_eff < sum(s.stop - s.start for s in blocks) / 10
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(1, 400), st.integers(1, 60), st.integers(0, 30))
+def test_batch_means_are_the_means_of_the_blocks_slices(m, L, start):
+    """The batch means (one reshape per block) are the means of the slices [start + kL,
+    start + (k + 1)L), the remainder dropped; a block shorter than L is one batch when it holds
+    at least L // 2 samples, none otherwise."""
+    x = np.random.default_rng(m * 61 + L).normal(size=start + m)
+    got = _batch_means(x, start, m, L)
+    cuts = [(start + k * L, start + (k + 1) * L) for k in range(m // L)] or ([(start, start + m)] if m >= L // 2 else [])
+    assert np.allclose(got, [x[lo:hi].mean() for lo, hi in cuts], rtol=1e-13, atol=1e-15) and got.size == len(cuts)
 
 
 def test_batches_of_a_slowly_varying_error_count_less():

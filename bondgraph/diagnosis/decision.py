@@ -91,13 +91,8 @@ def compare(ea: np.ndarray, eb: np.ndarray, blocks: list[slice]) -> Comparison:
         ratio = float(a2.mean()) / max(float(b2.mean()), 1e-300)
     gain = math.sqrt(ratio) if math.isfinite(ratio) else 0.0
     L = batch_length(a2 - b2, blocks, offsets)
-    A_k, B_k = [], []
-    for s, o in zip(blocks, offsets):
-        m = s.stop - s.start
-        cuts = [(o + k * L, o + (k + 1) * L) for k in range(m // L)] or ([(o, o + m)] if m >= L // 2 else [])
-        A_k += [float(a2[lo:hi].mean()) for lo, hi in cuts]
-        B_k += [float(b2[lo:hi].mean()) for lo, hi in cuts]
-    A_k, B_k = np.asarray(A_k), np.asarray(B_k)
+    A_k = np.concatenate([_batch_means(a2, o, s.stop - s.start, L) for s, o in zip(blocks, offsets)])
+    B_k = np.concatenate([_batch_means(b2, o, s.stop - s.start, L) for s, o in zip(blocks, offsets)])
     K = A_k.size
     A, B = float(A_k.mean()) if K else 0.0, float(B_k.mean()) if K else 0.0
     if not (math.isfinite(A) and math.isfinite(B)) or A <= 0 or B <= 0 or K < 2:
@@ -107,6 +102,14 @@ def compare(ea: np.ndarray, eb: np.ndarray, blocks: list[slice]) -> Comparison:
     inflation = _serial_inflation(d)
     z = _z(math.log(A / B), float(np.std(d, ddof=1)) / math.sqrt(K) * math.sqrt(inflation))
     return Comparison(gain, z, float(K) / inflation)
+
+
+def _batch_means(x: np.ndarray, start: int, m: int, L: int) -> np.ndarray:
+    """Means of the consecutive length-``L`` batches of ``x[start:start + m]`` (the remainder
+    dropped); a block shorter than ``L`` is one batch if it holds at least ``L // 2`` samples."""
+    if m >= L:
+        return x[start:start + m // L * L].reshape(-1, L).mean(axis=1)
+    return x[start:start + m].mean(keepdims=True) if m >= L // 2 else np.zeros(0)
 
 
 def _serial_inflation(d: np.ndarray) -> float:
