@@ -189,89 +189,19 @@ def polynomial_term(term: Callable, partner: bool):
     return _TERMS[key]
 
 
-@njit(cache=True, inline='always')
-def _poly(P, HG, k, x, a):
-    """(f, ∂f/∂x, ∂f/∂a) of f = Σ P[k, i, j]·x^i·a^j + HG[k, 0]·tanh(HG[k, 1]·x)."""
-    f = fx = fa = 0.0
-    if HG[k, 0] != 0.0:
-        th = np.tanh(HG[k, 1] * x)
-        f += HG[k, 0] * th
-        fx += HG[k, 0] * HG[k, 1] * (1.0 - th * th)
-    xi = 1.0
-    for i in range(P.shape[1]):
-        aj = 1.0
-        for j in range(P.shape[2]):
-            p = P[k, i, j]
-            if p != 0.0:
-                f += p * xi * aj
-                if i > 0:
-                    fx += i * p * x ** (i - 1) * aj
-                if j > 0:
-                    fa += j * p * xi * a ** (j - 1)
-            aj *= a
-        xi *= x
-    return f, fx, fa
-
-
-@njit(cache=True, inline='always')
-def _solve_in_place(J, g, m):
-    """g ← J⁻¹g by Gaussian elimination with partial pivoting (m is small); J is overwritten."""
-    for c in range(m):
-        p = c
-        for r in range(c + 1, m):
-            if abs(J[r, c]) > abs(J[p, c]):
-                p = r
-        if p != c:
-            for l in range(m):
-                J[c, l], J[p, l] = J[p, l], J[c, l]
-            g[c], g[p] = g[p], g[c]
-        for r in range(c + 1, m):
-            f = J[r, c] / J[c, c]
-            for l in range(c, m):
-                J[r, l] -= f * J[c, l]
-            g[r] -= f * g[c]
-    for c in range(m - 1, -1, -1):
-        acc = g[c]
-        for l in range(c + 1, m):
-            acc -= J[c, l] * g[l]
-        g[c] = acc / J[c, c]
-
-
-@njit(cache=True, inline='always')
-def _residual(w, row, Dd, a_rows, P, HG, n_el, g, J, jac):
-    """g = w − term(x(w), a(w)) (and its Jacobian J) at one sample; returns (|g|², largest
-    |term|)."""
-    norm, big = 0.0, 0.0
-    for j in range(n_el):
-        x = row[1 + j]
-        for l in range(n_el):
-            x += Dd[1 + j, 1 + l] * w[l]
-        ar = a_rows[j]
-        a = 0.0
-        if ar >= 0:
-            a = row[ar]
-            for l in range(n_el):
-                a += Dd[ar, 1 + l] * w[l]
-        v, dx, da = _poly(P, HG, j, x, a)
-        g[j] = w[j] - v
-        norm += g[j] * g[j]
-        big = max(big, abs(v))
-        if jac:
-            for l in range(n_el):
-                J[j, l] = (1.0 if j == l else 0.0) - dx * Dd[1 + j, 1 + l] - (da * Dd[ar, 1 + l] if ar >= 0 else 0.0)
-    return norm, big
-
-
 @njit(cache=True)
 def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     """Sample-by-sample first-order-hold stepping of the augmented model (inputs: drive, then
     the n_el nonlinear terms; output rows: output, element variables, partners); at each
     sample Newton's method (with a backtracking line search) on w − term(x(w), a(w)) = 0 from
-    the previous sample's w (w = 0 throughout unless ``active``).  False when a step does not
-    converge."""
+    the previous sample's w (w = 0 throughout unless ``active``), the term of element j being
+    Σ P[j, i, l]·x^i·a^l + HG[j, 0]·tanh(HG[j, 1]·x).  False when a step does not converge.
+    One function without array-passing helpers: numba's reference counting of the arrays
+    handed to inlined helpers cost more than the arithmetic (2x on the whole step)."""
     n = Phi.shape[0]
     N = u.shape[0]
     R = C.shape[0]
+    nx, na = P.shape[1], P.shape[2]          # powers of x and of a in the terms
     xi = np.zeros(n)
     xn = np.zeros(n)
     w = np.zeros(n_el)
@@ -279,7 +209,6 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     J = np.zeros((n_el, n_el))
     step = np.zeros(n_el)
     trial = np.zeros(n_el)
-    res = (0.0, 0.0)
     row = np.zeros(R)
     scale = 1e-300                           # largest |w| so far: the convergence test's scale
     for i in range(n):                       # at rest: x[0] = ξ[0] + Γ1·u_all[0] = 0
@@ -291,46 +220,106 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
                 acc += C[r, i] * xi[i]
             row[r] = acc
         converged = not active
-        full, last = False, 0.0              # was the last step a full Newton step, its size
         if active:
-            res = _residual(w, row, Dd, a_rows, P, HG, n_el, g, J, True)
-            scale = max(scale, res[1])
-        for it in range(60 if active else 0):
+            full, last, change = False, 0.0, 0.0   # was the last step a full Newton step, its size
+            lam, norm0, halvings, newton = 1.0, -1.0, 0, 0   # norm0 < 0: not in a line search
             for j in range(n_el):
-                step[j] = g[j]
-            _solve_in_place(J, step, n_el)
-            change = 0.0
-            for j in range(n_el):
-                change = max(change, abs(step[j]))
-            if not np.isfinite(change):
-                return False
-            # converged: the step is below the tolerance, or, after a full step, quadratic
-            # convergence (next ≈ change³/last²) puts the step after this one below it
-            if change <= 1e-12 * scale or (full and change ** 3 <= 1e-12 * scale * last * last):
+                trial[j] = w[j]
+            while True:
+                # g = trial - term(x(trial), a(trial)) and its Jacobian J
+                norm, big = 0.0, 0.0
                 for j in range(n_el):
-                    w[j] -= step[j]
-                converged = True
-                break
-            norm0 = res[0]
-            lam = 1.0                        # backtracking: a saturating term (tanh) can send a
-            decreased = False                # full Newton step far past the root
-            for _ in range(40):
-                for j in range(n_el):
-                    trial[j] = w[j] - lam * step[j]
-                res = _residual(trial, row, Dd, a_rows, P, HG, n_el, g, J, True)
-                if res[0] <= (1.0 - 1e-4 * lam) * norm0:
-                    decreased = True
+                    x = row[1 + j]
+                    for l in range(n_el):
+                        x += Dd[1 + j, 1 + l] * trial[l]
+                    ar = a_rows[j]
+                    a = 0.0
+                    if ar >= 0:
+                        a = row[ar]
+                        for l in range(n_el):
+                            a += Dd[ar, 1 + l] * trial[l]
+                    f = fx = fa = 0.0
+                    if HG[j, 0] != 0.0:
+                        th = np.tanh(HG[j, 1] * x)
+                        f += HG[j, 0] * th
+                        fx += HG[j, 0] * HG[j, 1] * (1.0 - th * th)
+                    xp = 1.0
+                    for i in range(nx):
+                        aj = 1.0
+                        for m in range(na):
+                            p = P[j, i, m]
+                            if p != 0.0:
+                                f += p * xp * aj
+                                if i > 0:
+                                    fx += i * p * x ** (i - 1) * aj
+                                if m > 0:
+                                    fa += m * p * xp * a ** (m - 1)
+                            aj *= a
+                        xp *= x
+                    g[j] = trial[j] - f
+                    norm += g[j] * g[j]
+                    big = max(big, abs(f))
+                    for l in range(n_el):
+                        J[j, l] = (1.0 if j == l else 0.0) - fx * Dd[1 + j, 1 + l] - (fa * Dd[ar, 1 + l] if ar >= 0 else 0.0)
+                if norm0 >= 0.0:                 # a trial of the line search (backtracking: a saturating
+                    #                              term can send a full Newton step far past the root)
+                    if norm > (1.0 - 1e-4 * lam) * norm0:
+                        halvings += 1
+                        if halvings >= 40:
+                            break
+                        lam *= 0.5
+                        for j in range(n_el):
+                            trial[j] = w[j] - lam * step[j]
+                        continue
+                    for j in range(n_el):
+                        w[j] = trial[j]
+                    full, last = lam == 1.0, change
+                    scale = max(scale, big)
+                    if lam * change <= 1e-12 * scale:
+                        converged = True
+                        break
+                else:
+                    scale = max(scale, big)
+                if newton >= 60:
                     break
-                lam *= 0.5
-            if not decreased:
-                break
-            for j in range(n_el):
-                w[j] = trial[j]
-            full, last = lam == 1.0, change
-            scale = max(scale, res[1])
-            if lam * change <= 1e-12 * scale:
-                converged = True
-                break
+                newton += 1
+                # step = J⁻¹ g (Gaussian elimination with partial pivoting; J overwritten)
+                for j in range(n_el):
+                    step[j] = g[j]
+                for c in range(n_el):
+                    pv = c
+                    for r in range(c + 1, n_el):
+                        if abs(J[r, c]) > abs(J[pv, c]):
+                            pv = r
+                    if pv != c:
+                        for l in range(n_el):
+                            J[c, l], J[pv, l] = J[pv, l], J[c, l]
+                        step[c], step[pv] = step[pv], step[c]
+                    for r in range(c + 1, n_el):
+                        fq = J[r, c] / J[c, c]
+                        for l in range(c, n_el):
+                            J[r, l] -= fq * J[c, l]
+                        step[r] -= fq * step[c]
+                for c in range(n_el - 1, -1, -1):
+                    acc = step[c]
+                    for l in range(c + 1, n_el):
+                        acc -= J[c, l] * step[l]
+                    step[c] = acc / J[c, c]
+                change = 0.0
+                for j in range(n_el):
+                    change = max(change, abs(step[j]))
+                if not np.isfinite(change):
+                    return False
+                # converged: the step is below the tolerance, or, after a full step, quadratic
+                # convergence (next ≈ change³/last²) puts the step after this one below it
+                if change <= 1e-12 * scale or (full and change ** 3 <= 1e-12 * scale * last * last):
+                    for j in range(n_el):
+                        w[j] -= step[j]
+                    converged = True
+                    break
+                norm0, lam, halvings = norm, 1.0, 0
+                for j in range(n_el):
+                    trial[j] = w[j] - step[j]
         if not converged:
             return False
         for r in range(R):
