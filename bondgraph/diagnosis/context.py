@@ -56,6 +56,9 @@ class State:
     #: the drive as a sum of effects (:class:`~bondgraph.diagnosis.additive.AdditiveDrive`),
     #: when the extensions named so far were additive
     additive: object | None = None
+    #: the linear model the held terms extend when it is not the calibrated nominal model (a
+    #: linear structural extension named before them, e.g. a compliant output stage)
+    core_model: Model | None = None
 
     @property
     def prediction(self) -> np.ndarray:

@@ -256,13 +256,18 @@ def advance(ctx: Context, state: State, oc: Outcome, view: View) -> State:
     ext = oc.extension
     g, b, _, _ = score(ctx, oc.raw)
     before = state.drive if state.drive is not None else state.core_drive
+    core_model = state.core_model
+    if before is None and ext.terms and view.exact and not view.reduced:
+        # terms fitted on the current model itself (linear: e.g. with a compliant output stage
+        # named before them): that model, under the drive, is the core they are held on
+        before, core_model = np.asarray(view.u), state.model
     # what the linear core sees and the terms held on it, while the model stays a Lur'e system
     core = ext.drive if ext.drive is not None else before if ext.terms and before is not None else None
     terms = tuple(state.terms) + tuple(ext.terms) if core is not None else ()
     extra = (state.core_extra if state.terms else view.extra) if terms else None
     return State(ext.model, dict(ext.values), oc.raw, g, b, ext.drive, ext.drive_expr,
                  state.causes + [oc.result.cause], state.linear and ext.drive is not None, terms, core, extra,
-                 ext.additive if ext.drive is not None else None)
+                 additive=ext.additive if ext.drive is not None else None, core_model=core_model if terms else None)
 
 
 def load_candidates() -> list[Candidate]:

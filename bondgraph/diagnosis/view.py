@@ -83,7 +83,7 @@ class View:
         self.structural = not state.linear
         #: nonlinear terms in elements' laws named so far: (element, partner, term, c, r2)
         self.terms = tuple(state.terms)
-        self._core_drive, self._core_extra = state.core_drive, state.core_extra
+        self._core_drive, self._core_extra, self._core_model = state.core_drive, state.core_extra, state.core_model
         self.causes = tuple(state.causes)
         self.prediction = _frozen(state.prediction)
         self.residual = _frozen(ctx.y - state.prediction)
@@ -122,8 +122,10 @@ class View:
         return self.drive is not None and not self.structural and self.exact and not self.reduced
 
     def core(self) -> Model:
-        """A copy of the linear core (the calibrated nominal model) carrying the current values."""
-        m = self._ctx.model.copy()
+        """A copy of the linear core carrying the current values: the calibrated nominal model,
+        or the linear model the held nonlinear terms extend (one with a linear structural
+        extension named before them)."""
+        m = (self._core_model or self._ctx.model).copy()
         known = m.all_parameters()
         m.values.update({k: v for k, v in self.values.items() if k in known})
         return m
