@@ -55,7 +55,7 @@ def test_a_term_named_after_the_split_is_held_on_the_split_model():
     """A chain that names the split mass and then a softening holds the softening's term on the
     split model (its linear core from then on), so the next step's structural candidates are
     stepped exactly (a Lur'e system) instead of integrated: before, the term was dropped from
-    the held ones and every later structural fit integrated the whole model (a T215/APA record
+    the held ones and every later structural fit integrated the whole model (an APA record
     spent 270 s there).  Two routes agree: the held term stepped on the split core with no new
     term, and the chain's model integrated."""
     from bondgraph.diagnosis.engine import advance, run_candidate
