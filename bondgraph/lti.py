@@ -160,9 +160,12 @@ class LTI:
         y = [eqs.outputs[output]]
         mats = [eqs.jacobian(rates, xs), eqs.jacobian(rates, [u]), eqs.jacobian(y, xs), eqs.jacobian(y, [u])]
         moving = set(xs) | set(eqs.inputs) | set(eqs.input_rates) | {ob.symbol for ob in eqs.operators}
-        self.exact = not eqs.operators and all(
-            not (e.free_symbols & moving) for M in mats for e in M) and self._affine(rates + y, xs, eqs.inputs)
         others = [s for s in eqs.inputs if s != u]
+        # affine in states and every input (so the Jacobians say everything): the slopes in x
+        # and u move with nothing; the slopes in the other inputs move with no state or input
+        self.exact = not eqs.operators and all(
+            not (e.free_symbols & moving) for M in mats for e in M) and all(
+            not (e.free_symbols & (set(xs) | set(eqs.inputs))) for e in eqs.jacobian(rates + y, others))
         zero = {s: 0 for s in list(moving - set(xs) - {u}) + others}
         mats = [M.xreplace(zero) for M in mats]
         used = set().union(*(e.free_symbols for M in mats for e in M))
@@ -170,19 +173,6 @@ class LTI:
         self.parameters = [p.name for p in eqs.params if p in used]
         self._fn = sp.lambdify([eqs.params], mats, modules="numpy", cse=True)
         self.n = len(xs)
-
-    def _affine(self, exprs, xs, us) -> bool:
-        """True when the rates and output are affine in states and inputs (so the Jacobians say everything)."""
-        full = self.eqs.substituted({i: e for i, e in enumerate(exprs)})
-        syms = list(xs) + list(us)
-        for e in full.values():
-            try:
-                poly = sp.Poly(e, *syms) if syms else None
-            except sp.PolynomialError:
-                return False
-            if poly is not None and poly.total_degree() > 1:
-                return False
-        return True
 
     def matrices(self, th: np.ndarray):
         A, B, C, D = (np.array(M, dtype=float).reshape(shape) for M, shape in

@@ -58,3 +58,19 @@ def test_one_column_gives_the_many_column_loops_column_bit_for_bit():
         for j in range(4):
             alone = ss.response(1e-4, U[:, j], x0, rows)
             assert np.array_equal(alone[:, 0], together[:, j])
+
+
+@pytest.mark.parametrize("second, exact", [(lambda u: 3 * u, True), (lambda u: u ** 2, False)])
+def test_the_linear_route_is_exact_only_when_affine_in_every_input(second, exact):
+    """A mass on a spring pushed by two forces: F1 = u1 (the input of the linear route) and
+    F2 = 3·u2 or u2².  The slopes in x and u1 are constant either way; only the second input's
+    slope tells that the dynamics are not affine in u2 (and the linear route not exact)."""
+    g = bg.Model("two_forces")
+    u1, u2 = g.input("u1"), g.input("u2")
+    g.add(bg.Se("f1", u1), bg.Se("f2", second(u2)), bg.J1("v"), bg.I("m", 1e-3), bg.C("k", 1e-6))
+    for e in ("f1", "f2"):
+        g.bond(e, "v")
+    g.bond("v", "m")
+    g.bond("v", "k")
+    g.output("x", "k.q", "m")
+    assert LTI(bg.derive(g), input="u1").exact is exact
