@@ -320,31 +320,29 @@ class Identification:
 
 def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     """min ||A·x − b|| with lower ≤ x ≤ upper (scipy's bounded-variable least squares on the
-    column-scaled problem; for tall A it works on the small triangular factor R of A,
-    ||Ax − b||² = ||Rx − Qᵀb||² + const).  Columns that these rows cannot tell from the
-    others (pivoted QR of the scaled columns: a diagonal below 1e-10 of the largest, or beyond
-    the number of rows; a column that vanishes here up to rounding among them) get 0: any
-    split between them would fit, and elsewhere, where they differ, a huge one would be
-    anything but a fit."""
+    column-scaled problem, reduced by one pivoted QR of the scaled columns, A·P = Q·R, to the
+    small triangular one: ||A·x − b||² = ||R·Pᵀx − Qᵀb||² + const).  Columns that these rows
+    cannot tell from the others (a diagonal of R below 1e-10 of the largest, or beyond the
+    number of rows; a column that vanishes here up to rounding among them) get 0: any split
+    between them would fit, and elsewhere, where they differ, a huge one would be anything
+    but a fit."""
     norms = np.linalg.norm(A, axis=0)
     out = np.zeros(A.shape[1])
     live = np.nonzero(norms > 1e-60 * max(float(norms.max(initial=0.0)), 1e-300))[0]
     if live.size == 0:
         return out
-    An = A[:, live] / norms[live]
-    _, Rp, piv = scipy.linalg.qr(An, mode="economic", pivoting=True)
-    d = np.abs(np.diag(Rp))
-    live = np.sort(live[piv[:d.size][d > 1e-10 * d[0]]])   # at most one column per row
-    An = A[:, live] / norms[live]
-    lower = np.asarray(lower, float)[live] * norms[live]
-    upper = np.asarray(upper, float)[live] * norms[live]
+    Q, R, piv = scipy.linalg.qr(A[:, live] / norms[live], mode="economic", pivoting=True)
+    d = np.abs(np.diag(R))
+    r = int(np.argmin(d > 1e-10 * d[0])) if np.any(d <= 1e-10 * d[0]) else d.size   # the told-apart columns lead
+    cols = live[piv[:r]]
+    R, qb = R[:r, :r], Q[:, :r].T @ b
+    lower = np.asarray(lower, float)[cols] * norms[cols]
+    upper = np.asarray(upper, float)[cols] * norms[cols]
     if np.all(np.isinf(lower)) and np.all(np.isinf(upper)):
-        out[live] = np.linalg.lstsq(An, b, rcond=None)[0] / norms[live]
-        return out
-    if An.shape[0] > 4 * An.shape[1]:
-        Qm, Rm = np.linalg.qr(An)
-        An, b = Rm, Qm.T @ b
-    out[live] = lsq_linear(An, b, bounds=(lower, upper), method="bvls").x / norms[live]
+        x = scipy.linalg.solve_triangular(R, qb)
+    else:
+        x = lsq_linear(R, qb, bounds=(lower, upper), method="bvls").x
+    out[cols] = x / norms[cols]
     return out
 
 
