@@ -36,6 +36,16 @@ from .signals import Constant, Signal, SignalBank
 METHODS = ("auto", "dopri5", "radau", "bdf", "lsoda")
 
 
+def _signal(name: str, value) -> Signal:
+    """An input's signal: a :class:`Signal` as given, a number as a constant."""
+    if isinstance(value, Signal):
+        return value
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+        return Constant(float(value))
+    raise SignalError(f"input {name!r}: give a number or a signal (Sine(...), PiecewiseLinear(t, v), ...), "
+                      f"not {type(value).__name__}")
+
+
 class SimulationError(BondGraphError, RuntimeError):
     """The integrator failed (step-size underflow, non-finite state, too many steps)."""
 
@@ -125,7 +135,7 @@ class Simulator:
         unknown = set(inputs) - set(self.input_names)
         if unknown:
             raise SignalError(f"model has no input {sorted(unknown)[0]!r}; inputs: {', '.join(self.input_names) or 'none'}")
-        return SignalBank({n: inputs.get(n, Constant(0.0)) for n in self.input_names},
+        return SignalBank({n: _signal(n, inputs.get(n, 0.0)) for n in self.input_names},
                           kinks=self.uses_input_rates or bool(self.eqs.operators))
 
     def initial_memory(self, t0, x0, th, bank: SignalBank) -> np.ndarray:
@@ -150,6 +160,7 @@ class Simulator:
             max_steps: int | None = None, progress=None, deadline: float | None = None) -> SimResult:
         """Simulate and sample at times ``t`` (increasing array, or a scalar end time → 1001 samples).
 
+        ``inputs`` maps input names to signals or numbers (constants; an input not given is 0);
         ``params`` maps parameter names to values; ``progress(fraction)`` is called between
         chunks of long runs.  ``rtol``, ``atol`` and ``max_steps`` default to the settings
         ``simulate.rtol``, ``simulate.atol_floor`` and ``simulate.max_steps``.  ``deadline``

@@ -31,6 +31,18 @@ def test_mass_spring_damper_step_matches_analytic():
     assert np.max(np.abs(res["v"] - va)[5:-5]) / np.max(np.abs(va)) < 1e-4
 
 
+def test_a_number_as_an_input_is_a_constant_and_anything_else_is_refused():
+    """F = 2.5 given as a number is the step of 2.5 from t = 0 (the static deflection F/k after
+    the transient); a list is refused with a SignalError that names the input."""
+    t = np.linspace(0, 10, 1001)
+    as_number = bg.simulate(msd(), t, {"F": 2.5})
+    as_signal = bg.simulate(msd(), t, {"F": bg.Constant(2.5)})
+    assert np.array_equal(as_number["x"], as_signal["x"])
+    assert as_number["x"][-1] == pytest.approx(2.5 / 100.0, rel=1e-3)
+    with pytest.raises(bg.SignalError, match="input 'F'"):
+        bg.simulate(msd(), t, {"F": [1.0, 2.0]})
+
+
 def test_rc_circuit_step_and_sine():
     g = bg.Model("rc")
     V = g.input("V", "V")
