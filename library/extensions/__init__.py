@@ -10,7 +10,8 @@ may miss, each rewriting the model with the element of the papers that produces 
 * :mod:`.modes` — a mode the model lacks (a resonator on the output, or a compliant output
   stage on the element tagged ``inertia``): linear rewrites, fitted on the exact linear route;
 * :mod:`.structure` — nonlinear laws of the elements tagged ``stiffness`` (amplitude- or
-  field-dependent) and ``damping``, fitted on the exact Lur'e route or with the compiled
+  field-dependent), ``damping`` and ``polarization`` (a dipole that saturates with the field
+  across it, inside the dynamics), fitted on the exact Lur'e route or with the compiled
   integrator.
 
 They use only :mod:`bondgraph.diagnosis`'s public contract and are registered through the
@@ -19,12 +20,13 @@ entry point ``bondgraph.diagnosis`` → ``piezo = library.extensions:candidates`
 from .circuit import LoopInductance
 from .drive import InputBoucWen, InputCreep, InputExpansion, InputHysteresis, InputRC, InputRLC, InputSaturation
 from .modes import OutputMode, ParallelMode
-from .structure import FieldStiffness, FrictionDamping, NonlinearDamping, StiffnessSoftening
+from .structure import (FieldStiffness, FrictionDamping, NonlinearDamping, PolarizationSaturation,
+                        StiffnessSoftening)
 
 
 def candidates() -> list:
     """The piezo candidate set."""
     return [InputHysteresis(), InputBoucWen(), InputCreep(), InputSaturation(), InputExpansion(), InputRC(), InputRLC(),
-            LoopInductance(), ParallelMode(), OutputMode(), StiffnessSoftening(), FieldStiffness(),
+            LoopInductance(), ParallelMode(), OutputMode(), PolarizationSaturation(), StiffnessSoftening(), FieldStiffness(),
             NonlinearDamping(), NonlinearDamping(velocity=True),
             FrictionDamping()]

@@ -1,6 +1,7 @@
 """Nonlinear laws inside the structure, found through element roles (``stiffness``,
-``damping``): cubic softening and amplitude-dependent damping of a bender (Shahabi,
-Ghafarirad & Taghvaeipour, C. R. Mécanique 347 (2019)).  When the rest of the model is
+``damping``, ``polarization``): cubic softening and amplitude-dependent damping of a bender
+(Shahabi, Ghafarirad & Taghvaeipour, C. R. Mécanique 347 (2019)), a saturating dipole of a
+stack (Rodriguez-Fortun et al., Mechatronics 20 (2010): its polarization capacitor).  When the rest of the model is
 linear, or a drive transform of its linear core (hysteresis or creep on the drive named
 before), they are simulated on the exact linear route as a Lur'e system
 (:meth:`bondgraph.diagnosis.View.lure`), else, or for parameter values that make that
@@ -88,7 +89,7 @@ class _Centred(Candidate):
             az = {el: series.get(f"diag.a:{el}") for el in els}
         else:
             st = view.states()
-            xs = {el: st[view.state_of(el)] if self.role == "stiffness" else st["output rate"] for el in els}
+            xs = {el: st[view.state_of(el)] if self.role != "damping" else st["output rate"] for el in els}
             az = {el: field(view)[1] if partners[el] == DRIVE else
                   st[view.state_of(partners[el])] if partners[el] else None for el in els}
         refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
@@ -185,6 +186,55 @@ class StiffnessSoftening(_Centred):
     def refs(self, view, el, x, a):
         peak = float(np.max(np.abs(x))) or 1.0
         return abs(slope(view.model, el, view.values)) / peak ** 2, 1.5 * float(np.mean(x ** 2))
+
+
+class PolarizationSaturation(_Centred):
+    """A polarization that saturates inside the dynamics: every element tagged ``polarization``
+    (a layer's dipole capacitance, E = k_x·p) gets a hardening term, E = law(p) + k·p·(p^m − r)
+    (m = 2, a cubic, or m = 4, a quintic: the sharper knee; the better fit is kept) with
+    r = ⟨p^m⟩·(1.5 or 5/3) of the current model, the describing-function value under a sine, so
+    the slope at the data's amplitude stays the calibrated one and k (≥ 0) makes the dipole
+    grow less than linearly with the field across the layer.  That field is the drive less the
+    series resistance's drop and the mechanics' back-coupling, so near a resonance, or behind a
+    slow input stage, the curve acts on another signal than the drive: a drive-side curve
+    (:class:`InputSaturation`) cannot follow it there.  Only for models with at most
+    :attr:`most` such elements (one coefficient each: a stack of many layers is left to the
+    drive-side curve)."""
+
+    cause = "saturation"
+    label = "saturating polarization inside the dynamics"
+    role, prefix, upper = "polarization", "sat.k", 3.0
+    grid = (0.01, 0.03, 0.1, 0.3, 1.0)
+    cost = 4          # two shapes, each a fit on the exact route
+    #: the most elements tagged ``polarization`` it is fitted on
+    most = 2
+    #: the powers m tried (the better fit is kept)
+    powers = (2, 4)
+
+    def __init__(self, power: int | None = None):
+        self.power = power
+        if power is not None:
+            self.prefix = f"sat.k{power + 1}"
+
+    def applies(self, view):
+        n = len(view.model.with_role(self.role))
+        if n > self.most:
+            return f"{n} elements are tagged '{self.role}' (one coefficient each; at most {self.most})"
+        return super().applies(view)
+
+    def term(self, c, r, x, a):
+        return c * x * (x ** self.power - r)
+
+    def refs(self, view, el, x, a):
+        peak = float(np.max(np.abs(x))) or 1.0
+        return (abs(slope(view.model, el, view.values)) / peak ** self.power,
+                (1.5 if self.power == 2 else 5 / 3) * float(np.mean(x ** self.power)))
+
+    def fit(self, view):
+        if self.power is not None:
+            return super().fit(view)
+        fits = [PolarizationSaturation(m).fit(view) for m in self.powers]
+        return min(fits, key=lambda ext: view.score(ext.prediction)[2])
 
 
 class FieldStiffness(_Centred):
