@@ -3,8 +3,8 @@
 The truth is written here: a mass on a spring and a damper (40 Hz, damping ratio 0.02; the
 model says 38 Hz and 0.03) whose spring softens linearly with the drive's magnitude,
 k(F) = k0·(1 − 0.2·|F|/F_max) (the bender's k_a(E) law, Wood, Steltz & Fearing, ICRA 2005,
-Sec. III-B; not the candidate's even quadratic form), driven by the same 10 → 70 Hz chirp
-through the resonance twice, at a low and at a five times higher unipolar level (as a piezo
+Sec. III-B; not the candidate's even quadratic form), driven by the same 10 → 40 Hz chirp up to
+the resonance twice, at a low and at a five times higher unipolar level (as a piezo
 is driven), 2 kHz × 4 s, white noise of 0.5 % of the stroke.  At the higher level the
 resonance sits 4 % lower, which a curve on the drive cannot produce and amplitude-dependent
 (cubic) softening of the spring explains only in part.
@@ -23,6 +23,7 @@ from bondgraph.diagnosis import diagnose
 from bondgraph.diagnosis.rewrite import modify_law
 from library.extensions import (FieldStiffness, FrictionDamping, InputExpansion, InputSaturation, NonlinearDamping,
                                 StiffnessSoftening)
+from conftest import two_level_chirp
 from test_diagnosis_friction import assert_named_through, model_file_like, resonator
 
 FS, T = 2000.0, 4.0
@@ -31,10 +32,8 @@ CANDIDATES = [InputSaturation(), InputExpansion(), StiffnessSoftening(), FieldSt
 
 
 def drive(t):
-    """The chirp 10 → 70 Hz in each half, 0-0.4 N then 0-2 N (unipolar, starting at rest)."""
-    tau = np.mod(t, T / 2)
-    level = np.where(t < T / 2, 0.2, 1.0)
-    return level * (1 - np.cos(2 * np.pi * (10 * tau + 7.5 * tau ** 2)))
+    """The chirp 10 → 40 Hz in each half, 0-0.4 N then 0-2 N."""
+    return two_level_chirp(t, T, 10.0, 40.0, 0.2, 1.0)
 
 
 def record(field=True, seed=4):

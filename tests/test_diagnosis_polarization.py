@@ -22,7 +22,7 @@ from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose, model_file_options
 from bondgraph.diagnosis.rewrite import modify_law
 from bondgraph.modelfile import load_model
-from conftest import MODELS
+from conftest import MODELS, two_level_chirp
 from library.extensions import InputHysteresis, InputRC, InputSaturation, PolarizationSaturation
 from test_diagnosis_friction import assert_named_through
 
@@ -32,9 +32,7 @@ CANDIDATES = [InputSaturation(), PolarizationSaturation(), InputRC(), InputHyste
 
 def drive(t):
     """A unipolar chirp 5 → 400 Hz in each half, 0-24 V then 0-120 V."""
-    tau = np.mod(t, T / 2)
-    level = np.where(t < T / 2, 12.0, 60.0)
-    return level * (1 - np.cos(2 * np.pi * (5 * tau + 395 * tau ** 2)))
+    return two_level_chirp(t, T, 5.0, 400.0, 12.0, 60.0)
 
 
 def record(saturating=True, seed=5):
