@@ -27,6 +27,5 @@ from .structure import (FieldStiffness, FrictionDamping, NonlinearDamping, Polar
 def candidates() -> list:
     """The piezo candidate set."""
     return [InputHysteresis(), InputBoucWen(), InputCreep(), InputSaturation(), InputExpansion(), InputRC(), InputRLC(),
-            LoopInductance(), ParallelMode(), OutputMode(), PolarizationSaturation(), StiffnessSoftening(), FieldStiffness(),
-            NonlinearDamping(), NonlinearDamping(velocity=True),
-            FrictionDamping()]
+            LoopInductance(), ParallelMode(), OutputMode(), PolarizationSaturation(), StiffnessSoftening(),
+            FieldStiffness(), NonlinearDamping(), NonlinearDamping(velocity=True), FrictionDamping()]

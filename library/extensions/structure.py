@@ -1,10 +1,10 @@
 """Nonlinear laws inside the structure, found through element roles (``stiffness``,
 ``damping``, ``polarization``): cubic softening and amplitude-dependent damping of a bender
 (Shahabi, Ghafarirad & Taghvaeipour, C. R. Mécanique 347 (2019)), a saturating dipole of a
-stack (Rodriguez-Fortun et al., Mechatronics 20 (2010): its polarization capacitor).  When the rest of the model is
-linear, or a drive transform of its linear core (hysteresis or creep on the drive named
-before), they are simulated on the exact linear route as a Lur'e system
-(:meth:`bondgraph.diagnosis.View.lure`), else, or for parameter values that make that
+stack (Rodriguez-Fortun et al., Mechatronics 20 (2010): its polarization capacitor).  When
+the rest of the model is linear, or a drive transform of its linear core (hysteresis or
+creep on the drive named before), they are simulated on the exact linear route as a Lur'e
+system (:meth:`bondgraph.diagnosis.View.lure`), else, or for parameter values that make that
 route diverge, with the compiled integrator."""
 from __future__ import annotations
 
