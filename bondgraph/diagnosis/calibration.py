@@ -20,7 +20,10 @@
    modes give a time-domain fit), then
    on the time series by variable projection (gain and offset solved at every step); without
    a frequency response, from the model's values and the best three of 48 random points
-   within ×/÷2 of them.
+   within ×/÷2 of them.  When the frequency response's start ends on a search bound, those
+   random points are tried too and the better fit kept: a tone near a lightly damped
+   resonance is matched in amplitude and phase by a heavily damped mode elsewhere with a large
+   sensor gain, a local minimum on the damping's bound.
 4. **The plausible device.**  Parameters that end outside their tolerance (the model file's
    ``TOLERANCE``, else ``diagnosis.tolerance``: manufacturing spread) make the null an
    implausible device; the calibration within tolerance is then fitted too, and linear
@@ -322,12 +325,13 @@ def _z_bounds(specs: list[Param], delay: float | None):
 
 
 def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts=(),
-         delay: bool = False, drift: bool = False):
+         delay: bool = False, drift: bool = False, resample: bool = True):
     """Frequency response first when the data allow, then the time series by variable projection
     (sensor gain and offset solved exactly, and with ``drift`` a linear drift, its coefficient
     the solution's third, per half the record's span from its middle); with ``delay``, the
-    output's delay behind the drive (samples, last in z) too.  (values, delay, raw prediction,
-    solution, route)."""
+    output's delay behind the drive (samples, last in z) too; with ``resample``, when the
+    frequency response's start ends on a search bound, the best of a random sample of starts
+    too.  (values, delay, raw prediction, solution, route)."""
     idx = ctx.ident.fit_idx
     route = "time series"
     z0 = np.append(z0, 0.0) if delay else np.asarray(z0, float)
@@ -353,6 +357,14 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts
         starts = list(starts) + _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
     sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * lin, [np.inf] * lin, max_nfev=40,
                         starts=([] if z_frf is None else [z0]) + list(starts))
+    if resample and z_frf is not None and [i for i in sol.at_bounds if i < len(specs)]:
+        # the frequency response's start led to a search bound: that may be a local minimum
+        # (a lightly damped mode driven by a tone near its resonance, the free sensor gain
+        # matching the tone's amplitude), so the best of a random sample is tried too
+        sampled = _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
+        other = projected_fit(columns, ctx.y, idx, sampled[0], lb, ub, [-np.inf] * lin, [np.inf] * lin,
+                              max_nfev=40, starts=sampled[1:])
+        sol = other if other.cost < sol.cost else sol
     if not sol.success:   # the baseline must be the best linear explanation: go on from the best point
         more = projected_fit(columns, ctx.y, idx, sol.z, lb, ub, [-np.inf] * lin, [np.inf] * lin,
                              max_nfev=int(40 * config.get("diagnosis.polish_effort")))
@@ -463,7 +475,7 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     pspecs = [Param(n, min(max(abs(values[n]), plausible[n][0]), plausible[n][1]) * (1 if values[n] > 0 else -1),
                     *plausible[n]) for n in free]
     pz0 = np.array([s.to_z(s.start) for s in pspecs])
-    pvalues, _, praw, psol, _ = _fit(ctx, pspecs, nominal, pz0,
+    pvalues, _, praw, psol, _ = _fit(ctx, pspecs, nominal, pz0, resample=False,
                                   starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])])
     pgain, poffset, _, prv = score(ctx, praw)
     cal.rms_plausible = prv

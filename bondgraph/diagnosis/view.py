@@ -230,6 +230,18 @@ class View:
             out.append(Param(n, math.copysign(min(max(abs(v), lo), hi), v), lo, hi))
         return out
 
+    def strained(self) -> list[str]:
+        """The calibrated linear parameters whose current value sits on its search bound: the
+        linear calibration went as far as it may to absorb what no linear device explains (a
+        resonance that moves with amplitude read as heavy damping), so a fit inside the
+        dynamics should not start only from there."""
+        return [p.name for p in self._linear_params()
+                if not p.lower * (1 + 1e-6) < abs(self.values[p.name]) < p.upper * (1 - 1e-6)]
+
+    def model_file_values(self) -> dict[str, float]:
+        """The model file's values of the calibrated linear parameters."""
+        return {n: self.nominal_value(n) for n in self.linear}
+
     def fit_drive(self, basis: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
                   lower: Sequence[float] = (), upper: Sequence[float] = (), *,
                   direct: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),

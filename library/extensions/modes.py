@@ -22,7 +22,16 @@ def frf_mismatch(view):
     """(ω rad/s, mismatch): |H_measured − H_model| relative to the model, weighted by coherence."""
     w, H, coh = view.empirical_frf()
     Hm = view.gain * view.frequency_response(w)
-    return w, np.abs(H - Hm) * coh / np.maximum(np.abs(Hm), 1e-300 + 1e-3 * np.abs(Hm).max())
+    return w, np.abs(H - Hm) * coh / np.maximum(np.abs(Hm), 1e-300 + 1e-3 * np.abs(Hm).max(initial=0.0))
+
+
+def unresolved(view) -> str:
+    """Why no mode can be placed from the record's frequency response ('' if one can): the
+    record resolves the response at no frequency (output and drive coherent nowhere)."""
+    if view.empirical_frf()[0].size:
+        return ""
+    return (f"the record resolves the response at no frequency (coherence of output and drive "
+            f"≤ {view.resolved_coherence:g} everywhere): no mismatch to place a mode at")
 
 
 def mismatch_peaks(view, n: int = 3) -> list[float]:
@@ -102,7 +111,7 @@ class ParallelMode(Candidate):
     kind = LINEAR
 
     def applies(self, view):
-        return True if view.drive is not None else NOT_A_DRIVE
+        return NOT_A_DRIVE if view.drive is None else unresolved(view) or True
 
     def evidence(self, view):
         w, mis = frf_mismatch(view)
@@ -157,7 +166,7 @@ class OutputMode(Candidate):
             return "the inertia's dynamics are faster than the data resolve"
         if view.drive is None:
             return NOT_A_DRIVE
-        return True if view.exact else "needs a model linear in its states"
+        return unresolved(view) or True if view.exact else "needs a model linear in its states"
 
     def build(self, view, model, omega, zeta, mu):
         """``model`` (the current model or its linear core) with its inertia split."""

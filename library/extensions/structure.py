@@ -35,7 +35,10 @@ class _Centred(Candidate):
     one coefficient c ≥ 0 per element, centred on the data's amplitude by r² (see the
     subclasses).  The coefficient is scanned upwards on a log grid of its scale, each point
     refitting the linear parameters briefly (a nonlinear resonance moves with the
-    calibration), then fitted with the calibration from the best point.  An element whose
+    calibration), from the calibrated values and, when the calibration left one on its search
+    bound (:meth:`~bondgraph.diagnosis.View.strained`: it may have bent the linear device to
+    mimic the term), from the model file's values too; then fitted with the calibration from
+    the best point.  An element whose
     coefficient ends on its upper bound (past it the law is no longer plausible) is held at 0
     and the others are fitted again without it, unless no element would be left."""
 
@@ -134,19 +137,23 @@ class _Centred(Candidate):
                          self.upper * refs[el][0] if free else f * refs[el][0], scale=refs[el][0])
                     for n, el in zip(names, els)]
 
-        best, worse = None, 0
-        for f in self.grid:
-            try:
-                values, raw, *_ = fitted(spec(f), 3)
-            except SimulationError:
-                break
-            rf = view.score(raw)[2]
-            if best is None or rf < best[0]:
-                best, worse = (rf, f, values), 0
-            else:
-                worse += 1
-                if worse == 2:
+        best = None
+        # from the calibration; when it left a parameter on its search bound, from the model
+        # file's values too (the calibration may have bent the linear device to mimic this term)
+        for start in [None] + ([view.model_file_values()] if view.strained() else []):
+            worse = 0
+            for f in self.grid:
+                try:
+                    values, raw, *_ = fitted(spec(f), 3, start)
+                except SimulationError:
                     break
+                rf = view.score(raw)[2]
+                if best is None or rf < best[0]:
+                    best, worse = (rf, f, values), 0
+                else:
+                    worse += 1
+                    if worse == 2:
+                        break
         if best is None:
             raise SimulationError(f"{self.cause}: the extended model could not be simulated")
         start = {k: v for k, v in best[2].items() if k not in names}
