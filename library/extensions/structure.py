@@ -38,9 +38,9 @@ class _Centred(Candidate):
     calibration), from the calibrated values and, when the calibration left one on its search
     bound (:meth:`~bondgraph.diagnosis.View.strained`: it may have bent the linear device to
     mimic the term), from the model file's values too; then fitted with the calibration from
-    the best point.  An element whose
-    coefficient ends on its upper bound (past it the law is no longer plausible) is held at 0
-    and the others are fitted again without it, unless no element would be left."""
+    the best point.  An element whose coefficient ends on its upper bound (past it the law is
+    no longer plausible) is held at 0 and the others are fitted again without it, unless no
+    element would be left."""
 
     role = ""
     prefix = ""
