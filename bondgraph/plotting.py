@@ -201,13 +201,15 @@ def plot_diagnosis(report, path: str) -> None:
     inp, out = report.data.get("input", "input"), report.data.get("output", "output")
     fig, ax = plt.subplots(3, 1, figsize=(9, 9))
     ax[0].plot(t, y, lw=0.8, label="measured")
-    ax[0].plot(t, base, lw=0.8, label="calibrated model")
+    which = "calibrated" if report.baseline == "calibrated" else "plausible device"
+    ax[0].plot(t, base, lw=0.8, label="calibrated model" if which == "calibrated" else
+               "plausible device (calibrated within tolerance)")
     if ext is not None:
         ax[0].plot(t, ext, lw=0.8, ls="--", label=f"extended ({chain})")
     ax[0].set_xlabel("t (s)")
     ax[0].set_ylabel(out)
     ax[0].legend(fontsize=8)
-    ax[1].plot(t, y - base, lw=0.6, label=f"residual, calibrated (RMS {report.baseline_rms:.3g})")
+    ax[1].plot(t, y - base, lw=0.6, label=f"residual, {which} (RMS {report.baseline_rms:.3g})")
     if ext is not None:
         ax[1].plot(t, y - ext, lw=0.6, label=f"residual, extended (RMS {report.extended_rms:.3g})")
     if report.noise:

@@ -690,6 +690,12 @@ def test_an_amplifier_pole_hidden_by_implausible_values_is_named():
     named = next(c for c in rep.steps[0].candidates if c.passed and c.cause == "electrical-rc")
     assert named.against == "plausible"
     assert rep.unexplained == ""                         # the named input stage accounts for it
+    # the chain's gain is counted from the plausible device it was fitted on, not from the free
+    # calibration whose implausible values the stage replaces (against which it may be below 1)
+    assert rep.baseline == "plausible"
+    assert rep.baseline_rms == rep.calibration["rms_plausible"] > rep.calibration["rms_validation"]
+    assert rep.gain == pytest.approx(rep.baseline_rms / rep.extended_rms) and rep.gain > 1
+    assert rep.as_json()["baseline"] == "plausible"
 
 
 def test_an_implausible_device_that_no_candidate_explains_is_said_so():

@@ -392,7 +392,7 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
     say(f"calibrated in {time.time() - started:.1f} s: validation RMS {cal.rms_validation:.4g}")
     steps: list[Step] = []
     folds: list[Context] = []   # the second fold's context, made when first needed
-    baseline = state
+    baseline, from_plausible = state, False
     with Pool(ctx, cal.free, cands, workers) as pool:
         for k in range(int(config.get("diagnosis.max_chain")) if chain else 1):
             spent = time.time() - (started if since is None else since)
@@ -446,6 +446,8 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                 return (f"a linear drift of the output explained the record as well as {winner.result.cause} "
                         f"(gain {winner.result.gain:.3g}): solved with the calibration as a sensor drift")
             steps.append(step)
+            if k == 0 and winner is not None and winner.result.against == "plausible":
+                baseline, from_plausible = pstate, True   # a linear structural cause fitted on it
             say(f"step {k + 1}: {step.why}")
             if k == 0 and decide is not None and not decide(gap, floor, (ctx.reading, step.cause, step.rms)):
                 break
@@ -454,14 +456,15 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
             state = advance(ctx, state, winner, view)
     causes = [s.cause for s in steps if s.cause != "none"]
     final_rms = rms((ctx.y - state.prediction)[ctx.ident.val_mask])
-    report = Report(causes, cal.rms_validation / max(final_rms, 1e-300) if causes else 1.0, cal.rms_validation,
-                    final_rms if causes else cal.rms_validation, steps, cal.as_json(),
+    base_rms = cal.rms_plausible if from_plausible and cal.rms_plausible is not None else cal.rms_validation
+    report = Report(causes, base_rms / max(final_rms, 1e-300) if causes else 1.0, base_rms,
+                    final_rms if causes else base_rms, steps, cal.as_json(),
                     {"file": data.path or "", "model": source, "samples": len(ctx.t), "rate_hz": ctx.fs,
                      "source_samples": ctx.source_samples, "source_rate_hz": ctx.source_rate,
                      "validation_share": validation, "blocks": ctx.n_blocks, "input": ctx.input, "output": ctx.output,
                      "drive_band_hz": ctx.band_hz, "drive_reading": ctx.reading, "reading_gap_rms": gap,
                      "reading_floor_rms": floor},
-                    list(ctx.notes), noise=ctx.noise)
+                    list(ctx.notes), noise=ctx.noise, baseline="plausible" if from_plausible else "calibrated")
     report.predictions = {"t": ctx.t, "u": ctx.u_recorded, "y": ctx.y, "baseline": baseline.prediction}
     if causes:
         ext_model = state.model.copy()

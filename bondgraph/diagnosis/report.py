@@ -112,6 +112,10 @@ class Report:
     predictions: dict = field(default_factory=dict)
     noise: float | None = None
     seconds: float = 0.0
+    #: what ``baseline_rms`` and ``gain`` start from: "calibrated" (the free calibration), or
+    #: "plausible" when the first cause is a linear structural one fitted on the plausible device
+    #: (the calibration within tolerance), whose implausible values it replaces
+    baseline: str = "calibrated"
 
     @property
     def cause(self) -> str:
@@ -139,7 +143,7 @@ class Report:
     def as_json(self) -> dict:
         steps = [s for s in self.steps if s.cause != "none"]
         return {"cause": self.cause, "causes": list(self.causes), "gain": self.gain,
-                "baseline_rms": self.baseline_rms, "extended_rms": self.extended_rms,
+                "baseline_rms": self.baseline_rms, "baseline": self.baseline, "extended_rms": self.extended_rms,
                 "candidates": [c.as_json() for c in self.candidates],
                 "steps": [s.as_json() for s in steps],
                 "why": self.steps[-1].why if self.steps else "",
@@ -184,7 +188,7 @@ class Report:
         if not cal["success"]:
             lines.append(f"  WARNING: calibration did not converge ({cal['message']})")
         noise = f", noise floor {self.noise:.3g}" if self.noise else ""
-        lines.append(f"  calibrated model validation RMS: {self.baseline_rms:.4g}{noise}")
+        lines.append(f"  calibrated model validation RMS: {cal['rms_validation']:.4g}{noise}")
         for k, s in enumerate(self.steps, 1):
             lines += ["", f"Step {k}: on the model " + (" + ".join(["calibrated"] + self.causes[:k - 1]))
                       + f" (validation RMS {s.rms_before:.4g}; flexible linear reference {s.reference_rms:.4g})",
@@ -203,7 +207,8 @@ class Report:
                              f"{'NAMED' if c.passed and c.cause == s.cause else c.verdict}; {c.label}{flag}")
             lines.append(f"  → {s.cause}: {s.why}")
         causes = " → ".join(self.causes) if self.causes else "none"
-        lines += ["", f"Causes: {causes}" + (f" (gain {self.gain:.3g}, validation RMS {self.baseline_rms:.4g} → "
+        base = "" if self.baseline == "calibrated" else " of the plausible device"
+        lines += ["", f"Causes: {causes}" + (f" (gain {self.gain:.3g}, validation RMS{base} {self.baseline_rms:.4g} → "
                                             f"{self.extended_rms:.4g})" if self.causes else "")]
         if self.unexplained:
             lines.append(f"  NOTE: {self.unexplained}")
