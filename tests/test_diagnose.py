@@ -46,7 +46,8 @@ def p885_json(tmp_path_factory):
     """The CLI's JSON report and plot for the real record (run once for the tests below)."""
     png = tmp_path_factory.mktemp("diag") / "p885.png"
     proc = subprocess.run([sys.executable, "-m", "bondgraph", "diagnose", str(MODELS / "stack.py"), str(P885),
-                           "--json", "--quiet", "--plot", str(png)], capture_output=True, text=True, timeout=900)
+                           "--json", "--quiet", "--plot", str(png), "--workers", "1"], capture_output=True, text=True,
+                          timeout=900)
     assert proc.returncode == 0, proc.stderr
     return json.loads(proc.stdout), png
 
@@ -77,7 +78,7 @@ def test_the_sensor_orientation_does_not_change_the_diagnosis(p885_json):
     data = read_csv(P885)
     flipped = Dataset(data.t, {"V": data.columns["V"], "x": -data.columns["x"]})
     lm = load_model(MODELS / "stack.py")
-    rep = diagnose(lm.model, flipped, **model_file_options(lm.module), workers=2)
+    rep = diagnose(lm.model, flipped, **model_file_options(lm.module), workers=1)
     assert rep.calibration["sensor_gain"] == pytest.approx(-out["calibration"]["sensor_gain"], rel=1e-3)
     assert_same_chain(rep, out, rel=0.02)
 
@@ -89,7 +90,7 @@ def test_half_the_sample_rate_gives_the_same_chain(p885_json):
     data = read_csv(P885)
     half = Dataset(data.t[::2], {k: v[::2] for k, v in data.columns.items()})
     lm = load_model(MODELS / "stack.py")
-    rep = diagnose(lm.model, half, **model_file_options(lm.module), workers=2)
+    rep = diagnose(lm.model, half, **model_file_options(lm.module), workers=1)
     assert_same_chain(rep, out, rel=0.05)
 
 
@@ -684,7 +685,7 @@ def apa_behind_amplifier_pole(tau=1e-3, fs=10_000.0, T=0.6, noise=2e-3, seed=5):
 def test_an_amplifier_pole_hidden_by_implausible_values_is_named():
     lm = load_model(MODELS / "apa120ml.py")
     data = apa_behind_amplifier_pole()
-    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2, chain=False)
+    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1, chain=False)
     assert rep.calibration["outside_tolerance"]          # the best linear fit needs an implausible device
     assert rep.cause == "electrical-rc", rep.steps[0].why
     named = next(c for c in rep.steps[0].candidates if c.passed and c.cause == "electrical-rc")
@@ -729,7 +730,7 @@ def test_a_damping_beyond_its_search_bound_is_reached_through_a_held_parameter()
     rng = np.random.default_rng(7)
     data = Dataset(t, {"V": V, "x": x + 3e-3 * np.ptp(x) * rng.standard_normal(t.size)})
     nominal = load_model(MODELS / "apa120ml.py")
-    rep = diagnose(nominal.model, data, **model_file_options(nominal.module), workers=2, chain=False)
+    rep = diagnose(nominal.model, data, **model_file_options(nominal.module), workers=1, chain=False)
     assert any("calibrated after all" in n for n in rep.notes), rep.notes
     assert "c" not in rep.calibration["at_bounds"]
     assert rep.cause == "none", rep.steps[0].why
@@ -761,7 +762,7 @@ def test_the_output_delay_stays_within_half_a_recorded_sample_on_a_decimated_rec
     delay is sought within half a sample of the recorded rate; a longer one is not solved
     (the calibration absorbs it), and the effect-free record stays effect-free."""
     lm = load_model(MODELS / "bimorph_t215.py")
-    rep = diagnose(lm.model, t215_slow_sine(), **model_file_options(lm.module), workers=2, chain=False)
+    rep = diagnose(lm.model, t215_slow_sine(), **model_file_options(lm.module), workers=1, chain=False)
     assert any("decimated by" in n for n in rep.notes)
     assert abs(rep.calibration["delay"]) <= 0.5 / 50_000.0 * (1 + 1e-9)
     assert rep.cause == "none", rep.steps[0].why
@@ -791,7 +792,7 @@ def test_calibration_finds_a_resonance_on_the_other_side_of_the_drive():
     to its search bound (×10) and the sensor gain to -1 400."""
     lm = load_model(MODELS / "bimorph_t226.py")
     data, omega = t226_bursts()
-    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2, chain=False)
+    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1, chain=False)
     assert rep.calibration["params"]["omega_1"] == pytest.approx(omega, rel=0.01)
     assert rep.calibration["sensor_gain"] == pytest.approx(1.0, abs=0.1)
     assert rep.cause == "none", rep.steps[0].why
@@ -822,7 +823,7 @@ def test_a_second_modes_damping_is_calibrated_beside_a_sharp_first_mode():
     a higher mode (×2.3).  The calibrated model's residual asks for it, and it is calibrated."""
     lm = load_model(MODELS / "bimorph_t215.py")
     data, true = t215_null_noise()
-    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2, chain=False)
+    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1, chain=False)
     assert rep.calibration["params"]["zeta_2"] == pytest.approx(true["zeta_2"], rel=0.05)
     assert any(n.startswith("zeta_2 calibrated after all") for n in rep.notes), rep.notes
     assert rep.cause == "none", rep.steps[0].why
@@ -835,7 +836,7 @@ def test_a_record_of_a_few_samples_is_answered_not_crashed(recwarn):
     data = read_csv(P885)
     short = Dataset(data.t[:10], {k: v[:10] for k, v in data.columns.items()})
     lm = load_model(MODELS / "stack.py")
-    rep = diagnose(lm.model, short, **model_file_options(lm.module), workers=2)
+    rep = diagnose(lm.model, short, **model_file_options(lm.module), workers=1)
     assert rep.cause == "none"
     assert "effective samples" in rep.steps[0].why, rep.steps[0].why
     assert not [w for w in recwarn if "nperseg" in str(w.message)]
@@ -852,6 +853,6 @@ def test_the_calibration_goes_on_until_it_converges():
     assert rec.causes == ()                                   # the truth: nothing hidden
     lm = load_model(ROOT / rec.model, rec.overrides)
     data = Dataset(np.asarray(rec.t), {"V": np.asarray(rec.V), "x": np.asarray(rec.x)})
-    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2)
+    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1)
     assert rep.calibration["success"], rep.calibration["message"]
     assert rep.cause == "none", rep.steps[-1].why

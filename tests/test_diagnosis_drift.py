@@ -43,10 +43,10 @@ def test_the_real_record_with_a_drift_gives_the_drift_back_and_the_same_chain():
     the record gives without the added drift (hysteresis first)."""
     lm = load_model(MODELS / "stack.py")
     data = read_csv(P885)
-    plain = diagnose(lm.model, data, **model_file_options(lm.module), workers=2, drift=True)
+    plain = diagnose(lm.model, data, **model_file_options(lm.module), workers=1, drift=True)
     assert plain.cause == "hysteresis"
     with_drift, rate = drifted(data)
-    rep = diagnose(lm.model, with_drift, **model_file_options(lm.module), workers=2, drift=True)
+    rep = diagnose(lm.model, with_drift, **model_file_options(lm.module), workers=1, drift=True)
     assert rep.calibration["drift"] - plain.calibration["drift"] == pytest.approx(rate, rel=0.02)
     assert "sensor drift" in rep.text()
     assert_same_chain(rep, plain.as_json(), rel=0.05)
@@ -57,7 +57,7 @@ def test_a_drift_on_an_effect_free_record_is_not_named_an_effect():
     assert rec.causes == ()                                   # the truth: nothing hidden
     lm = load_model(ROOT / rec.model, rec.overrides)
     data, rate = drifted(Dataset(np.asarray(rec.t), {"V": np.asarray(rec.V), "x": np.asarray(rec.x)}))
-    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2, drift=True)
+    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1, drift=True)
     assert rep.cause == "none", rep.steps[-1].why
     assert rep.calibration["drift"] == pytest.approx(rate, rel=0.2)
 
@@ -69,7 +69,7 @@ def test_without_the_option_a_small_drift_is_not_named_creep():
     rec = draw(1011, "ci")
     lm = load_model(ROOT / rec.model, rec.overrides)
     data, _ = drifted(Dataset(np.asarray(rec.t), {"V": np.asarray(rec.V), "x": np.asarray(rec.x)}))
-    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2)
+    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1)
     assert rep.cause == "none", rep.steps[-1].why
     creep = next(r for r in rep.steps[0].candidates if r.cause == "creep" and r.params)
     assert not creep.passed and creep.need_share == 0.9
@@ -84,7 +84,7 @@ def test_a_drift_that_explains_as_much_as_the_first_cause_is_solved_as_a_drift()
     rec = draw(1011, "ci")
     lm = load_model(ROOT / rec.model, rec.overrides)
     data, rate = drifted(Dataset(np.asarray(rec.t), {"V": np.asarray(rec.V), "x": np.asarray(rec.x)}), 0.02)
-    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=2)
+    rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1)
     assert rep.cause == "none", rep.steps[-1].why
     assert any("sensor drift" in n for n in rep.notes)
     assert rep.calibration["drift"] == pytest.approx(rate, rel=0.2)

@@ -32,7 +32,7 @@ def single_sine_null():
     assert rec.drive["kind"] == "sine"
     lm = load_model(ROOT / rec.model, rec.overrides)
     data = Dataset(np.asarray(rec.t), {"V": np.asarray(rec.V), "x": np.asarray(rec.x)})
-    return diagnose(lm.model, data, **model_file_options(lm.module), workers=2)
+    return diagnose(lm.model, data, **model_file_options(lm.module), workers=1)
 
 
 def test_the_reference_is_never_worse_than_the_model_it_extends(single_sine_null):

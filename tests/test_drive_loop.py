@@ -73,7 +73,7 @@ def test_the_drive_loop_is_found_only_where_the_input_is_a_voltage_source():
 @pytest.fixture(scope="module")
 def cable_report():
     lm = load_model(MODELS / "apa120ml.py")
-    return diagnose(lm.model, cable_record(), **model_file_options(lm.module), workers=2, chain=False)
+    return diagnose(lm.model, cable_record(), **model_file_options(lm.module), workers=1, chain=False)
 
 
 def test_a_cable_in_the_drive_loop_is_named_with_its_inductance(cable_report):

@@ -93,7 +93,7 @@ def test_an_effect_free_record_is_none_under_either_reading(reading):
     the record with the linear drive was named electrical-rc: an RLC stage absorbs the
     1/sinc² difference.)"""
     lm = load_model(MODELS / "apa120ml.py")
-    rep = diagnose(lm.model, record(reading), **model_file_options(lm.module), workers=2)
+    rep = diagnose(lm.model, record(reading), **model_file_options(lm.module), workers=1)
     assert rep.data["reading_gap_rms"] > 3 * rep.data["reading_floor_rms"]
     assert any(n.startswith("drive read as") for n in rep.notes), rep.notes
     assert rep.data["drive_reading"] == reading, rep.notes
