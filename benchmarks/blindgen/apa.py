@@ -22,7 +22,7 @@ from numba import njit
 
 from . import drives, linear
 from .nominal import model_values
-from .spread import factor, logu
+from .spread import creep_knobs, factor, logu
 
 FS = 10_000.0
 DURATION = 18.0
@@ -126,16 +126,8 @@ def draw_knobs(mech, rng) -> dict:
         return {"h": u(0.06, 0.14), "rho": np.sort(u(0.05, 0.6, m)), "w": rng.dirichlet(np.full(m, 2.0))}
     if mech == "duhem":
         return {"h": u(0.03, 0.08), "alpha": u(3.0, 12.0), "beta": u(0.0, 0.5)}
-    if mech == "kelvin-voigt":
-        m = int(rng.integers(2, 5))
-        return {"r_T": u(0.04, 0.12), "tau": np.sort(np.exp(u(np.log(0.05), np.log(8.0), m))),
-                "w": rng.dirichlet(np.full(m, 2.0))}
-    if mech == "log":
-        tau = 10.0 ** np.arange(-2.0, 3.01, 0.5)
-        return {"r_T": u(0.04, 0.12), "tau": tau, "w": np.ones_like(tau)}
-    if mech == "fractional":
-        tau, alpha = 10.0 ** np.arange(-2.5, 3.01, 0.5), u(0.15, 0.45)
-        return {"r_T": u(0.04, 0.12), "alpha": alpha, "tau": tau, "w": tau ** alpha}
+    if mech in ("kelvin-voigt", "log", "fractional"):
+        return creep_knobs(mech, rng, (0.04, 0.12), (0.05, 8.0), -2.0, -2.5, 3.0)
     if mech == "tanh":
         return {"r_max": u(0.45, 0.7)}
     if mech == "polynomial":

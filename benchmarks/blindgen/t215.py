@@ -21,7 +21,7 @@ from numba import njit
 
 from . import drives, linear, operators
 from .nominal import beam, cantilever_mode, rayleigh_zeta
-from .spread import factor, logu
+from .spread import creep_knobs, factor, logu
 
 FS = 50_000.0
 DURATION = 5.0
@@ -157,16 +157,8 @@ def draw_knobs(mech, rng) -> dict:
         return {"h": u(0.2, 0.45), "table": operators.preisach_table(rng)}
     if mech == "bouc-wen":
         return {"H": u(0.05, 0.12), "w": u(0.15, 0.5), "beta": u(0.5, 0.9), "n": u(1.0, 2.0)}
-    if mech == "kelvin-voigt":
-        m = int(rng.integers(2, 5))
-        return {"r_T": u(0.05, 0.15), "tau": np.sort(np.exp(u(np.log(0.02), np.log(2.0), m))),
-                "w": rng.dirichlet(np.full(m, 2.0))}
-    if mech == "log":
-        tau = 10.0 ** np.arange(-2.5, 2.51, 0.5)
-        return {"r_T": u(0.05, 0.15), "tau": tau, "w": np.ones_like(tau)}
-    if mech == "fractional":
-        tau, alpha = 10.0 ** np.arange(-3.0, 2.51, 0.5), u(0.15, 0.45)
-        return {"r_T": u(0.05, 0.15), "alpha": alpha, "tau": tau, "w": tau ** alpha}
+    if mech in ("kelvin-voigt", "log", "fractional"):
+        return creep_knobs(mech, rng, (0.05, 0.15), (0.02, 2.0), -2.5, -3.0, 2.5)
     if mech == "tanh":
         return {"r_max": u(0.5, 0.8)}
     if mech == "polynomial":
