@@ -103,6 +103,12 @@ DEFAULTS: dict[str, Default] = {
                                             "converged, are fitted again with polish_effort times the evaluations "
                                             "before one is named (a race decided by converged fits, not by which "
                                             "optimiser got further)"),
+    "diagnosis.screen_effort": Default(0.3, "factor on the optimisers' budgets of the chain's later steps "
+                                            "(after the first cause): candidates are screened with it, and those "
+                                            "gaining screen_gain or more are fitted again with the full budget "
+                                            "(1: every candidate with the full budget)"),
+    "diagnosis.screen_gain": Default(1.05, "a screened candidate gaining at least this much is fitted again with "
+                                           "the full budget before its step is judged"),
     "diagnosis.polish_effort": Default(10.0, "factor on every optimiser's evaluation budget when a race is polished, and on the "
                                             "calibration's when it stops before converging"),
     "diagnosis.reading_gap": Default(0.5, "when the two readings of the drive between its samples (band-limited, "

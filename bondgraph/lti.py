@@ -34,7 +34,7 @@ from .equations import Equations
 from .errors import UsageError, did_you_mean
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
     """x_j[k+1] = Ad x_j[k] + Bd u_j[k], y_j[k] = Cd x_j[k] + Dd u_j[k] for every column j of U
     (one input each, states X0[:, j] at k = 0), all columns in one pass over the samples; the
@@ -69,7 +69,7 @@ def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
             r += 1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _one_column(Ad, b, c, d, x, u, rows, y):
     """:func:`recursion` for a single input column (vectors b, c, x, u, y; scalar d): the same
     arithmetic in the same order, in a loop about twice as fast; ``x`` is overwritten."""

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import bondgraph as bg
+from bondgraph import config
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose
 from library.extensions import InputCreep, InputHysteresis, InputSaturation
@@ -102,6 +103,12 @@ def test_hysteresis_then_creep(compound):
     assert rep.causes[:2] == ["hysteresis", "creep"], [s.why for s in rep.steps]
     creep = next(c for c in rep.steps[1].candidates if c.cause == "creep")
     assert creep.passed and creep.gain > 1.2
+    # the later step screens with a fraction of the budget; what comes near the bar, the
+    # creep, is fitted again with the full budget before the step is judged
+    bar = config.get("diagnosis.screen_gain")
+    assert creep.effort == 1.0
+    assert all(c.effort == 1.0 or (c.effort == config.get("diagnosis.screen_effort") and c.gain < bar)
+               for c in rep.steps[1].candidates)
     # the hysteresis weights were refitted with the creep cells (the drive is one sum)
     h1 = {k: v for k, v in rep.steps[0].candidates[0].params.items() if k.startswith("H.w")}
     assert any(abs(rep.extended_values[k] - v) > 1e-6 * max(abs(v), 1e-12) for k, v in h1.items())
@@ -139,7 +146,6 @@ def test_each_effect_alone(hysteresis, creep, expected):
 def test_no_step_starts_past_the_time_budget(compound):
     """The same compound record with ``diagnosis.chain_seconds`` spent before the second step:
     the first cause is named as before, the chain stops there and the report says why."""
-    from bondgraph import config
     with config.override({"diagnosis.chain_seconds": 0.0}):
         rep = diagnose(lag_model(), record(), candidates=CANDIDATES, workers=1)
     assert rep.causes == compound.causes[:1] == ["hysteresis"] and len(rep.steps) == 1

@@ -43,6 +43,7 @@ from scipy.optimize import least_squares
 from .. import config
 from ..errors import UsageError
 from .context import SENSOR_GAIN, Context, State, welch, welch_length
+from .pool import fork_map
 from .projection import Param, projected_fit
 
 
@@ -259,11 +260,13 @@ def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
 
 
 def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarray, H: np.ndarray,
-            coh: np.ndarray, starts: Sequence[np.ndarray] = (), random: int = 12, max_nfev: int = 60):
+            coh: np.ndarray, starts: Sequence[np.ndarray] = (), random: int = 12, max_nfev: int = 60,
+            workers: int = 1):
     """Multi-start fit of ``frf_of(z)`` (complex, at ``w``) to the measured ``H``: log-magnitude
     (its coherence-weighted mean removed: the sensor gain is solved later) and wrapped phase,
     weighted by √coherence.  Starts: ``z0``, ``starts``, and ``random`` perturbations of z0
-    (σ = 0.5 in z).  Returns the best (z, cost) or None."""
+    (σ = 0.5 in z), fitted in ``workers`` processes (the same result as one).  Returns the
+    best (z, cost) or None."""
     wt = np.sqrt(coh)
     share = coh / np.sum(coh)            # the weights of the mean log-magnitude
     log_mag, phase = np.log(np.abs(H) + 1e-300), np.angle(H)
@@ -278,15 +281,19 @@ def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarra
     rng = np.random.default_rng(1)
     points = [np.asarray(z0, float)] + [np.asarray(s, float) for s in starts]
     points += [np.clip(points[0] + rng.normal(0, 0.5, points[0].size), lb, ub) for _ in range(random)]
-    best = None
-    for p in points:
+
+    def solve(p):
         try:
             sol = least_squares(fres, np.clip(p, lb, ub), bounds=(lb, ub), max_nfev=max_nfev)
         except (ValueError, np.linalg.LinAlgError):
-            continue
-        if best is None or sol.cost < best.cost:
+            return None
+        return sol.x, float(sol.cost)
+
+    best = None
+    for sol in fork_map(solve, points, workers):
+        if sol is not None and (best is None or sol[1] < best[1]):
             best = sol
-    return None if best is None else (best.x, float(best.cost))
+    return best
 
 
 #: the measured output's delay behind the drive is sought within ± this many samples (recorded rate)
@@ -298,7 +305,7 @@ def max_delay(ctx: Context) -> float:
     return MAX_DELAY * ctx.fs / ctx.source_rate
 
 
-def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, delay: bool):
+def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, delay: bool, workers: int = 1):
     """The free parameters (and the delay, last, if ``delay``) fitted to the empirical frequency
     response (:func:`fit_frf`), or None when the drive leaves too few coherent frequencies.  Both
     signs of the sensor are tried: the nominal model's correlation with the data does not tell it
@@ -314,7 +321,8 @@ def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, 
         return Hm * np.exp(-1j * w * z[-1] * ctx.dt) if delay else Hm
 
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
-    fits = [f for f in (fit_frf(frf_of, z0, lb, ub, w, sign * H, coh) for sign in (1.0, -1.0)) if f is not None]
+    fits = [f for f in (fit_frf(frf_of, z0, lb, ub, w, sign * H, coh, workers=workers) for sign in (1.0, -1.0))
+            if f is not None]
     return min(fits, key=lambda f: f[1])[0] if fits else None
 
 
@@ -325,20 +333,22 @@ def _z_bounds(specs: list[Param], delay: float | None):
 
 
 def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts=(),
-         delay: bool = False, drift: bool = False, resample: bool = True):
+         delay: bool = False, drift: bool = False, resample: bool = True, workers: int = 1):
     """Frequency response first when the data allow, then the time series by variable projection
     (sensor gain and offset solved exactly, and with ``drift`` a linear drift, its coefficient
     the solution's third, per half the record's span from its middle); with ``delay``, the
     output's delay behind the drive (samples, last in z) too; with ``resample``, when the
     frequency response's start ends on a search bound, the best of a random sample of starts
-    too.  (values, delay, raw prediction, solution, route)."""
+    too; ``workers``: processes for the frequency response's starts, threads for the time
+    series' Jacobians.  (values, delay, raw
+    prediction, solution, route)."""
     idx = ctx.ident.fit_idx
     route = "time series"
     z0 = np.append(z0, 0.0) if delay else np.asarray(z0, float)
     starts = [np.append(s, 0.0) if delay else s for s in starts]
     z_frf = None
     if z0.size and ctx.lti is not None:
-        z_frf = _frf_starts(ctx, specs, nominal, z0, delay)
+        z_frf = _frf_starts(ctx, specs, nominal, z0, delay, workers)
         if z_frf is not None:
             route = "frequency response, then time series"
 
@@ -355,7 +365,7 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts
     first = z0 if z_frf is None else z_frf
     if z_frf is None and z0.size:   # no frequency response to start from: the best of a random sample
         starts = list(starts) + _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
-    sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * lin, [np.inf] * lin, max_nfev=40,
+    sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * lin, [np.inf] * lin, max_nfev=40, threads=workers,
                         starts=([] if z_frf is None else [z0]) + list(starts))
     if resample and z_frf is not None and [i for i in sol.at_bounds if i < len(specs)]:
         # the frequency response's start led to a search bound: that may be a local minimum
@@ -363,11 +373,11 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts
         # matching the tone's amplitude), so the best of a random sample is tried too
         sampled = _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
         other = projected_fit(columns, ctx.y, idx, sampled[0], lb, ub, [-np.inf] * lin, [np.inf] * lin,
-                              max_nfev=40, starts=sampled[1:])
+                              max_nfev=40, starts=sampled[1:], threads=workers)
         sol = other if other.cost < sol.cost else sol
     if not sol.success:   # the baseline must be the best linear explanation: go on from the best point
         more = projected_fit(columns, ctx.y, idx, sol.z, lb, ub, [-np.inf] * lin, [np.inf] * lin,
-                             max_nfev=int(40 * config.get("diagnosis.polish_effort")))
+                             max_nfev=int(40 * config.get("diagnosis.polish_effort")), threads=workers)
         sol = more if more.cost <= sol.cost else sol
     values = dict(nominal)
     values.update({s.name: s.from_z(zi) for s, zi in zip(specs, sol.z)})
@@ -404,10 +414,11 @@ def tolerances(names: Sequence[str], tolerance: Mapping[str, float] | None) -> d
 
 
 def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
-              tolerance: Mapping[str, float] | None = None) -> tuple[State, Calibration, State]:
+              tolerance: Mapping[str, float] | None = None, workers: int = 1) -> tuple[State, Calibration, State]:
     """Calibrate every identifiable linear parameter (see the module docstring): the best linear
     explanation within ×/÷ ``diagnosis.spread`` (the null), and the plausible device within each
     parameter's tolerance (:func:`tolerances`), which linear structural causes must beat.
+    ``workers``: processes for the multi-start fits (the result is the same with one).
     Returns (null state, its calibration, plausible state)."""
     say = say or (lambda s: None)
     names = linear_parameters(ctx)
@@ -433,10 +444,10 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     if ctx.lti is not None and not with_delay:
         held["output delay"] = "not separable from the calibrated parameters"
     drift = bool(config.get("diagnosis.drift"))
-    values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, delay=with_delay, drift=drift)
+    values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, delay=with_delay, drift=drift, workers=workers)
     if with_delay and abs(delay) >= 0.99 * max_delay(ctx):   # a model error the delay mimics: not a delay
         held["output delay"] = f"it went to its search bound (±{MAX_DELAY:g} recorded samples): a model error, not a delay"
-        values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, drift=drift)
+        values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, drift=drift, workers=workers)
     ctx.set_delay(delay)
     asked = residual_asks(ctx, names, free, held, values, sol)
     if asked:    # the delay stays at its solved value (ctx); the fit goes on from this one
@@ -452,7 +463,7 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
         start = {**values, **{n: values[n] * f for n, f in asked.items()}}
         z1 = np.array([s.to_z(start[s.name]) for s in specs])
         values, _, raw, sol, route = _fit(ctx, specs, nominal, z1, starts=[np.array([s.to_z(s.start) for s in specs])],
-                                          drift=drift)
+                                          drift=drift, workers=workers)
     if drift:
         rate = float(sol.coef[2]) / max(0.5 * ctx.span, 1e-300)
         ctx.remove_drift(rate)
@@ -476,7 +487,7 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
                     *plausible[n]) for n in free]
     pz0 = np.array([s.to_z(s.start) for s in pspecs])
     pvalues, _, praw, psol, _ = _fit(ctx, pspecs, nominal, pz0, resample=False,
-                                  starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])])
+                                  starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])], workers=workers)
     pgain, poffset, _, prv = score(ctx, praw)
     cal.rms_plausible = prv
     pstate = State(ctx.model, pvalues, praw, pgain, poffset, state.drive, state.drive_expr, [], state.linear)

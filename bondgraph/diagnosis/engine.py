@@ -193,6 +193,17 @@ def _confirm_borderline(outcomes: list[Outcome], scored: dict, confirm, e_plaus,
                                                 first.n_eff + second.n_eff))
 
 
+def screened(ctx: Context, state: State, outcomes) -> list[Outcome]:
+    """Of a chain step's outcomes fitted with ``diagnosis.screen_effort`` of the budget, those to
+    fit again with the full budget before the step is judged: the ones whose validation gain
+    reaches ``diagnosis.screen_gain``, a margin below the bar (a fit stopped early explains
+    less than it can: the ones far below the bar stay below it)."""
+    bar = config.get("diagnosis.screen_gain")
+    e_state = ctx.y - state.prediction
+    return [oc for oc in outcomes
+            if oc.raw is not None and compare(*effect_errors(ctx, oc, e_state, None), ctx.blocks).gain >= bar]
+
+
 def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
     """The outcomes to fit again with more effort before one is named: when two or more passing
     candidates are within ``diagnosis.polish_margin`` of the best gain over the flexible linear
@@ -385,7 +396,7 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
     tick = getattr(progress, "advance", None)
     cands = list(candidates) if candidates is not None else load_candidates()
     ctx = Context(model, data, input, output, data_input, data_output, validation, say, reading)
-    state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance)
+    state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance, workers)
     plausible = (pstate, cal.plausible) if pstate is not state else None
     gap = ctx.reading_gap(state.values, state.gain)
     floor = ctx.noise or residual_floor(ctx.y - state.prediction, ctx.fs)
@@ -408,12 +419,19 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                 break
             outcomes = {}
             first = plausible if k == 0 else None
-            for n, (i, oc) in enumerate(pool.run(state, pending, first), 1):
+            screen = config.get("diagnosis.screen_effort") if k else 1.0
+            for n, (i, oc) in enumerate(pool.run(state, pending, first, screen), 1):
                 outcomes[i] = oc
                 if tick is not None:
                     tick(status=_line(k + 1, n, len(pending), oc.result))
                 else:
                     say(_line(k + 1, n, len(pending), oc.result))
+            promising = screened(ctx, state, [outcomes[i] for i in pending]) if screen != 1.0 else []
+            if promising:
+                redo = [i for i in pending if any(outcomes[i] is oc for oc in promising)]
+                say(f"step {k + 1}: {len(redo)} of {len(pending)} candidates screened with {screen:g}× the "
+                    f"evaluations come near the bar: fitted with the full budget")
+                outcomes.update(pool.run(state, redo, first))
             ordered = [outcomes[i] for i in pending]
             view = View(ctx, state, cal.free)
             of = {id(outcomes[i]): cands[i] for i in pending}

@@ -189,7 +189,7 @@ def polynomial_term(term: Callable, partner: bool):
     return _TERMS[key]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     """Sample-by-sample first-order-hold stepping of the augmented model (inputs: drive, then
     the n_el nonlinear terms; output rows: output, element variables, partners); at each

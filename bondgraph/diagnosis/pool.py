@@ -13,7 +13,7 @@ import multiprocessing as mp
 import queue
 import signal
 import threading
-from typing import Iterator, Sequence
+from typing import Callable, Iterator, Sequence
 
 from .. import config
 
@@ -105,3 +105,56 @@ class Pool:
 
 def _main_thread() -> bool:
     return threading.current_thread() is threading.main_thread()
+
+
+def fork_map(fn: Callable, items: Sequence, workers: int) -> list:
+    """``[fn(x) for x in items]``, the items shared round-robin between this process and
+    ``workers − 1`` forked children (``fn`` is inherited, not pickled; the results are).  Each
+    result is the one the serial loop gives (the calls are independent), in the items' order.
+    Serial with one worker, one item, without ``fork``, or inside a worker process (which may
+    not have children).  A child's exception is raised here; on any error (Ctrl-C included)
+    the children are killed and waited for."""
+    items = list(items)
+    workers = min(int(workers), len(items))
+    if workers < 2 or "fork" not in mp.get_all_start_methods() or mp.current_process().daemon:
+        return [fn(x) for x in items]
+    mpc = mp.get_context("fork")
+    results = mpc.Queue()
+
+    def child(share: list[int]) -> None:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        for i in share:
+            try:
+                results.put((i, True, fn(items[i])))
+            except BaseException as exc:   # noqa: BLE001 - handed to the parent, which raises it
+                results.put((i, False, exc))
+                return
+
+    shares = [list(range(k, len(items), workers)) for k in range(workers)]
+    procs = [mpc.Process(target=child, args=(share,), daemon=True) for share in shares[1:]]
+    out: dict[int, object] = {}
+    try:
+        for p in procs:
+            p.start()
+        for i in shares[0]:
+            out[i] = fn(items[i])
+        while len(out) < len(items):
+            try:
+                i, ok, value = results.get(timeout=0.2)
+            except queue.Empty:
+                if any(not p.is_alive() and p.exitcode not in (0, None) for p in procs):
+                    raise RuntimeError("a diagnosis worker died") from None
+                continue
+            if not ok:
+                raise value
+            out[i] = value
+        for p in procs:
+            p.join()
+    finally:
+        for p in procs:
+            if p.is_alive():
+                p.kill()
+            p.join()
+        results.cancel_join_thread()
+        results.close()
+    return [out[i] for i in range(len(items))]

@@ -10,6 +10,7 @@ import contextlib
 import contextvars
 import math
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Callable, Iterator, Sequence
 
@@ -99,15 +100,31 @@ class Projected:
     at_bounds: list[int]
 
 
+@contextlib.contextmanager
+def jacobian_map(threads: int) -> Iterator[Callable | None]:
+    """A map for ``least_squares(workers=...)``: the finite-difference Jacobian's columns in
+    ``threads`` threads (each call in a copy of the caller's context, so its time budget holds
+    there too), or None (serial) for one.  It gains where the evaluations spend their time in
+    compiled kernels that release the GIL (the exact linear route's recursion); the columns,
+    and so the fit, are the serial ones."""
+    if threads < 2:
+        yield None
+        return
+    caller = contextvars.copy_context()
+    with ThreadPoolExecutor(threads) as ex:
+        yield lambda f, xs: list(ex.map(lambda x: caller.copy().run(f, x), xs))
+
+
 def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray], y: np.ndarray, idx: np.ndarray,
                   z0: Sequence[float], lb: Sequence[float], ub: Sequence[float],
                   lower: Sequence[float], upper: Sequence[float], max_nfev: int = 40,
-                  starts: Sequence[Sequence[float]] = ()) -> Projected:
+                  starts: Sequence[Sequence[float]] = (), threads: int = 1) -> Projected:
     """min over z in [lb, ub] of min over lower ≤ c ≤ upper of ||y[idx] − A(z)[idx]·c||.
 
     ``columns(z, rows)`` returns the rows ``rows`` of A(z) (every sample for None: the optimiser
     asks for the rows ``idx`` only, the result holds A on every sample); ``starts`` are extra
-    start points (the best solution wins)."""
+    start points (the best solution wins); ``threads``: see :func:`jacobian_map` (``columns``
+    must then be safe to call from several threads)."""
     scale = max(float(np.std(y[idx])), 1e-300)
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
 
@@ -151,16 +168,17 @@ def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray]
         return Projected(z0, c, A, 0.5 * float(r @ r), 1, True, "linear least squares", [])
     best = None
     nfev, out_of_time = 0, False
-    for start in [z0, *[np.asarray(s, float) for s in starts]]:
-        try:
-            sol = least_squares(resid, np.clip(start, lb, ub), bounds=(lb, ub), max_nfev=max_nfev, diff_step=1e-4,
-                                x_scale=1.0)
-        except _OutOfTime:
-            out_of_time = True
-            break
-        nfev += int(sol.nfev)
-        if best is None or sol.cost < best.cost:
-            best = sol
+    with jacobian_map(threads) as jmap:
+        for start in [z0, *[np.asarray(s, float) for s in starts]]:
+            try:
+                sol = least_squares(resid, np.clip(start, lb, ub), bounds=(lb, ub), max_nfev=max_nfev,
+                                    diff_step=1e-4, x_scale=1.0, workers=jmap)
+            except _OutOfTime:
+                out_of_time = True
+                break
+            nfev += int(sol.nfev)
+            if best is None or sol.cost < best.cost:
+                best = sol
     if out_of_time and (best is None or seen["cost"] < best.cost):
         x, cost, success, message = seen["z"], seen["cost"], False, "stopped at its best point: time budget spent"
     else:

@@ -202,7 +202,8 @@ class Report:
                     continue
                 vr = f"{c.gain_reference:.3g}" if c.gain_reference is not None else "-"
                 flag = ("" if c.success else " [optimiser: not converged]") + \
-                    (f" [fitted again, {c.effort:g}× the evaluations]" if c.effort != 1.0 else "")
+                    (f" [fitted again, {c.effort:g}× the evaluations]" if c.effort > 1.0 else
+                     f" [screened, {c.effort:g}× the evaluations]" if c.effort < 1.0 else "")
                 lines.append(f"  {c.cause:<18} {c.gain:>7.3g} {c.rms_validation:>10.4g} {c.z:>6.1f} {vr:>7}  "
                              f"{'NAMED' if c.passed and c.cause == s.cause else c.verdict}; {c.label}{flag}")
             lines.append(f"  → {s.cause}: {s.why}")
