@@ -340,8 +340,7 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts
     output's delay behind the drive (samples, last in z) too; with ``resample``, when the
     frequency response's start ends on a search bound, the best of a random sample of starts
     too; ``workers``: processes for the frequency response's starts, threads for the time
-    series' Jacobians.  (values, delay, raw
-    prediction, solution, route)."""
+    series' Jacobians.  (values, delay, raw prediction, solution, route)."""
     idx = ctx.ident.fit_idx
     route = "time series"
     z0 = np.append(z0, 0.0) if delay else np.asarray(z0, float)
@@ -365,8 +364,8 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts
     first = z0 if z_frf is None else z_frf
     if z_frf is None and z0.size:   # no frequency response to start from: the best of a random sample
         starts = list(starts) + _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
-    sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * lin, [np.inf] * lin, max_nfev=40, threads=workers,
-                        starts=([] if z_frf is None else [z0]) + list(starts))
+    sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * lin, [np.inf] * lin, max_nfev=40,
+                        starts=([] if z_frf is None else [z0]) + list(starts), threads=workers)
     if resample and z_frf is not None and [i for i in sol.at_bounds if i < len(specs)]:
         # the frequency response's start led to a search bound: that may be a local minimum
         # (a lightly damped mode driven by a tone near its resonance, the free sensor gain

@@ -107,10 +107,13 @@ def second_fold(ctx: Context, state: State, calibrated: Sequence[str], cand: Can
     """The candidate fitted again with other validation blocks (``ctx`` refolded) and compared
     there as on the first fold; None when it fails."""
     oc = run_candidate(ctx, state, calibrated, cand, plausible, effort)
-    if oc.raw is None:
-        return None
-    before, after = effect_errors(ctx, oc, ctx.y - state.prediction, e_plaus)
-    return compare(before, after, ctx.blocks)
+    return None if oc.raw is None else effect_comparison(ctx, state, oc, e_plaus)
+
+
+def effect_comparison(ctx: Context, state: State, oc: Outcome, e_plaus: np.ndarray | None = None) -> Comparison:
+    """The outcome's errors after against before (:func:`effect_errors`), compared on ``ctx``'s
+    validation blocks."""
+    return compare(*effect_errors(ctx, oc, ctx.y - state.prediction, e_plaus), ctx.blocks)
 
 
 def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
@@ -193,15 +196,12 @@ def _confirm_borderline(outcomes: list[Outcome], scored: dict, confirm, e_plaus,
                                                 first.n_eff + second.n_eff))
 
 
-def screened(ctx: Context, state: State, outcomes) -> list[Outcome]:
-    """Of a chain step's outcomes fitted with ``diagnosis.screen_effort`` of the budget, those to
-    fit again with the full budget before the step is judged: the ones whose validation gain
-    reaches ``diagnosis.screen_gain``, a margin below the bar (a fit stopped early explains
-    less than it can: the ones far below the bar stay below it)."""
-    bar = config.get("diagnosis.screen_gain")
-    e_state = ctx.y - state.prediction
-    return [oc for oc in outcomes
-            if oc.raw is not None and compare(*effect_errors(ctx, oc, e_state, None), ctx.blocks).gain >= bar]
+def near_the_bar(ctx: Context, state: State, oc: Outcome) -> bool:
+    """Whether an outcome fitted with ``diagnosis.screen_effort`` of the budget is fitted again
+    with the full budget before its chain step is judged: its validation gain reaches
+    ``diagnosis.screen_gain``, a margin below the bar (a fit stopped early explains less than it
+    can: the ones far below the bar stay below it)."""
+    return oc.raw is not None and effect_comparison(ctx, state, oc).gain >= config.get("diagnosis.screen_gain")
 
 
 def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
@@ -426,9 +426,8 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                     tick(status=_line(k + 1, n, len(pending), oc.result))
                 else:
                     say(_line(k + 1, n, len(pending), oc.result))
-            promising = screened(ctx, state, [outcomes[i] for i in pending]) if screen != 1.0 else []
-            if promising:
-                redo = [i for i in pending if any(outcomes[i] is oc for oc in promising)]
+            redo = [i for i in pending if screen != 1.0 and near_the_bar(ctx, state, outcomes[i])]
+            if redo:
                 say(f"step {k + 1}: {len(redo)} of {len(pending)} candidates screened with {screen:g}× the "
                     f"evaluations come near the bar: fitted with the full budget")
                 outcomes.update(pool.run(state, redo, first))

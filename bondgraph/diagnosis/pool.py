@@ -148,8 +148,6 @@ def fork_map(fn: Callable, items: Sequence, workers: int) -> list:
             if not ok:
                 raise value
             out[i] = value
-        for p in procs:
-            p.join()
     finally:
         for p in procs:
             if p.is_alive():
