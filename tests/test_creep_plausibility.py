@@ -65,3 +65,37 @@ def test_one_lag_is_one_lag_on_the_grid_and_log_time_creep_is_a_spectrum():
     assert InputCreep.spread(grid, grid, w) > 0.5
     # equal weights on five neighbouring points: all but two of five
     assert InputCreep.spread(grid, grid[2:7], np.ones(5)) == pytest.approx(0.6)
+
+
+def test_the_held_share_counts_holds_not_the_turning_points_of_a_wave():
+    from bondgraph.diagnosis.context import drive_held_share
+    fs, t = 1e3, np.arange(0.0, 10.0, 1e-3)
+    steps = np.repeat([0.0, 1.0, -0.5, 2.0, 0.0], t.size // 5)          # four levels of 2 s each
+    assert drive_held_share(steps, fs, 0.5) == pytest.approx(1.0)
+    assert drive_held_share(steps, fs, 2.5) == 0.0                       # no hold lasts 2.5 s
+    sine = np.sin(2 * math.pi * 0.5 * t)   # within 1 % of its range for 0.4 rad about each peak
+    assert drive_held_share(sine, fs, 0.1) == pytest.approx(2 * 0.4 / (2 * math.pi), abs=0.002)
+    assert drive_held_share(sine, fs, 0.15) == 0.0                       # 0.127 s at most
+    triangle = np.abs((t % 2.0) - 1.0)
+    assert drive_held_share(triangle, fs, 0.05) == 0.0
+    rest = np.where(t < 9.0, np.sin(2 * math.pi * 0.5 * t), 0.0)        # a sine, then one second at rest
+    assert drive_held_share(rest, fs, 0.5) == pytest.approx(0.1, abs=0.01)
+
+
+def _view(drive, fs, modes_hz, main_hz):
+    from types import SimpleNamespace
+    from bondgraph.diagnosis.context import drive_held_share
+    t = np.arange(drive.size) / fs
+    return SimpleNamespace(t=t, modes_hz=modes_hz, main_hz=main_hz,
+                           held_share=lambda length: drive_held_share(drive, fs, length))
+
+
+def test_on_a_drive_that_holds_only_the_models_dynamics_bound_a_creep_lag():
+    fs, t = 1e4, np.arange(0.0, 5.0, 1e-4)
+    model = 10 / (2 * math.pi * 350.0)                                   # 4.5 ms
+    held = np.repeat([0.0, 1.0, 0.4, 1.5, 0.8], t.size // 5)             # levels held 1 s
+    assert InputCreep.lag_limit(_view(held, fs, (350.0,), 1.5)) == pytest.approx(model)
+    sine = np.sin(2 * math.pi * 1.5 * t)                                 # the same period, never still
+    assert InputCreep.lag_limit(_view(sine, fs, (350.0,), 1.5)) == pytest.approx(0.05, rel=1e-3)   # 1 % of 5 s
+    fast = np.sin(2 * math.pi * 200.0 * t)                               # a quarter period below 10/omega
+    assert InputCreep.lag_limit(_view(fast, fs, (350.0,), 200.0)) == pytest.approx(model)

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import sympy as sp
-from scipy import signal, stats
+from scipy import ndimage, signal, stats
 
 from .. import config
 from ..data import Dataset
@@ -314,6 +314,19 @@ def drive_peak(u: np.ndarray, fs: float) -> float:
     nper = welch_length(n, 4, 16)
     f, P = welch(u, fs, nper)
     return float(f[1 + int(np.argmax(P[1:]))]) if f.size > 1 else 0.0
+
+
+def drive_held_share(u: np.ndarray, fs: float, length: float, band: float = 0.01) -> float:
+    """Share of the record (0-1) lying in holds of the drive: stretches of ``length`` s or
+    longer over which it stays within ``band`` of its range (steps, holds, rests between
+    bursts; about 0 for sines, triangles, chirps and noise)."""
+    w = 2 * int(round(length * fs / 2)) + 1                  # odd: windows centred on a sample
+    if w >= len(u):
+        return 0.0
+    tol = band * float(np.ptp(u))
+    still = (ndimage.maximum_filter1d(u, w) - ndimage.minimum_filter1d(u, w)) <= tol
+    still[:w // 2] = still[len(u) - w // 2:] = False       # windows that reach past the record
+    return float(ndimage.maximum_filter1d(still.astype(np.uint8), w, mode="constant").mean())
 
 
 def drive_sweep(u: np.ndarray, fs: float, blocks: int) -> tuple[float, float] | None:

@@ -15,7 +15,7 @@ from ..identify import Identification, Spec
 from ..lti import LTI
 from .calibration import RESOLVED_COHERENCE, coherence_spectrum, empirical_frf, score
 from .additive import AdditiveDrive, Term
-from .context import Context, State
+from .context import Context, State, drive_held_share
 from .projection import Param, projected_fit, simulation_deadline
 
 
@@ -102,6 +102,11 @@ class View:
             extra = state.raw - self.respond([state.drive])[:, 0]
             self.extra = _frozen(extra if np.max(np.abs(extra)) > 1e-9 * np.max(np.abs(state.raw)) else
                                  np.zeros_like(extra))
+
+    def held_share(self, length: float) -> float:
+        """Share of the record (0-1) in which the measured drive holds still (within 1 % of
+        its range) for ``length`` s or longer: steps, holds, rests between bursts."""
+        return drive_held_share(np.asarray(self.u), self.fs, length)
 
     def _budget(self, max_nfev: int) -> int:
         """An optimiser's evaluation budget at this view's effort."""

@@ -247,10 +247,14 @@ class InputCreep(_DriveCandidate):
     lengths): log-time and fractional creep relax over many decades, and on a periodic drive
     the decades slower than its period average out while the faster ones show as a loss that
     hardly depends on the frequency (a loop at every rate).  A lag faster than the model's own
-    dynamics or than a quarter of the drive's main period (1 % of the record for drives that
-    hold) is a phase lag, though, an electrical stage's or a misplaced damping's, unless it is
-    one of many: when most of the weight lies there, the spectrum must be broad (at least
-    ``min_spread`` of it outside its heaviest two neighbouring cells), not one lag.
+    dynamics or than a quarter of the drive's main period (1 % of the record at most) is a
+    phase lag, though, an electrical stage's or a misplaced damping's, unless it is one of
+    many: when most of the weight lies there, the spectrum must be broad (at least
+    ``min_spread`` of it outside its heaviest two neighbouring cells), not one lag.  The
+    drive's period bounds it only where the drive keeps moving: when ``min_held`` of the record
+    or more lies in holds three times that long (steps, holds, rests), a cell relaxes within
+    the holds and shows its own tail, a rise after the elastic jump that no phase lag makes,
+    and only the model's own dynamics bound it.
     It is small: piezoelectric stacks creep by 1–2 % of their
     stroke per decade of time, so cells that move by more than ``max_ratio`` of the elastic
     response within the record (:meth:`creep_range`) are not creep.  The chain is of the flexible linear
@@ -264,6 +268,7 @@ class InputCreep(_DriveCandidate):
     max_ratio = 0.5
     linear_share = 0.9
     min_spread = 1 / 3
+    min_held = 0.2
 
     @staticmethod
     def taus(view) -> np.ndarray:
@@ -272,14 +277,18 @@ class InputCreep(_DriveCandidate):
         n = max(2, int(round(math.log10(hi / lo) * 2)) + 1)
         return np.geomspace(lo, hi, n)
 
-    @staticmethod
-    def lag_limit(view) -> float:
+    @classmethod
+    def lag_limit(cls, view) -> float:
         """Cells faster than this (s) are phase lags unless the spectrum is broad: 10/ω of the
-        slowest mode, a quarter of the drive's main period (1 % of the record at most)."""
+        slowest mode, and a quarter of the drive's main period (1 % of the record at most)
+        unless the drive holds for three times that in ``min_held`` of the record."""
         slow = [f for f in view.modes_hz if f > 0]
         span = float(view.t[-1] - view.t[0])
-        return max(10.0 / (2 * math.pi * min(slow)) if slow else 0.0,
-                   min(0.25 / view.main_hz if view.main_hz > 0 else 0.0, 0.01 * span))
+        model = 10.0 / (2 * math.pi * min(slow)) if slow else 0.0
+        drive = min(0.25 / view.main_hz if view.main_hz > 0 else 0.0, 0.01 * span)
+        if drive > model and view.held_share(3 * drive) >= cls.min_held:
+            return model
+        return max(model, drive)
 
     def fit(self, view):
         taus = self.taus(view)
