@@ -254,7 +254,9 @@ class InputCreep(_DriveCandidate):
     drive's period bounds it only where the drive keeps moving: when ``min_held`` of the record
     or more lies in holds three times that long (steps, holds, rests), a cell relaxes within
     the holds and shows its own tail, a rise after the elastic jump that no phase lag makes,
-    and only the model's own dynamics bound it.
+    and only the model's own dynamics bound it (its spectrum there starts at that bound: a
+    faster cell only reshapes the transient of the model's own dynamics, standing in for a
+    damping or stiffness the calibration bent).
     It is small: piezoelectric stacks creep by 1–2 % of their
     stroke per decade of time, so cells that move by more than ``max_ratio`` of the elastic
     response within the record (:meth:`creep_range`) are not creep.  The chain is of the flexible linear
@@ -270,25 +272,40 @@ class InputCreep(_DriveCandidate):
     min_spread = 1 / 3
     min_held = 0.2
 
-    @staticmethod
-    def taus(view) -> np.ndarray:
-        """The relaxation times (s), two per decade from five samples to three record lengths."""
+    @classmethod
+    def taus(cls, view) -> np.ndarray:
+        """The relaxation times (s), two per decade from five samples (from 10/ω of the
+        model's slowest mode on a drive that holds: a faster cell there only reshapes the
+        transient of the model's own dynamics) to three record lengths."""
         lo, hi = 5 * view.dt, 3 * float(view.t[-1] - view.t[0])
+        if cls.holds(view):
+            lo = max(lo, cls.model_lag(view))
         n = max(2, int(round(math.log10(hi / lo) * 2)) + 1)
         return np.geomspace(lo, hi, n)
 
+    @staticmethod
+    def model_lag(view) -> float:
+        """10/ω (s) of the model's slowest mode (0 without one)."""
+        slow = [f for f in view.modes_hz if f > 0]
+        return 10.0 / (2 * math.pi * min(slow)) if slow else 0.0
+
+    @staticmethod
+    def drive_lag(view) -> float:
+        """A quarter of the drive's main period (s), 1 % of the record at most."""
+        return min(0.25 / view.main_hz if view.main_hz > 0 else 0.0, 0.01 * float(view.t[-1] - view.t[0]))
+
+    @classmethod
+    def holds(cls, view) -> bool:
+        """Whether ``min_held`` of the record or more lies in holds of the drive three times
+        :meth:`drive_lag` long (steps, holds, rests)."""
+        return view.held_share(3 * cls.drive_lag(view)) >= cls.min_held
+
     @classmethod
     def lag_limit(cls, view) -> float:
-        """Cells faster than this (s) are phase lags unless the spectrum is broad: 10/ω of the
-        slowest mode, and a quarter of the drive's main period (1 % of the record at most)
-        unless the drive holds for three times that in ``min_held`` of the record."""
-        slow = [f for f in view.modes_hz if f > 0]
-        span = float(view.t[-1] - view.t[0])
-        model = 10.0 / (2 * math.pi * min(slow)) if slow else 0.0
-        drive = min(0.25 / view.main_hz if view.main_hz > 0 else 0.0, 0.01 * span)
-        if drive > model and view.held_share(3 * drive) >= cls.min_held:
-            return model
-        return max(model, drive)
+        """Cells faster than this (s) are phase lags unless the spectrum is broad:
+        :meth:`model_lag`, and :meth:`drive_lag` unless the drive :meth:`holds`."""
+        model = cls.model_lag(view)
+        return model if cls.holds(view) else max(model, cls.drive_lag(view))
 
     def fit(self, view):
         taus = self.taus(view)
