@@ -86,7 +86,7 @@ def _view(drive, fs, modes_hz, main_hz):
     from types import SimpleNamespace
     from bondgraph.diagnosis.context import drive_held_share
     t = np.arange(drive.size) / fs
-    return SimpleNamespace(t=t, modes_hz=modes_hz, main_hz=main_hz,
+    return SimpleNamespace(t=t, dt=1 / fs, modes_hz=modes_hz, main_hz=main_hz,
                            held_share=lambda length: drive_held_share(drive, fs, length))
 
 
@@ -99,3 +99,14 @@ def test_on_a_drive_that_holds_only_the_models_dynamics_bound_a_creep_lag():
     assert InputCreep.lag_limit(_view(sine, fs, (350.0,), 1.5)) == pytest.approx(0.05, rel=1e-3)   # 1 % of 5 s
     fast = np.sin(2 * math.pi * 200.0 * t)                               # a quarter period below 10/omega
     assert InputCreep.lag_limit(_view(fast, fs, (350.0,), 200.0)) == pytest.approx(model)
+
+
+def test_on_a_drive_that_holds_the_spectrum_starts_at_the_models_dynamics():
+    fs, t = 1e4, np.arange(0.0, 5.0, 1e-4)
+    held = np.repeat([0.0, 1.0, 0.4, 1.5, 0.8], t.size // 5)
+    grid = InputCreep.taus(_view(held, fs, (350.0,), 1.5))
+    assert grid[0] == pytest.approx(10 / (2 * math.pi * 350.0)) and grid[-1] == pytest.approx(15.0, rel=1e-3)
+    grid = InputCreep.taus(_view(np.sin(2 * math.pi * 1.5 * t), fs, (350.0,), 1.5))
+    assert grid[0] == pytest.approx(5e-4)                                # five samples
+    assert np.allclose(np.diff(np.log10(grid)), np.diff(np.log10(grid))[0])
+    assert 0.4 <= np.diff(np.log10(grid))[0] <= 0.6                       # two a decade
