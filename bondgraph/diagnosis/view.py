@@ -106,7 +106,7 @@ class View:
     def held_share(self, length: float) -> float:
         """Share of the record (0-1) in which the measured drive holds still (within 1 % of
         its range) for ``length`` s or longer: steps, holds, rests between bursts."""
-        return drive_held_share(np.asarray(self.u), self.fs, length)
+        return drive_held_share(self.u, self.fs, length)
 
     def _budget(self, max_nfev: int) -> int:
         """An optimiser's evaluation budget at this view's effort."""
