@@ -48,8 +48,8 @@ IDLE_S = 5.0
 COMPILE = """
 import time
 t0 = time.perf_counter()
-from bondgraph.modelfile import load_model
-from bondgraph.simulate import Simulator
+from bondgraph.model.modelfile import load_model
+from bondgraph.numerics.simulate import Simulator
 t1 = time.perf_counter()
 lm = load_model({model!r})
 sim = Simulator(lm.model)
@@ -61,8 +61,8 @@ print(time.perf_counter() - t1)
 def serial(draws: int) -> dict:
     """A plain loop over the sweep's draws: build, wall and CPU time, the peak values."""
     from bondgraph.batch.sampling import design_points, parse_spec
-    from bondgraph.modelfile import load_model
-    from bondgraph.simulate import Simulator
+    from bondgraph.model.modelfile import load_model
+    from bondgraph.numerics.simulate import Simulator
 
     points = design_points({k: parse_spec(v) for k, v in SPACE.items()}, "random", draws, SEED)
     t0 = time.perf_counter()

@@ -58,7 +58,7 @@ def load_file_model(name: str, **overrides):
     """A model file from models/ (stack.py, apa120ml.py) built with ``overrides``."""
     if ROOT not in sys.path:
         sys.path.insert(0, ROOT)
-    from bondgraph.modelfile import load_model
+    from bondgraph.model.modelfile import load_model
 
     return load_model(os.path.join(ROOT, "models", f"{name}.py"), overrides)
 

@@ -3,7 +3,7 @@
     python benchmarks/cli_bench.py [--repeat N] [--compare] [--layers 200,400]
 
 1. Start-up: ``bondgraph --help`` and ``bondgraph simulate --help`` in fresh processes, side by
-   side with a bare ``python -c pass`` and with ``python -c "import bondgraph.simulate"`` (what
+   side with a bare ``python -c pass`` and with ``python -c "import bondgraph.numerics.simulate"`` (what
    every command imported before the package's names became lazy).
 2. Printouts: ``bondgraph equations models/stack.py --set layers=N`` in a fresh process (output
    to /dev/null), and in-process the parts: model build, derivation, rendering.  With
@@ -47,8 +47,8 @@ def startup(repeat: int) -> list[tuple[str, float]]:
     rows = [("python -c pass", wall([py, "-c", "pass"], repeat)),
             ("bondgraph --help", wall([py, "-m", "bondgraph", "--help"], repeat)),
             ("bondgraph simulate --help", wall([py, "-m", "bondgraph", "simulate", "--help"], repeat)),
-            ("python -c 'import bondgraph.simulate' (the former eager import)",
-             wall([py, "-c", "import bondgraph.simulate"], repeat))]
+            ("python -c 'import bondgraph.numerics.simulate' (the former eager import)",
+             wall([py, "-c", "import bondgraph.numerics.simulate"], repeat))]
     return rows
 
 
@@ -61,9 +61,9 @@ def printouts(layers: list[int], repeat: int, compare: bool) -> list[tuple[str, 
     sys.path.insert(0, str(ROOT))
     import sympy as sp
 
-    from bondgraph.equations import derive
-    from bondgraph.modelfile import load_model
-    from bondgraph.printing import render
+    from bondgraph.equations.derivation import derive
+    from bondgraph.model.modelfile import load_model
+    from bondgraph.equations.printing import render
 
     for n in layers:
         clock = time.process_time

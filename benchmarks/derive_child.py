@@ -72,7 +72,7 @@ def cmd_compile(a):
     import numpy as np
 
     import bondgraph as bg
-    from bondgraph.codegen import compile_equations, generate_source
+    from bondgraph.numerics.codegen import compile_equations, generate_source
     from sympy.core.cache import clear_cache
 
     t0 = time.perf_counter()

@@ -1,6 +1,6 @@
 """The compiled limit: a hand-written numba DOPRI5 with hand-written right-hand sides.
 
-Same algorithm as ``bondgraph.integrators.dopri5`` (scipy's RK45 tableau, Hairer's initial
+Same algorithm as ``bondgraph.numerics.integrators.dopri5`` (scipy's RK45 tableau, Hairer's initial
 step, safety 0.9, factors 0.2..10, error weight atol_i + rtol·max(|x_i|, |x_new,i|, peak_i),
 RMS norm, dense output at the requested times, memory frozen inside a step and committed
 after each accepted step, FSAL refreshed after a commit, optional rejection of steps in which
@@ -85,7 +85,7 @@ def make_dopri5(rhs, output, opin, commit):
             output(t, x, prm, mem, y)
             Y[k_out, :] = y
             k_out += 1
-        # initial step (as bondgraph.integrators / scipy)
+        # initial step (as bondgraph.numerics.integrators / scipy)
         for i in range(n):
             w[i] = atol[i] + rtol * max(abs(x[i]), peak[i])
             if w[i] <= 0.0:

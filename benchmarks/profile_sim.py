@@ -6,7 +6,7 @@ A sampling profiler sees one opaque native frame for numba code, so this measure
 
 1. the per-call cost of every kernel the integrator calls — the generated ``rhs``, ``output``,
    ``opin``, ``commit`` (called through the same first-class function type as in
-   ``bondgraph.integrators.dopri5``), ``eval_inputs`` with the workload's signals, and
+   ``bondgraph.numerics.integrators.dopri5``), ``eval_inputs`` with the workload's signals, and
    ``_dense`` (one dense-output evaluation) — each in a compiled loop of 10^6 calls;
 2. how often the integrator calls each of them in the run (from the run's step statistics and
    the algorithm: 6 stage evaluations per attempted step, 1 dense output + inputs + output per
@@ -73,8 +73,8 @@ def fc_loop(fn_type):
 
 
 def profile_case(case, t_end: float):
-    import bondgraph.integrators as integ
-    from bondgraph.model_functions import FUNCTION_TYPE
+    import bondgraph.numerics.integrators as integ
+    from bondgraph.numerics.model_functions import FUNCTION_TYPE
     from bondgraph import Simulator
     from bondgraph import config
 

@@ -82,7 +82,7 @@ def t215_truth(effect: str):
     import sympy as sp
 
     import bondgraph as bg
-    from bondgraph.modelfile import load_model
+    from bondgraph.model.modelfile import load_model
 
     tab = {str(k): v for k, v in load_model(truth.MODELS / "bimorph_t215.py", {"modes": 3}).model
            .parameter_table().items()}
@@ -111,7 +111,7 @@ def t215_truth(effect: str):
 
 def truth_of(family: str, effect: str):
     """(truth model, its first resonance in rad/s or None)."""
-    from bondgraph.modelfile import load_model
+    from bondgraph.model.modelfile import load_model
 
     if family == "apa":
         return truth.apa_truth(effect, APA_CHANGES), None

@@ -39,7 +39,7 @@ def standin_truth():
     """The lumped stack with Bouc–Wen polarization and Kelvin–Voigt creep cells (see the module doc)."""
     import bondgraph as bg
     from bondgraph import C, I, J0, J1, R, Se
-    from bondgraph.modelfile import load_model
+    from bondgraph.model.modelfile import load_model
     from library.piezo import bouc_wen_polarization, layer_extension, piezo_layer
 
     p = load_model(os.path.join(ROOT, "models", "stack.py")).params

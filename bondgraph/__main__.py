@@ -1,7 +1,7 @@
 """``python -m bondgraph`` and the ``bondgraph`` command.
 
 A Ctrl-C (or SIGTERM) handler is the very first thing installed, so even an interrupt during
-start-up ends with one line and status 130 (143); :mod:`bondgraph.interrupt` then takes over.
+start-up ends with one line and status 130 (143); :mod:`bondgraph.support.interrupt` then takes over.
 """
 import os
 import signal
@@ -16,7 +16,7 @@ def _early(signum, frame):  # noqa: ARG001 - before any work: nothing to clean u
 def run() -> None:
     signal.signal(signal.SIGINT, _early)
     signal.signal(signal.SIGTERM, _early)
-    from . import interrupt
+    from .support import interrupt
 
     with interrupt.handle_signals():
         from .cli import main

@@ -34,11 +34,11 @@ from bondgraph.batch.table import Table  # noqa: E402
 from bondgraph.cli import main  # noqa: E402
 from bondgraph.data import read_csv, write_csv  # noqa: E402
 from bondgraph.diagnosis import diagnose, model_file_options  # noqa: E402
-from bondgraph.fitting import fit_parameters  # noqa: E402
-from bondgraph.linearize import linearize  # noqa: E402
-from bondgraph.modelfile import load_model  # noqa: E402
-from bondgraph.signals import Sine  # noqa: E402
-from bondgraph.simulate import Simulator  # noqa: E402
+from bondgraph.fit.fitting import fit_parameters  # noqa: E402
+from bondgraph.linear.linearize import linearize  # noqa: E402
+from bondgraph.model.modelfile import load_model  # noqa: E402
+from bondgraph.model.signals import Sine  # noqa: E402
+from bondgraph.numerics.simulate import Simulator  # noqa: E402
 from conftest import MODELS, ROOT  # noqa: E402
 
 APA = str(MODELS / "apa120ml.py")

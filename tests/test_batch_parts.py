@@ -14,10 +14,10 @@ from bondgraph.batch import analysis, jobs, sampling
 from bondgraph.batch.runs import simulation_options
 from bondgraph.batch.table import Table
 from bondgraph.cli import main
-from bondgraph.errors import UsageError
-from bondgraph.modelfile import load_model
-from bondgraph.simulate import Simulator
-from bondgraph.signals import Sine
+from bondgraph.support.errors import UsageError
+from bondgraph.model.modelfile import load_model
+from bondgraph.numerics.simulate import Simulator
+from bondgraph.model.signals import Sine
 from conftest import MODELS
 
 MSD = '''

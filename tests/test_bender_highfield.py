@@ -14,8 +14,8 @@ import pytest
 
 import bondgraph as bg
 from bondgraph import C, I, J1, Model, R, Se
-from bondgraph.linearize import linearize
-from bondgraph.modelfile import load_model
+from bondgraph.linear.linearize import linearize
+from bondgraph.model.modelfile import load_model
 from conftest import MODELS
 from library.beam import cantilever_mass_factor, cantilever_tip_compliance, extension_mass_factor
 from library.bender import (creep_step_response, damping_coefficient, kelvin_voigt_chain, load_enhancement,

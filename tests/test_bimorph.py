@@ -26,8 +26,8 @@ import pytest
 import bondgraph as bg
 from bondgraph.cli import main
 from bondgraph.data import read_csv
-from bondgraph.linearize import linearize
-from bondgraph.modelfile import load_model, read_model_module
+from bondgraph.linear.linearize import linearize
+from bondgraph.model.modelfile import load_model, read_model_module
 from conftest import MODELS, ROOT
 from library.beam import T215_A4_103X, T226_H4_203X
 from library.bimorph import (ModeNonlinearity, add_bimorph_modes, amplitude_equation_peak,

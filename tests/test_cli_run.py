@@ -62,9 +62,9 @@ def run(argv, capsys):
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory):
     """A 4 s record of the oscillator with k, c of TRUE, a sensor offset and noise."""
-    from bondgraph.modelfile import load_model
-    from bondgraph.signals import PiecewiseLinear
-    from bondgraph.simulate import Simulator
+    from bondgraph.model.modelfile import load_model
+    from bondgraph.model.signals import PiecewiseLinear
+    from bondgraph.numerics.simulate import Simulator
 
     d = tmp_path_factory.mktemp("rec")
     (d / "osc.py").write_text(MODEL)
@@ -136,7 +136,7 @@ def test_fit_file_reproduces_the_fit_offset_included(work, capsys):
 
 
 def test_fit_reports_progress_and_plots(work, capsys, monkeypatch):
-    from bondgraph.progress import Progress
+    from bondgraph.support.progress import Progress
     monkeypatch.setitem(Progress.__init__.__kwdefaults__, "delay", 0.0)
     monkeypatch.setitem(Progress.__init__.__kwdefaults__, "interval", 0.0)
     monkeypatch.setenv("BONDGRAPH_PROGRESS", "lines")
@@ -215,7 +215,7 @@ def test_plots_carry_units_skip_constants_and_label_shared_axes(work, capsys, mo
     import bondgraph.plotting as plotting
 
     figs = []
-    monkeypatch.setattr(plotting, "save", lambda fig, path: (figs.append(fig), open(path, "wb").write(b"png")))
+    monkeypatch.setattr(plotting.figures, "save", lambda fig, path: (figs.append(fig), open(path, "wb").write(b"png")))
     rc, out, err = run(["simulate", "osc.py", "--input", "V=sine(amplitude=1e-3, frequency=5)", "--t-end", "0.5",
                         "--out", "r.csv", "--plot", "r.png", "--quiet"], capsys)
     assert rc == 0, err
@@ -253,10 +253,10 @@ def test_python_control_export_matches_the_poles(work, capsys):
 
 def test_python_control_missing_is_one_line(work, capsys, monkeypatch):
     import bondgraph.cli.linearize as cli_lin
-    from bondgraph.equations import derive
-    from bondgraph.errors import UsageError
-    from bondgraph.linearize import linearize
-    from bondgraph.modelfile import load_model
+    from bondgraph.equations.derivation import derive
+    from bondgraph.support.errors import UsageError
+    from bondgraph.linear.linearize import linearize
+    from bondgraph.model.modelfile import load_model
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "control" else real(name, *a))
@@ -273,8 +273,8 @@ def test_python_control_missing_is_one_line(work, capsys, monkeypatch):
 # ---- choices and start-up ------------------------------------------------------------------------------
 def test_choices_come_from_the_modules():
     from bondgraph.cli import build_parser
-    from bondgraph.printing import FORMATS
-    from bondgraph.simulate import METHODS
+    from bondgraph.equations.printing import FORMATS
+    from bondgraph.numerics.simulate import METHODS
 
     p = build_parser()
     sub = p._subparsers._group_actions[0].choices
@@ -308,7 +308,7 @@ def test_help_exits_0_and_names_every_command():
 
 
 def test_lazy_package_names_still_import():
-    code = ("import bondgraph.simulate, bondgraph.linearize\n"
+    code = ("import bondgraph.numerics.simulate, bondgraph.linear.linearize\n"
             "import bondgraph as bg\n"
             "from bondgraph import C, Model, Parameter, Sine, simulate\n"
             "assert callable(bg.simulate) and callable(bg.linearize) and bg.simulate is simulate\n"
@@ -322,9 +322,9 @@ def test_printouts_equal_sympys_own_printer(tmp_path):
     """The remembering printers give the same text as sympy's (on the 20-layer stack)."""
     import sympy as sp
 
-    from bondgraph.equations import derive
-    from bondgraph.modelfile import load_model
-    from bondgraph.printing import render
+    from bondgraph.equations.derivation import derive
+    from bondgraph.model.modelfile import load_model
+    from bondgraph.equations.printing import render
     from conftest import MODELS
 
     eqs = derive(load_model(MODELS / "stack.py").model)
@@ -487,11 +487,11 @@ def _ppid(pid: int) -> int:
         return -1
 
 
-# ---- bondgraph.atomic.Outputs: the machinery behind items 4-6 ----------------------------------------------
+# ---- bondgraph.support.atomic.Outputs: the machinery behind items 4-6 ----------------------------------------------
 def test_outputs_commit_together_or_not_at_all(tmp_path):
-    from bondgraph.atomic import Outputs
-    from bondgraph.errors import UsageError
-    from bondgraph.interrupt import TEMPORARY
+    from bondgraph.support.atomic import Outputs
+    from bondgraph.support.errors import UsageError
+    from bondgraph.support.interrupt import TEMPORARY
 
     (tmp_path / "a.csv").write_text("old a\n")
     os.chmod(tmp_path / "a.csv", 0o640)

@@ -1,4 +1,4 @@
-"""Feedforward hysteresis compensation (bondgraph.compensate, ``bondgraph compensate``).
+"""Feedforward hysteresis compensation (bondgraph.fit.compensate, ``bondgraph compensate``).
 
 The papers' claim (Rodriguez-Fortun et al., Mechatronics 20 (2010), Sec. 6: "control strategies
 based on the inverse model calculation and feedforward"; Ghafarirad et al., MCMDS 21 (2015),
@@ -15,10 +15,10 @@ import pytest
 import bondgraph as bg
 from bondgraph import C, I, J1, Model, R, Se
 from bondgraph.cli import main
-from bondgraph.compensate import feedforward, invert_operator
+from bondgraph.fit.compensate import feedforward, invert_operator
 from bondgraph.data import read_csv, write_csv
-from bondgraph.errors import ModelError
-from bondgraph.modelfile import load_model
+from bondgraph.support.errors import ModelError
+from bondgraph.model.modelfile import load_model
 from conftest import MODELS, ROOT
 from library.hysteresis import MaxwellSlip, ModifiedPI, PrandtlIshlinskii, RelativeModifiedPI
 from library.identification import fit_pi, fit_relative_modified_pi

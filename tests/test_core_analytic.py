@@ -89,7 +89,7 @@ def test_a_stiff_run_stops_at_its_deadline(method):
     """A deadline already passed stops the stiff solvers at their first step with a
     SimulationTimeout (a SimulationError); one in the future changes nothing."""
     import time
-    from bondgraph.simulate import SimulationError, SimulationTimeout
+    from bondgraph.numerics.simulate import SimulationError, SimulationTimeout
     t = np.linspace(0, 3, 3001)
     free = bg.simulate(msd(), t, {"F": bg.Step(1.0)}, method=method)
     with pytest.raises(SimulationTimeout, match="deadline") as err:

@@ -1,4 +1,4 @@
-"""Measured-data CSV format (bondgraph.data) and atomic file output (bondgraph.atomic)."""
+"""Measured-data CSV format (bondgraph.data) and atomic file output (bondgraph.support.atomic)."""
 from __future__ import annotations
 
 import json
@@ -12,9 +12,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from bondgraph.atomic import atomic_write
+from bondgraph.support.atomic import atomic_write
 from bondgraph.data import Dataset, DataWarning, check_units, read_csv, write_csv
-from bondgraph.errors import BondGraphError, DataError, UsageError
+from bondgraph.support.errors import BondGraphError, DataError, UsageError
 
 FAST = settings(
     max_examples=60,
@@ -510,7 +510,8 @@ def test_resample_interpolates_onto_uniform_grid():
 
 
 def test_uniform_sampling_has_one_definition_and_a_config_tolerance():
-    from bondgraph import config, identify
+    from bondgraph import config
+    from bondgraph.fit import identify
     from bondgraph.data import uniform_step
 
     assert identify.uniform_step is uniform_step

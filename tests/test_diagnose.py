@@ -34,7 +34,7 @@ from bondgraph.cli import main
 from bondgraph.data import Dataset, read_csv
 from bondgraph.diagnosis import LINEAR, Candidate, Extension, diagnose, model_file_options
 from bondgraph.diagnosis.decision import _batch_means, compare, judge, Comparison
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from conftest import MODELS
 
 DATA = Path(__file__).parent / "data"
@@ -355,7 +355,7 @@ def test_a_slow_simulation_stops_at_the_fits_budget():
     so far as not converged, and the final prediction runs without a deadline."""
     import time
     from bondgraph.diagnosis.projection import projected_fit, simulation_deadline, time_budget
-    from bondgraph.simulate import SimulationTimeout
+    from bondgraph.numerics.simulate import SimulationTimeout
     t = np.linspace(0.0, 1.0, 200)
     y = np.exp(-3.0 * t)
     seen = []
@@ -383,7 +383,7 @@ def test_a_first_evaluation_that_cannot_finish_stops_at_the_limit():
     and a simulation that would outlast it ends the fit with the SimulationTimeout."""
     import time
     from bondgraph.diagnosis.projection import projected_fit, simulation_deadline, time_budget
-    from bondgraph.simulate import SimulationTimeout
+    from bondgraph.numerics.simulate import SimulationTimeout
     t = np.linspace(0.0, 1.0, 200)
     seen = []
 
@@ -427,7 +427,7 @@ def test_a_candidate_whose_simulation_passes_the_limit_is_reported_failed():
 
 
 def test_the_second_fold_holds_out_other_blocks():
-    from bondgraph.identify import split_masks
+    from bondgraph.fit.identify import split_masks
     t = np.linspace(0.0, 10.0, 30_001)
     fit0, val0 = split_masks(t, 0.3, "blocks", 30)
     fit2, val2 = split_masks(t, 0.3, "blocks", 30, shift=2)
@@ -465,7 +465,7 @@ def test_a_chirp_through_a_resonance_is_held_out_in_part_only():
     shorter blocks 0.24-1.7, the worst case 40 % closer to 1 on a log scale."""
     from scipy import signal
     from bondgraph.diagnosis.context import drive_sweep
-    from bondgraph.identify import split_masks
+    from bondgraph.fit.identify import split_masks
     fs, w = 20_000.0, 2 * np.pi * 500
     t = np.arange(0.0, 3.0, 1 / fs)
     worst = {}

@@ -22,7 +22,7 @@ import pytest
 from bondgraph.cli import main
 from bondgraph.data import Dataset, read_csv
 from bondgraph.diagnosis import diagnose, model_file_options
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from conftest import MODELS
 from test_diagnose import P885, assert_same_chain
 from truthgen import draw

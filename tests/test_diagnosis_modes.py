@@ -15,7 +15,8 @@ from bondgraph.data import Dataset
 from bondgraph.diagnosis import View
 from bondgraph.diagnosis.calibration import calibrate
 from bondgraph.diagnosis.context import Context
-from bondgraph.linearize import linearize
+from bondgraph.linear import lti
+from bondgraph.linear.linearize import linearize
 from library.extensions import OutputMode
 from test_diagnosis_friction import resonator
 
@@ -46,8 +47,8 @@ def test_the_split_mass_has_the_two_mass_modes_of_the_same_masses_by_hand():
     # below the whole mass's mode the split leaves the response as it was
     base = linearize(bg.derive(view.rewrite()), "F", "x")
     w = 2 * math.pi * np.array([5.0, 20.0])
-    ratio = np.abs(bg.lti.frequency_response(lin.A, lin.B, lin.C, lin.D, w)
-                   / bg.lti.frequency_response(base.A, base.B, base.C, base.D, w))
+    ratio = np.abs(lti.frequency_response(lin.A, lin.B, lin.C, lin.D, w)
+                   / lti.frequency_response(base.A, base.B, base.C, base.D, w))
     np.testing.assert_allclose(ratio, 1.0, atol=0.02)
 
 

@@ -21,7 +21,7 @@ import bondgraph as bg
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose, model_file_options
 from bondgraph.diagnosis.rewrite import modify_law
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from conftest import MODELS, two_level_chirp
 from library.extensions import InputHysteresis, InputRC, InputSaturation, PolarizationSaturation
 from test_diagnosis_friction import assert_named_through

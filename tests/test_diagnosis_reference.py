@@ -9,7 +9,7 @@ cancelling coefficients blew up at the record's end and made the reference 2.2x 
 the calibrated model on the validation part, which switched the share rule off, and creep (a
 fast cell for the phase error at the drive's frequency, a slow one for the noise's wander) was
 named with gain 1.19 (it explained 78 % of what the reference then explained, creep must
-explain 90 %).  Since the residualised modes keep their lag (:func:`bondgraph.lti.residualise`)
+explain 90 %).  Since the residualised modes keep their lag (:func:`bondgraph.linear.lti.residualise`)
 that phase error is gone and creep gains 1.08.
 """
 from __future__ import annotations
@@ -20,7 +20,7 @@ import pytest
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose, model_file_options
 from bondgraph.diagnosis.decision import judge, Comparison
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from truthgen import draw
 from truthgen.families import ROOT
 

@@ -31,7 +31,7 @@ from truthgen import draw
 
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose, model_file_options
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from library.extensions import InputBoucWen, InputSaturation, ParallelMode, StiffnessSoftening
 
 ROOT = Path(__file__).resolve().parents[1]

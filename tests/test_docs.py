@@ -12,7 +12,7 @@ import bondgraph as bg
 from bondgraph import config
 from bondgraph.cli import main
 from bondgraph.data import Dataset
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from conftest import ROOT
 
 DOCS = ROOT / "docs"
@@ -76,7 +76,7 @@ def test_data_check_example_flags_micrometres():
 
 
 def test_command_page_lists_every_command():
-    from bondgraph.cli.registry import COMMANDS   # filled when bondgraph.cli is imported (above)
+    from bondgraph.cli.registry import COMMANDS  # filled when bondgraph.cli is imported (above)
     text = (DOCS / "command-line.md").read_text()
     assert COMMANDS and all(re.search(rf"^\| `{name}[ `]", text, re.M) for name in COMMANDS), sorted(COMMANDS)
 

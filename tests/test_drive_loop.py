@@ -20,7 +20,7 @@ from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose
 from bondgraph.diagnosis.engine import model_file_options
 from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from library.extensions import LoopInductance
 from library.piezo import layer_extension, linear_polarization, piezo_layer
 

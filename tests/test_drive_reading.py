@@ -27,7 +27,7 @@ from bondgraph.data.sampling import interpolation_compensated
 from bondgraph.diagnosis import diagnose
 from bondgraph.diagnosis.context import Context, residual_floor
 from bondgraph.diagnosis.engine import model_file_options
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
 FS = 10_000.0

@@ -10,9 +10,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import bondgraph as bg
-from bondgraph.elements import DISSIPATION, Element
+from bondgraph.model.elements import DISSIPATION, Element, sympify
 from bondgraph import config
-from bondgraph.linearize import linearize
+from bondgraph.linear.linearize import linearize
 from test_properties import Spec, build, graphs
 
 
@@ -26,7 +26,7 @@ class CubicDamper(Element):
 
     def __init__(self, name, c):
         super().__init__(name)
-        self.c = bg.elements.sympify(c, f"Rcubic '{name}' coefficient")
+        self.c = sympify(c, f"Rcubic '{name}' coefficient")
 
     def preferred_causality(self, port):
         return True
@@ -193,7 +193,7 @@ class ViscousDamper(Element):
 
     def __init__(self, name, c):
         super().__init__(name)
-        self.c = bg.elements.sympify(c, f"Rvisc '{name}' coefficient")
+        self.c = sympify(c, f"Rvisc '{name}' coefficient")
 
     def preferred_causality(self, port):
         return True

@@ -11,9 +11,9 @@ import pytest
 from scipy.linalg import matrix_balance
 
 import bondgraph as bg
-from bondgraph import lti as lti_module
-from bondgraph.lti import LTI, StateSpace
-from bondgraph.modelfile import load_model
+from bondgraph.linear import lti as lti_module
+from bondgraph.linear.lti import LTI, StateSpace
+from bondgraph.model.modelfile import load_model
 from conftest import MODELS
 
 

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bondgraph.errors import ParameterError
+from bondgraph.support.errors import ParameterError
 from library.hysteresis import (
     MaxwellSlip,
     ModifiedPI,

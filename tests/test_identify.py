@@ -16,9 +16,9 @@ from hypothesis import given, settings, strategies as st
 
 import bondgraph as bg
 from bondgraph.data import Dataset
-from bondgraph.errors import DataError
-from bondgraph.identify import Identification
-from bondgraph.lti import LTI, residualise
+from bondgraph.support.errors import DataError
+from bondgraph.fit.identify import Identification
+from bondgraph.linear.lti import LTI, residualise
 
 K, C_D = 400.0, 4.0
 
@@ -122,7 +122,7 @@ def test_the_rate_term_keeps_the_lag_of_the_residualised_modes():
     model misses the fast lag, an error of ω/ω_f = 1 % of the response; with it the error is
     second order ((ω/ω_f)² = 1e-4), in the frequency response and in the sampled response.
     Analytically D1 = −C_f·A_f⁻²·B_f = −1/ω_f for the unit fast lag 1/(1 + s/ω_f)."""
-    from bondgraph.lti import StateSpace
+    from bondgraph.linear.lti import StateSpace
     wf, ws = 2 * math.pi * 2000.0, 2 * math.pi * 1.0
     A = np.diag([-wf, -ws])
     B = np.array([[wf], [ws]])
@@ -153,7 +153,7 @@ def test_bounded_least_squares_on_any_shape(rows, cols, seed):
     (a wide one, fewer rows than columns, indexed past the QR's diagonal before): within the
     bounds, and as good a fit (to rounding) whenever the columns are independent."""
     from scipy.optimize import lsq_linear
-    from bondgraph.identify import bounded_lstsq
+    from bondgraph.fit.identify import bounded_lstsq
     rng = np.random.default_rng(seed)
     A, b = rng.normal(size=(rows, cols)), rng.normal(size=rows)
     lower = np.where(rng.random(cols) < 0.5, 0.0, -np.inf)

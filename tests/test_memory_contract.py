@@ -44,7 +44,7 @@ def reference(model, t, signal, substeps=200):
     c = sim.compiled
     u, du = np.zeros(1), np.zeros(1)
     args = bank.args()
-    from bondgraph.integrators import eval_inputs
+    from bondgraph.numerics.integrators import eval_inputs
 
     def f(tt, xx):
         out = np.zeros_like(xx)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import bondgraph as bg
-from bondgraph.memory import MemoryOperator
+from bondgraph.model.memory import MemoryOperator
 
 CLIP = 0.25
 

@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import bondgraph as bg
-from bondgraph.errors import ParameterError
-from bondgraph.modelfile import load_model, read_model_module
+from bondgraph.support.errors import ParameterError
+from bondgraph.model.modelfile import load_model, read_model_module
 from conftest import MODELS
 from library.hysteresis import ModifiedPI, PrandtlIshlinskii, RelativeModifiedPI
 

@@ -4,7 +4,7 @@ import pytest
 import sympy as sp
 
 import bondgraph as bg
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from library.piezo import (layer_extension, linear_polarization, model1_cfield, model2_cfield,
                            model2_from_model1, piezo_layer)
 from conftest import MODELS

@@ -1,4 +1,4 @@
-"""bondgraph.progress: a bar on a terminal, plain lines otherwise, nothing when quiet or quick."""
+"""bondgraph.support.progress: a bar on a terminal, plain lines otherwise, nothing when quiet or quick."""
 from __future__ import annotations
 
 import io
@@ -6,7 +6,7 @@ import threading
 
 import pytest
 
-from bondgraph.progress import Progress, _duration
+from bondgraph.support.progress import Progress, _duration
 
 
 class Clock:
@@ -22,7 +22,7 @@ class Clock:
 @pytest.fixture
 def clock(monkeypatch):
     c = Clock()
-    monkeypatch.setattr("bondgraph.progress.time.monotonic", c)
+    monkeypatch.setattr("bondgraph.support.progress.time.monotonic", c)
     return c
 
 
@@ -81,7 +81,7 @@ def test_quick_work_and_quiet_mode_print_nothing(clock):
 
 
 def test_bar_on_a_terminal_redraws_one_line(clock, monkeypatch):
-    monkeypatch.setattr("bondgraph.progress.shutil.get_terminal_size", lambda default: __import__("os").terminal_size((60, 20)))
+    monkeypatch.setattr("bondgraph.support.progress.shutil.get_terminal_size", lambda default: __import__("os").terminal_size((60, 20)))
     s = Tty()
     p = Progress("simulating", total=1.0, stream=s, delay=0)
     assert p.mode == "bar"

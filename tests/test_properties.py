@@ -35,8 +35,8 @@ from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 import bondgraph as bg
-from bondgraph.causality import assign_causality
-from bondgraph.linearize import linearize
+from bondgraph.equations.causality import assign_causality
+from bondgraph.linear.linearize import linearize
 
 SYMBOLIC = settings(max_examples=60, deadline=None,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])

@@ -5,7 +5,7 @@ import sympy as sp
 
 import bondgraph as bg
 from bondgraph import config
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from conftest import MODELS
 
 

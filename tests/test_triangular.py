@@ -34,10 +34,10 @@ from scipy.linalg import solve_banded
 import bondgraph as bg
 from bondgraph.cli import main
 from bondgraph.data import read_csv
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from conftest import MODELS
-from bondgraph.errors import ModelError
-from bondgraph.modelfile import read_model_module
+from bondgraph.support.errors import ModelError
+from bondgraph.model.modelfile import read_model_module
 from library.identification import fit_pi
 from library.triangular import ellipse_axes as phasor_ellipse
 from library.triangular import (MeasuredStroke, contact_displacement, static_tip_displacement,

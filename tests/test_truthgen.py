@@ -15,8 +15,8 @@ import pytest
 
 from bondgraph import Sine
 from bondgraph.data import read_csv
-from bondgraph.modelfile import load_model
-from bondgraph.simulate import simulate as bondgraph_simulate
+from bondgraph.model.modelfile import load_model
+from bondgraph.numerics.simulate import simulate as bondgraph_simulate
 from truthgen import SEEDS, VISIBLE, design, draw, fresh_seeds
 from truthgen.generator import plan
 from truthgen import bimorph, drives, stack

@@ -16,7 +16,7 @@ import sympy as sp
 import bondgraph as bg
 from bondgraph import C, I, J0, J1, Quantity, R, Se
 from bondgraph.data import Dataset
-from bondgraph.modelfile import load_model
+from bondgraph.model.modelfile import load_model
 from conftest import MODELS
 from library.hysteresis import MaxwellSlip
 from library.piezo import piezo_layer

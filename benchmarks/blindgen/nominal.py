@@ -1,5 +1,5 @@
 """Nominal devices: the numbers of the project's model files (their PARAMETERS lists, read
-through ``bondgraph.modelfile``) and, for the bimorph, our own clamped-free uniform-beam modes.
+through ``bondgraph.model.modelfile``) and, for the bimorph, our own clamped-free uniform-beam modes.
 
 The bimorph is fully covered (one uniform segment), so its modes are the textbook cantilever
 modes, mass-normalised (int_0^L rhoA phi^2 dx = 1, phi(L) > 0):
@@ -26,7 +26,7 @@ MODELS = {"apa": os.path.join(ROOT, "models", "apa120ml.py"),
 @functools.lru_cache(maxsize=None)
 def model_values(family: str) -> dict:
     """{name: default} of the model file's PARAMETERS (numbers only)."""
-    from bondgraph.modelfile import load_model
+    from bondgraph.model.modelfile import load_model
     declared = load_model(MODELS[family]).declared
     return {p.name: float(p.default) for p in declared if isinstance(p.default, (int, float))}
 

@@ -19,8 +19,8 @@ import math
 import os
 from typing import Any, Callable, Iterator, Sequence
 
-from .. import config
-from ..errors import UsageError
+from ..support import config
+from ..support.errors import UsageError
 
 #: the one-line fix when Dask is missing
 INSTALL_HINT = "pip install -e '.[dask]' (or pip install 'dask[distributed]')"
@@ -86,10 +86,10 @@ def connect(scheduler: Any = None, workers: int | None = None,
 def ignore_interrupts() -> None:
     """Run on each worker of the embedded cluster: the terminal's Ctrl-C reaches the worker
     processes too (one process group); they ignore it and leave it to the client (which cancels
-    and closes, or, under the command line, :mod:`bondgraph.interrupt` ends them)."""
+    and closes, or, under the command line, :mod:`bondgraph.support.interrupt` ends them)."""
     import threading
 
-    from .. import interrupt
+    from ..support import interrupt
 
     if threading.current_thread() is threading.main_thread():
         interrupt.worker_initializer()

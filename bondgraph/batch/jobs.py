@@ -8,7 +8,7 @@ Simulation jobs reuse compiled models: each worker process keeps a memo of built
 simulators keyed by model file (path, modification time, size) and structural parameter
 values; real parameters the equations keep symbolic only change the parameter vector, so a
 worker derives and loads each model structure once (the machine code itself comes from the
-on-disk cache of :mod:`bondgraph.codegen`, compiled at most once per machine).
+on-disk cache of :mod:`bondgraph.numerics.codegen`, compiled at most once per machine).
 """
 from __future__ import annotations
 
@@ -22,8 +22,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .. import config
-from ..errors import BondGraphError
+from ..support import config
+from ..support.errors import BondGraphError
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,7 @@ def _read(job: Job, opts: Options, need_output: bool):
 
 
 def _diagnose(job: Job, opts: Options) -> dict:
-    from ..modelfile import load_model
+    from ..model.modelfile import load_model
 
     loaded = load_model(opts.model, _values(job, opts))
     return diagnosis_row(loaded, _read(job, opts, need_output=True), opts)
@@ -134,8 +134,8 @@ def diagnosis_row(loaded, data, opts: Options) -> dict:
 
 
 def _fit(job: Job, opts: Options) -> dict:
-    from ..fitting import fit_parameters
-    from ..modelfile import load_model
+    from ..fit.fitting import fit_parameters
+    from ..model.modelfile import load_model
 
     loaded = load_model(opts.model, _values(job, opts))
     fit = fit_parameters(loaded, _read(job, opts, need_output=True), list(opts.names), input=opts.input,
@@ -150,8 +150,8 @@ def _fit(job: Job, opts: Options) -> dict:
 
 
 def _simulate(job: Job, opts: Options) -> dict:
-    from ..signals import PiecewiseLinear
-    from ..simulate import Experiment
+    from ..model.signals import PiecewiseLinear
+    from ..numerics.simulate import Experiment
 
     sim, numeric = built(opts.model, _values(job, opts))
     inputs = dict(opts.inputs)
@@ -178,7 +178,7 @@ def _simulate(job: Job, opts: Options) -> dict:
 
 
 def _linearized(sim, numeric: Mapping[str, float], opts: Options):
-    from ..linearize import linearize
+    from ..linear.linearize import linearize
 
     u = opts.input if opts.input in sim.input_names else sim.input_names[0]
     y = opts.output if opts.output in sim.output_names else sim.output_names[0]
@@ -228,7 +228,7 @@ def _stamp(path: str) -> tuple:
 
 @functools.lru_cache(maxsize=16)
 def _declared(path: str, stamp: tuple) -> dict:
-    from ..modelfile import read_model_module
+    from ..model.modelfile import read_model_module
 
     _, declared = read_model_module(path)
     return {d.name: d for d in declared}
@@ -236,8 +236,8 @@ def _declared(path: str, stamp: tuple) -> dict:
 
 @functools.lru_cache(maxsize=32)
 def _simulator(path: str, stamp: tuple, structural: tuple):
-    from ..modelfile import load_model
-    from ..simulate import Simulator
+    from ..model.modelfile import load_model
+    from ..numerics.simulate import Simulator
 
     return Simulator(load_model(path, dict(structural)).model)
 

@@ -6,7 +6,7 @@ Signal metrics take the name of an output, input or state of the model:
 * ``max(y)``, ``min(y)``, ``mean(y)``         * ``p2p(y)``    max − min
 * ``final(y)``  y at the end time             * ``steady(y)`` mean of y over the last 10 % of the run
 
-Linear metrics come from the linearisation at the initial state (``bondgraph.linearize``):
+Linear metrics come from the linearisation at the initial state (``bondgraph.linear.linearize``):
 
 * ``resonance`` / ``resonance(k)``  natural frequency ωn/2π (Hz) of the first (k-th) oscillatory
   mode (complex pole pair), counted from the lowest
@@ -23,7 +23,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..errors import UsageError
+from ..support.errors import UsageError
 
 #: share of the run at its end over which ``steady`` averages
 STEADY_SHARE = 0.1
@@ -55,7 +55,7 @@ class Metric:
         return self.kind in _LINEAR
 
     def of(self, result, linear=None) -> float:
-        """The value on a :class:`~bondgraph.simulate.SimResult` (and its ``LinearModel``)."""
+        """The value on a :class:`~bondgraph.numerics.simulate.SimResult` (and its ``LinearModel``)."""
         if self.linear:
             return mode_property(linear, self.kind, int(self.arg))
         y = result.outputs.get(self.arg)  # outputs first: looking up an input samples every input

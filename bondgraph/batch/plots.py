@@ -3,14 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plotting import _pyplot, save
+from ..plotting import pyplot, save
 
 
 def plot_sweep(result, path: str) -> None:
     """One column per metric: its histogram over the runs (mean and ±1 std marked) on top,
     the tornado plot of its sensitivity below (bars from the baseline to the output at each
     parameter's low and high value, the largest swing on top)."""
-    plt = _pyplot()
+    plt = pyplot()
     metrics = result.metrics
     n = len(metrics)
     n_par = len(result.params)

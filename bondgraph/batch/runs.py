@@ -21,8 +21,8 @@ import os
 from pathlib import Path
 from typing import Callable, Iterable, Mapping, Sequence
 
-from .. import config
-from ..errors import ParameterError, UsageError, did_you_mean
+from ..support import config
+from ..support.errors import ParameterError, UsageError, did_you_mean
 from .cluster import chunk_size, chunked, connect, run_tasks, worker_count
 from .jobs import Job, Options, describe, run_chunk
 from .metrics import parse_metrics
@@ -85,7 +85,7 @@ def checked_model(model, params: Mapping | None, sets: Sequence[Mapping] | None 
                   names: Iterable[str] = ()):
     """The model file built with ``params`` (errors now, not in every job), after checking that
     every parameter named by the sets (and ``names``) exists."""
-    from ..modelfile import load_model
+    from ..model.modelfile import load_model
 
     lm = load_model(model, dict(params or {}))
     known = set(lm.model.values) | set(lm.model.parameters)
@@ -113,13 +113,13 @@ def model_io(lm, input: str | None, output: str | None, required: bool = True) -
 def simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol, input=None, output=None,
                        data_input=None, data_output=None) -> Options:
     """Options of simulation jobs: the model's experiment with the given overrides, checked."""
-    from ..simulate import METHODS
+    from ..numerics.simulate import METHODS
 
     parsed = parse_metrics(metrics)
     signals = set(lm.model.inputs) | set(lm.model.outputs)
     unknown = [m for m in parsed if not m.linear and m.arg not in signals]
     if unknown:
-        from ..equations import derive
+        from ..equations.derivation import derive
         states = {str(s) for s in derive(lm.model).state_symbols}
         for m in unknown:
             if m.arg not in states:

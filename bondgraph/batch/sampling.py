@@ -33,7 +33,7 @@ import numpy as np
 from scipy import stats
 from scipy.stats import qmc
 
-from ..errors import UsageError
+from ..support.errors import UsageError
 
 DESIGNS = ("random", "lhs", "grid", "oat")
 

@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
-from ..errors import UsageError
+from ..support.errors import UsageError
 from . import analysis
 from .runs import OnProgress, checked_model, execute, model_io, simulation_options
 from .sampling import Distribution, Grid, default_design, design_points, parse_spec

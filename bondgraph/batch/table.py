@@ -15,8 +15,8 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
-from ..atomic import atomic_write
-from ..errors import UsageError
+from ..support.atomic import atomic_write
+from ..support.errors import UsageError
 
 TRAILING = ("warnings", "seconds", "error")
 

@@ -4,7 +4,7 @@ Each command lives in its own module, its arguments declared next to its functio
 (:func:`registry.command`).  Exit status: 0 success, 2 usage or input error (one line on
 stderr, no traceback), 1 internal failure (``--debug`` shows the traceback), 130 interrupted
 by Ctrl-C and 143 by SIGTERM (one line; temporary files removed, worker processes killed,
-existing files untouched: see :mod:`bondgraph.interrupt`).
+existing files untouched: see :mod:`bondgraph.support.interrupt`).
 """
 from __future__ import annotations
 
@@ -15,19 +15,9 @@ import sys
 import traceback
 import warnings
 
-from ..errors import BondGraphError, UsageError
-from . import (  # noqa: F401 (registration: one command module per line)
-    batch,
-    causality,
-    compensate,
-    diagnose,
-    equations,
-    fit,
-    linearize,
-    params,
-    simulate,
-)
-from .. import interrupt
+from ..support.errors import BondGraphError, UsageError
+from . import batch, causality, compensate, diagnose, equations, fit, linearize, params, simulate
+from ..support import interrupt
 from .registry import COMMANDS, Parser
 
 DEBUG_HELP = "show the traceback of an error"

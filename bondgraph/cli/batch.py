@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 
-from ..errors import UsageError
+from ..support.errors import UsageError
 from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, arg, command, outputs, write_text
 
 ACTIONS = ("diagnose", "fit", "simulate", "sweep")
@@ -63,8 +63,8 @@ def run(args):
 
     cluster.require_dask()
     from .. import batch
-    from ..parameters import parse_assignments, read_params_file
-    from ..progress import Progress
+    from ..model.parameters import parse_assignments, read_params_file
+    from ..support.progress import Progress
 
     params = dict(read_params_file(args.params_file)) if args.params_file else {}
     params.update(parse_assignments(args.set))
@@ -137,7 +137,7 @@ def _inputs(args):
     """(data column driving the model, {input: signal}) from the --input items."""
     from pathlib import Path
 
-    from ..signals import parse_signal
+    from ..model.signals import parse_signal
 
     columns = [item for item in args.input if "=" not in item]
     if len(columns) > 1:

@@ -12,7 +12,7 @@ from .registry import MODEL_ARGS, PLOT_SUFFIXES, arg, command, load, outputs
                        arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0],
                            help="draw the bond graph with causal strokes (needs matplotlib)")])
 def run(args):
-    from ..causality import assign_causality
+    from ..equations.causality import assign_causality
 
     with outputs(args, "plot") as out:
         lm = load(args)

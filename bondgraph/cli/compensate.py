@@ -1,12 +1,12 @@
 """``bondgraph compensate``: the feedforward drive that makes a model follow a desired output
-(wraps :func:`bondgraph.compensate.feedforward`)."""
+(wraps :func:`bondgraph.fit.compensate.feedforward`)."""
 from __future__ import annotations
 
 import json
 import sys
 from pathlib import Path
 
-from ..errors import UsageError
+from ..support.errors import UsageError
 from .registry import MODEL_ARGS, PLOT_SUFFIXES, arg, command, counter, load, outputs
 
 
@@ -30,9 +30,9 @@ from .registry import MODEL_ARGS, PLOT_SUFFIXES, arg, command, counter, load, ou
              arg("--quiet", action="store_true", help="no progress or summary on stderr"),
          ])
 def run(args):
-    from ..compensate import feedforward
+    from ..fit.compensate import feedforward
     from ..data import read_csv, write_csv
-    from ..signals import parse_signal
+    from ..model.signals import parse_signal
 
     if args.iterations < 1:
         raise UsageError(f"--iterations must be at least 1, got {args.iterations}")
@@ -80,9 +80,9 @@ def run(args):
 
 
 def _plot(res, path: str, u: str, y: str, title: str) -> None:
-    from ..plotting import _pyplot, save
+    from ..plotting import pyplot, save
 
-    plt = _pyplot()
+    plt = pyplot()
     fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
     a1.plot(res.t, res.reference, "k", lw=1.6, label="reference")
     a1.plot(res.t, res.linear_predicted, lw=1.0, label="linear inverse")

@@ -19,7 +19,7 @@ from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, comm
          ])
 def run(args):
     from ..diagnosis import diagnose, model_file_options
-    from ..progress import Progress
+    from ..support.progress import Progress
 
     with outputs(args, "plot") as out:  # checked before the work, written only if it all succeeds
         lm = load(args)

@@ -6,12 +6,12 @@ from .registry import MODEL_ARGS, arg, command, load, module_constant, outputs, 
 
 @command("equations", "print the causal, symbolic state equations (parameters, constitutive relations, causal "
                       "strokes, state equations, outputs)",
-         MODEL_ARGS + [arg("--format", choices=module_constant("bondgraph.printing", "FORMATS"), default="text",
+         MODEL_ARGS + [arg("--format", choices=module_constant("bondgraph.equations.printing", "FORMATS"), default="text",
                            help="text (default), latex or markdown"),
                        arg("--out", metavar="FILE", help="write to a file instead of stdout")])
 def run(args):
-    from ..equations import derive
-    from ..printing import render
+    from ..equations.derivation import derive
+    from ..equations.printing import render
 
     with outputs(args, "out") as out:
         lm = load(args)

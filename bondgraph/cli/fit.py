@@ -1,5 +1,5 @@
 """``bondgraph fit``: fit a model file's parameters to measured data (wraps
-:func:`bondgraph.fitting.fit_parameters`).
+:func:`bondgraph.fit.fitting.fit_parameters`).
 
 The report lists every fitted quantity with its unit: the parameters (± one standard error,
 "linear" when solved exactly) and the output offset; then the RMS errors on the fitted and
@@ -11,7 +11,8 @@ from __future__ import annotations
 import json
 import sys
 
-from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, command, counter, load, outputs, read_data
+from .registry import (DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, command, counter, load, outputs,
+    read_data)
 
 
 @command("fit", "fit parameters to measured data (least squares, uncertainty, held-out validation); --out "
@@ -29,7 +30,7 @@ from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, comm
              QUIET_ARG,
          ])
 def run(args):
-    from ..fitting import fit_parameters
+    from ..fit.fitting import fit_parameters
 
     with outputs(args, "out", "plot") as out:
         lm = load(args)

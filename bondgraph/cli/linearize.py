@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from ..errors import UsageError
+from ..support.errors import UsageError
 from .registry import MODEL_ARGS, PLOT_SUFFIXES, arg, command, load, outputs, write_text
 
 FORMATS = ("text", "json", "python-control")
@@ -25,8 +25,8 @@ FORMATS = ("text", "json", "python-control")
              arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="Bode plot (needs matplotlib)"),
          ])
 def run(args):
-    from ..equations import derive
-    from ..linearize import linearize
+    from ..equations.derivation import derive
+    from ..linear.linearize import linearize
 
     fmt = "json" if args.json else args.format
     if args.json and args.format not in ("text", "json"):

@@ -11,7 +11,7 @@ import sys
 from dataclasses import dataclass, field
 from typing import Callable
 
-from ..errors import UsageError
+from ..support.errors import UsageError
 
 
 @dataclass
@@ -71,8 +71,8 @@ def load(args):
 
     Also fills in ``args.model_input``/``args.model_output`` (when the command has them and
     they were not given) with the model's first declared input and output."""
-    from ..modelfile import load_model
-    from ..parameters import parse_assignments, read_fit_file
+    from ..model.modelfile import load_model
+    from ..model.parameters import parse_assignments, read_fit_file
 
     overrides, offsets = {}, {}
     if args.params_file:
@@ -103,11 +103,11 @@ def read_data(args):
 
 
 def outputs(args, *dests: str, inputs=()):
-    """An :class:`~bondgraph.atomic.Outputs` with the output options ``dests`` of ``args``
+    """An :class:`~bondgraph.support.atomic.Outputs` with the output options ``dests`` of ``args``
     (e.g. ``"out", "plot"``) checked now, before any work: directory exists and is writable,
     not an input file of the run, not given twice, a figure format for ``plot``, matplotlib
     installed for figures.  ``inputs``: further files the run reads."""
-    from ..atomic import Outputs
+    from ..support.atomic import Outputs
 
     data = getattr(args, "data", None)
     out = Outputs([getattr(args, "model", None), *(data if isinstance(data, list) else [data]),
@@ -146,22 +146,22 @@ def write_text(path: str | None, text: str, out=None):
         with out.open(path, "w") as fh:
             fh.write(text)
     else:
-        from ..atomic import atomic_write
+        from ..support.atomic import atomic_write
         with atomic_write(path, "w", encoding="utf-8") as fh:
             fh.write(text)
 
 
 def progress(label: str, quiet: bool = False):
-    """A :class:`~bondgraph.progress.Progress` for a fraction done (0..1), e.g. for
+    """A :class:`~bondgraph.support.progress.Progress` for a fraction done (0..1), e.g. for
     ``Simulator.run(progress=...)``; silent with ``quiet``."""
-    from ..progress import Progress
+    from ..support.progress import Progress
     return Progress(label, total=1.0, mode="quiet" if quiet else "auto")
 
 
 def counter(label: str, unit: str = "simulations", quiet: bool = False):
-    """A :class:`~bondgraph.progress.Progress` for a count with no known end, e.g. for
+    """A :class:`~bondgraph.support.progress.Progress` for a count with no known end, e.g. for
     ``Identification.fit(progress=...)``; silent with ``quiet``."""
-    from ..progress import Progress
+    from ..support.progress import Progress
     return Progress(label, unit=unit, mode="quiet" if quiet else "auto")
 
 
@@ -173,7 +173,7 @@ class Parser(argparse.ArgumentParser):
 
 
 def module_constant(module: str, name: str) -> tuple:
-    """A tuple constant of a framework module (``module_constant("bondgraph.simulate",
+    """A tuple constant of a framework module (``module_constant("bondgraph.numerics.simulate",
     "METHODS")``) read from the module's source without importing it, so argument choices
     come from the module that defines them while ``--help`` stays fast (no sympy, no numba).
     Falls back to importing the module if the constant is not a plain top-level literal."""

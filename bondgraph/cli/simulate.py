@@ -13,8 +13,9 @@ import sys
 import time
 from pathlib import Path
 
-from ..errors import UsageError
-from .registry import MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, command, load, module_constant, outputs, progress
+from ..support.errors import UsageError
+from .registry import (MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, command, load, module_constant, outputs,
+    progress)
 
 _CSV_FILE = re.compile(r"^\s*csv\s*\(.*?\bfile\s*=\s*([^,)]+)", re.S)
 
@@ -29,7 +30,7 @@ _CSV_FILE = re.compile(r"^\s*csv\s*\(.*?\bfile\s*=\s*([^,)]+)", re.S)
                                               "end of a csv input"),
              arg("--dt", type=float, help="output sample interval (s); default from the EXPERIMENT, or the "
                                           "time stamps of a csv input"),
-             arg("--method", choices=module_constant("bondgraph.simulate", "METHODS"),
+             arg("--method", choices=module_constant("bondgraph.numerics.simulate", "METHODS"),
                  help="integration method (default from the EXPERIMENT, usually auto)"),
              arg("--rtol", type=float, help="relative tolerance (default from the EXPERIMENT, 1e-6 unless set)"),
              arg("--atol", type=float, help="absolute tolerance floor (default 1e-20; the error is otherwise "
@@ -41,10 +42,10 @@ _CSV_FILE = re.compile(r"^\s*csv\s*\(.*?\bfile\s*=\s*([^,)]+)", re.S)
              QUIET_ARG,
          ])
 def run(args):
-    from ..checks import check_start
+    from ..numerics.checks import check_start
     from ..data import write_csv
-    from ..signals import parse_signal
-    from ..simulate import Simulator
+    from ..model.signals import parse_signal
+    from ..numerics.simulate import Simulator
 
     csv_files = [m.group(1).strip() for m in map(_CSV_FILE.match, (i.partition("=")[2] for i in args.input)) if m]
     with outputs(args, "out", "plot", inputs=csv_files) as out:

@@ -15,7 +15,7 @@ import warnings
 from functools import lru_cache
 from importlib.metadata import entry_points
 
-from .. import config
+from ..support import config
 from .dataset import Dataset
 
 ENTRY_POINT_GROUP = "bondgraph.data_checks"

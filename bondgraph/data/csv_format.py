@@ -22,7 +22,7 @@
 * Cells are plain decimal numbers (``1``, ``-2.5``, ``.5``, ``3e-6``); NaN and inf are
   refused, and so is everything listed in :func:`~bondgraph.data.read_csv`.
 
-Every problem in a file is a :class:`~bondgraph.errors.DataError` whose message is one line
+Every problem in a file is a :class:`~bondgraph.support.errors.DataError` whose message is one line
 ``FILE:LINE: problem; fix`` (``LINE`` 1-based, as an editor counts, with CR, LF and CRLF
 each ending one line).  ``docs/data-format.md`` is the user-facing description.
 """

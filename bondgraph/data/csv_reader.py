@@ -14,7 +14,7 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
-from ..errors import DataError, UsageError
+from ..support.errors import DataError, UsageError
 from .checks import check_units as _check_units
 from .csv_format import META, NUMBER
 from .dataset import Dataset
@@ -291,7 +291,7 @@ def read_csv(
     A column that holds no number at all (a note, a time stamp string) and that is neither
     ``t`` nor required is left out of the :class:`Dataset` instead of being refused.
 
-    Raises :class:`~bondgraph.errors.DataError` with a one-line ``FILE:LINE: problem; fix``
+    Raises :class:`~bondgraph.support.errors.DataError` with a one-line ``FILE:LINE: problem; fix``
     message for: a missing, unreadable or non-UTF-8 file; an empty file or one without a
     header or data rows; a header that is numeric, has an empty or duplicate name, or lacks
     a required column; a row with the wrong number of cells; an empty or non-numeric cell;

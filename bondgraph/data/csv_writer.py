@@ -11,8 +11,8 @@ from typing import Mapping
 
 import numpy as np
 
-from ..atomic import atomic_write
-from ..errors import DataError
+from ..support.atomic import atomic_write
+from ..support.errors import DataError
 from .csv_format import META_KEY
 from .dataset import Dataset
 
@@ -48,7 +48,7 @@ def write_csv(
     with every number written by ``repr`` (shortest exact round-trip text).  The data are
     validated like a :class:`Dataset` (finite, ``t`` strictly increasing, equal lengths), so
     a file is never written that :func:`read_csv` would refuse.  Written via
-    :func:`~bondgraph.atomic.atomic_write`: on failure no partial file is left.
+    :func:`~bondgraph.support.atomic.atomic_write`: on failure no partial file is left.
 
     Raises :class:`DataError` for invalid data, names, metadata, or if the file cannot be
     written (message names the file).

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import DataError, UsageError, did_you_mean
+from ..support.errors import DataError, UsageError, did_you_mean
 from . import sampling
 
 
@@ -38,7 +38,7 @@ class Dataset:
         The file it was read from, or ``None``.
 
     All arrays are private read-only copies (copy one with ``np.array(ds.t)`` to modify it);
-    values must be finite.  Violations raise :class:`~bondgraph.errors.DataError`.
+    values must be finite.  Violations raise :class:`~bondgraph.support.errors.DataError`.
     """
 
     t: np.ndarray

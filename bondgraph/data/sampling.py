@@ -9,8 +9,8 @@ import math
 
 import numpy as np
 
-from .. import config
-from ..errors import DataError, UsageError
+from ..support import config
+from ..support.errors import DataError, UsageError
 
 
 def uniform_step(t, rtol: float | None = None) -> float | None:

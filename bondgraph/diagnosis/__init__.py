@@ -9,7 +9,7 @@ The engine, in order:
 1. **Prepare** (:mod:`.context`): resample irregular time stamps; find the drive's band;
    when every mode of the (linear) model is far above the data's Nyquist frequency, replace
    it by its quasi-static contribution and its lag at the data's frequencies (time-scale
-   separation, :func:`bondgraph.lti.residualise`; with none left, the static route);
+   separation, :func:`bondgraph.linear.lti.residualise`; with none left, the static route);
    decimate while the drive's band and the band where the output stands above its noise
    floor stay well below the new Nyquist frequency; estimate
    the noise floor where the drive has no power; read the drive as the band-limited signal it

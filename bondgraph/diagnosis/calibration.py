@@ -40,8 +40,8 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
-from .. import config
-from ..errors import UsageError
+from ..support import config
+from ..support.errors import UsageError
 from .context import SENSOR_GAIN, Context, State, welch, welch_length
 from .pool import fork_map
 from .projection import Param, projected_fit
@@ -97,7 +97,7 @@ def patterns(names: Sequence[str], pats: Sequence[str] | None) -> list[str]:
 
 def linear_parameters(ctx: Context) -> list[str]:
     """Parameters of the working model's linear dynamics (nonzero, not the sensor gain)."""
-    from ..lti import LTI
+    from ..linear.lti import LTI
     lti = ctx.lti or LTI(ctx.eqs, ctx.input, ctx.output)
     return [n for n in lti.parameters if n != SENSOR_GAIN and ctx.ident.current(n) != 0.0]
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
-from ..graph import Model
+from ..model.graph import Model
 
 #: kinds of cause: a nonlinear or memory effect must beat the flexible linear reference; a
 #: linear structural one must beat the full linear recalibration and be physically plausible

@@ -11,15 +11,15 @@ import numpy as np
 import sympy as sp
 from scipy import ndimage, signal, stats
 
-from .. import config
+from ..support import config
 from ..data import Dataset
-from ..equations import derive
-from ..graph import Model
+from ..equations.derivation import derive
+from ..model.graph import Model
 from ..data import uniform_step
 from ..data.sampling import interpolation_compensated
-from ..identify import Identification, check_varies
-from ..lti import LTI, first_input, first_output
-from ..simulate import Simulator
+from ..fit.identify import Identification, check_varies
+from ..linear.lti import LTI, first_input, first_output
+from ..numerics.simulate import Simulator
 
 SENSOR_GAIN = "sensor.gain"
 
@@ -255,7 +255,7 @@ class Context:
 
 
 def _theta(eqs) -> np.ndarray:
-    from ..codegen import parameter_vector
+    from ..numerics.codegen import parameter_vector
     return parameter_vector(eqs)
 
 

@@ -52,7 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import config
+from ..support import config
 from .filters import lowpass
 
 

@@ -10,11 +10,11 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from .. import config
+from ..support import config
 from ..data import Dataset
-from ..errors import BondGraphError, UsageError
-from ..graph import Model
-from ..simulate import SimulationError
+from ..support.errors import BondGraphError, UsageError
+from ..model.graph import Model
+from ..numerics.simulate import SimulationError
 from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State, residual_floor
@@ -315,7 +315,7 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     model's (default: its first declared); ``data_input``/``data_output``: the data columns
     (default: the same names); ``workers``: parallel processes; ``chain``: keep naming
     causes on the extended model until none passes; ``progress``: a
-    :class:`bondgraph.progress.Progress` (one count per candidate fitted, notes for the
+    :class:`bondgraph.support.progress.Progress` (one count per candidate fitted, notes for the
     stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
     the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
     settings = {} if drift is None else {"diagnosis.drift": bool(drift)}
@@ -404,7 +404,7 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
     steps: list[Step] = []
     folds: list[Context] = []   # the second fold's context, made when first needed
     baseline, from_plausible = state, False
-    with Pool(ctx, cal.free, cands, workers) as pool:
+    with Pool(run_candidate, ctx, cal.free, cands, workers) as pool:
         for k in range(int(config.get("diagnosis.max_chain")) if chain else 1):
             spent = time.time() - (started if since is None else since)
             if k and spent > config.get("diagnosis.chain_seconds"):
@@ -490,8 +490,8 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
         report.extended_model, report.extended_values = ext_model, dict(state.values)
         report.predictions["extended"] = state.prediction
         if equations:
-            from ..equations import derive
-            from ..printing import render
+            from ..equations.derivation import derive
+            from ..equations.printing import render
             report.equations = render(derive(ext_model), "text")
         if not ctx.n_fast and len(ctx.t) <= 200_000:
             report.extended_rms_integrated = _integrated(ctx, ext_model, state)

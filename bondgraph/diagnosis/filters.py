@@ -7,7 +7,7 @@ import math
 import numpy as np
 from scipy import signal
 
-from ..lti import StateSpace
+from ..linear.lti import StateSpace
 
 
 def lowpass(u: np.ndarray, tau: float, dt: float) -> np.ndarray:

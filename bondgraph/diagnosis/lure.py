@@ -23,11 +23,11 @@ import numpy as np
 import sympy as sp
 from numba import njit
 
-from ..elements import C, I, R
-from ..equations import derive
-from ..errors import BondGraphError
-from ..graph import Model, Quantity
-from ..lti import LTI, foh
+from ..model.elements import C, I, R
+from ..equations.derivation import derive
+from ..support.errors import BondGraphError
+from ..model.graph import Model, Quantity
+from ..linear.lti import LTI, foh
 from .rewrite import modify_law
 
 
@@ -84,7 +84,7 @@ class Lure:
         self.eqs, self.dt = eqs, dt
 
     def theta(self, values: Mapping[str, float]) -> np.ndarray:
-        from ..codegen import parameter_vector
+        from ..numerics.codegen import parameter_vector
         th = parameter_vector(self.eqs)
         index = {p.name: i for i, p in enumerate(self.eqs.params)}
         for k, v in values.items():

@@ -15,14 +15,13 @@ import signal
 import threading
 from typing import Callable, Iterator, Sequence
 
-from .. import config
+from ..support import config
 
 
-def _worker(ctx, calibrated, candidates, settings, tasks, results) -> None:
+def _worker(run_candidate, ctx, calibrated, candidates, settings, tasks, results) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     config.restore(settings)
     single_threaded_blas()
-    from .engine import run_candidate
     while True:
         task = tasks.get()
         if task is None:
@@ -41,7 +40,8 @@ def single_threaded_blas():
 class Pool:
     """Runs candidates on a chain state, in ``workers`` processes when that helps."""
 
-    def __init__(self, ctx, calibrated: Sequence[str], candidates: Sequence, workers: int):
+    def __init__(self, run_candidate: Callable, ctx, calibrated: Sequence[str], candidates: Sequence, workers: int):
+        self.run_candidate = run_candidate
         self.ctx, self.calibrated, self.candidates = ctx, list(calibrated), list(candidates)
         self._procs: list = []
         if workers > 1 and len(candidates) > 1 and "fork" in mp.get_all_start_methods():
@@ -49,7 +49,7 @@ class Pool:
             self._tasks, self._results = mpc.Queue(), mpc.Queue()
             settings = config.snapshot()
             for _ in range(min(workers, len(candidates))):
-                p = mpc.Process(target=_worker, args=(ctx, self.calibrated, self.candidates, settings,
+                p = mpc.Process(target=_worker, args=(run_candidate, ctx, self.calibrated, self.candidates, settings,
                                                       self._tasks, self._results), daemon=True)
                 p.start()
                 self._procs.append(p)
@@ -58,7 +58,7 @@ class Pool:
         """(index, outcome) for every candidate index, as they finish (costly ones start first);
         ``plausible``: (state, bounds) of the plausible device for linear structural candidates;
         ``effort``: a factor on the candidates' optimiser budgets."""
-        from .engine import run_candidate
+        run_candidate = self.run_candidate
         order = sorted(indices, key=lambda i: -getattr(self.candidates[i], "cost", 1))
         if not self._procs:
             for i in order:

@@ -17,8 +17,8 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..identify import bounded_lstsq
-from ..simulate import SimulationTimeout
+from ..fit.identify import bounded_lstsq
+from ..numerics.simulate import SimulationTimeout
 
 
 #: the time (time.monotonic) after which fits in this context stop at their best point so far
@@ -32,7 +32,7 @@ def time_budget(seconds: float | None, limit: float | None = None) -> Iterator[N
     """Within the block, :func:`projected_fit` stops at the best point it has found once
     ``seconds`` have passed (reported as not converged), and every simulation that asks
     :func:`simulation_deadline` stops once ``limit`` seconds have passed (a
-    :class:`~bondgraph.simulate.SimulationTimeout`: the first evaluation of a fit, which has no
+    :class:`~bondgraph.numerics.simulate.SimulationTimeout`: the first evaluation of a fit, which has no
     point to fall back on, and the final prediction included)."""
     now = time.monotonic()
     token = _DEADLINE.set(None if seconds is None else now + seconds)
@@ -53,7 +53,7 @@ def simulation_deadline() -> float | None:
     """The deadline (time.monotonic) for a simulation run in this context, or None: inside an
     optimiser's evaluation with a point to stop at, the fit's budget (the fit then stops at its
     best point so far: a single slow simulation must not outlast the budget); else the
-    context's limit (see :func:`time_budget`).  :meth:`~bondgraph.simulate.Simulator.run`
+    context's limit (see :func:`time_budget`).  :meth:`~bondgraph.numerics.simulate.Simulator.run`
     stops there."""
     stop = _STOP_AT.get()
     return stop if stop is not None else _LIMIT.get()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .. import config
+from ..support import config
 from .candidate import LINEAR
 
 

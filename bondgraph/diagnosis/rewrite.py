@@ -7,9 +7,9 @@ from typing import Callable, Mapping
 
 import sympy as sp
 
-from ..elements import C, E, F, I, J1, P, Q, R, Se
-from ..errors import ModelError
-from ..graph import Model
+from ..model.elements import C, E, F, I, J1, P, Q, R, Se
+from ..support.errors import ModelError
+from ..model.graph import Model
 
 _VAR = {C: Q, I: P}
 

@@ -10,12 +10,15 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from ..graph import Model
-from ..identify import Identification, Spec
-from ..lti import LTI
-from .calibration import RESOLVED_COHERENCE, coherence_spectrum, empirical_frf, score
+from ..model.graph import Model
+from ..fit.identify import Identification, Spec
+from ..linear.lti import LTI
+from .calibration import RESOLVED_COHERENCE, coherence_spectrum, cross_spectra, empirical_frf, param_bounds, score
 from .additive import AdditiveDrive, Term
-from .context import Context, State, drive_held_share
+from .context import SENSOR_GAIN, Context, State, drive_held_share
+from .lure import Lure
+from ..support import config
+from ..support.errors import BondGraphError
 from .projection import Param, projected_fit, simulation_deadline
 
 
@@ -154,7 +157,6 @@ class View:
 
     def add_to_output(self, model: Model, term) -> None:
         """Add ``term`` to the compared output of ``model``, inside the sensor gain."""
-        from .context import SENSOR_GAIN
         g = next(d.symbol for n, (d, _) in model.parameters.items() if n == SENSOR_GAIN)
         out = model.outputs[self.output]
         out.expr = out.expr + g * sp.sympify(term)
@@ -209,7 +211,6 @@ class View:
         """The share (0-1) of the residual power a raw prediction removes (its sensor gain and
         offset solved) that lies where the record resolves the response (coherence of output
         and drive at least :attr:`resolved_coherence`); 0 when it removes none."""
-        from .calibration import coherence_spectrum, cross_spectra
         g, b = self.score(raw)[:2]
         u, y, fs = self._ctx.u_recorded, self._ctx.y, self._ctx.fs
         _, coh = coherence_spectrum(u, y, fs)
@@ -227,7 +228,6 @@ class View:
         """The calibrated linear parameters as refit specs (from ``start`` or the current
         values): within the view's bounds (the plausible device's, for a linear structural
         candidate) or ×/÷ ``diagnosis.spread``."""
-        from .calibration import param_bounds
         out = []
         for n in self.linear:
             lo, hi = self._bounds.get(n) or param_bounds(self._ctx, n, self.nominal_value(n))
@@ -388,8 +388,7 @@ class View:
     def simulate(self, model: Model, values: Mapping[str, float], max_steps: int | None = None) -> np.ndarray:
         """Raw output (sensor gain 1, no offset) of ``model`` with ``values`` on every sample;
         with ``max_steps``, by the compiled explicit integrator within that many steps (a
-        :class:`~bondgraph.simulate.SimulationError` beyond: a bounded cost for a fallback)."""
-        from .. import config
+        :class:`~bondgraph.numerics.simulate.SimulationError` beyond: a bounded cost for a fallback)."""
         if max_steps is None:
             predict, known = self.predictor(model)
             return predict({k: v for k, v in values.items() if k in known})
@@ -463,8 +462,6 @@ class View:
         so far (held), else of ``model`` (e.g. after a linear structural cause: a compliant output
         stage).  Its ``drive`` is the series to feed it and ``extra`` the output part outside it
         (or None); None when that model is not linear."""
-        from ..errors import BondGraphError
-        from .lure import Lure
         if not self.exact or self.reduced:
             return None
         try:

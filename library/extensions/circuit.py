@@ -10,7 +10,7 @@ import numpy as np
 from bondgraph import I, config
 from bondgraph.diagnosis import LINEAR, Candidate, Extension
 from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
-from bondgraph.identify import Spec
+from bondgraph.fit.identify import Spec
 
 from .drive import NOT_A_DRIVE
 

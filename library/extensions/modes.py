@@ -13,7 +13,7 @@ from bondgraph.diagnosis import LINEAR, Candidate, Extension
 from bondgraph.diagnosis.context import welch
 from bondgraph.diagnosis.filters import resonator
 from bondgraph.diagnosis.rewrite import junction_of, law, modify_law
-from bondgraph.identify import Spec
+from bondgraph.fit.identify import Spec
 
 from .drive import NOT_A_DRIVE
 

@@ -17,8 +17,8 @@ from bondgraph import Quantity
 from bondgraph.diagnosis import Candidate, Extension
 from bondgraph.diagnosis.lure import DRIVE, NotConverged
 from bondgraph.diagnosis.rewrite import modify_law, neighbours, slope
-from bondgraph.identify import Spec
-from bondgraph.simulate import SimulationError
+from bondgraph.fit.identify import Spec
+from bondgraph.numerics.simulate import SimulationError
 
 
 def field(view) -> tuple:

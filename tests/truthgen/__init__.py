@@ -47,7 +47,7 @@ by an exact discretisation of the linear part and an explicit exponential scheme
 effects (:mod:`.system`).
 
 **Linear parameters** are the model file's values (read with
-``bondgraph.modelfile.load_model``) times a log-uniform factor, never within 2 % of 1:
+``bondgraph.model.modelfile.load_model``) times a log-uniform factor, never within 2 % of 1:
 stacks Re x[0.5, 2], polarization elastance (capacitance) x[0.75, 1.33], a x[0.8, 1.25],
 K x[0.75, 1.33], damping c x[0.1, 10], mass M x[0.7, 1.4]; bimorphs omega_i x[0.92, 1.08]
 (common) x[0.98, 1.02] (each), zeta_i x[0.2, 5], mp_i x[0.8, 1.25]; plus sensor gain

@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 @lru_cache(maxsize=None)
 def _model_values(model: str, overrides: tuple) -> dict:
-    from bondgraph.modelfile import load_model
+    from bondgraph.model.modelfile import load_model
     lm = load_model(ROOT / model, dict(overrides))
     values = {str(k): float(v) for k, v in lm.model.parameter_table().items()}
     file_values = lm.params.as_dict()

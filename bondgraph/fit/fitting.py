@@ -1,0 +1,93 @@
+"""Fit a model file's parameters to measured data: the workflow behind ``bondgraph fit``.
+
+    from bondgraph.model.modelfile import load_model
+    from bondgraph.data import read_csv
+    from bondgraph.fit.fitting import fit_parameters
+
+    fit = fit_parameters(load_model("models/apa120ml.py"), read_csv("data.csv"), ["a", "c", "K"])
+    fit.result.values, fit.result.stderr, fit.result.offset, fit.result.rms_validation
+    fit.as_json("models/apa120ml.py", "data.csv")   # the fit file (bondgraph fit --out)
+
+The model file's optional ``seed(p, data)`` hook gives start values; parameters the output
+depends on linearly are detected and solved exactly (see :mod:`bondgraph.fit.identify`).  The
+fit also solves an output offset (the sensor's zero): measured ≈ model output + offset.
+
+The fit file holds everything needed to reproduce the fit: every parameter value of the
+fitted model (``params``, what ``--params-file`` applies), the output ``offset`` and the
+``output`` it belongs to (``simulate --params-file`` adds it), the model input and the data
+columns, the settings (validation share, split, loss, starts) and the scores.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+from ..data import Dataset
+from ..support.errors import UsageError
+from .identify import FitResult, Identification, detect_linear
+from ..model.modelfile import LoadedModel
+
+#: the ``format`` entry of fit files
+FORMAT = "bondgraph-fit/1"
+
+
+@dataclass
+class ModelFit:
+    """A fit of a model file to data: the result, the parameters solved linearly, every
+    parameter value of the fitted model, the model input/output and the fit's settings."""
+
+    result: FitResult
+    linear: list[str]
+    params: dict = field(default_factory=dict)
+    input: str = ""
+    output: str = ""
+    output_unit: str = ""
+    settings: dict = field(default_factory=dict)
+
+    def as_json(self, model: str = "", data: str = "", data_input: str | None = None,
+                data_output: str | None = None) -> dict:
+        """The fit file: see the module docstring."""
+        res = self.result.as_json()
+        return {"format": FORMAT, "model": model, "data": data,
+                "input": self.input, "output": self.output,
+                "data_input": data_input or self.input, "data_output": data_output or self.output,
+                "params": self.params, "fitted": list(self.result.values), "linear": self.linear,
+                "stderr": res["stderr"], "offset": res["offset"], "offset_unit": self.output_unit,
+                "rms_fit": res["rms_fit"], "rms_validation": res["rms_validation"], "nfev": res["nfev"],
+                "success": res["success"], "message": res["message"], "settings": self.settings}
+
+
+def fit_parameters(loaded: LoadedModel, data: Dataset, names: Sequence[str], *, input: str | None = None,
+                   output: str | None = None, validation: float = 0.3, split: str = "blocks", loss: str = "linear",
+                   starts: int = 1, progress: Callable[[int], None] | None = None) -> ModelFit:
+    """Least-squares fit of ``names`` of the loaded model file to ``data`` (model input
+    ``input`` driven by the data column of that name, compared with output ``output``; both
+    default to the model's first declared input and output)."""
+    from ..numerics.checks import check_start
+
+    names = list(names)
+    if not names:
+        raise UsageError("fit: give the parameters to fit, e.g. --params a,c,K")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise UsageError(f"fit: {', '.join(twice)} listed twice in the parameters to fit; list each once")
+    model = loaded.model
+    decl = model.all_parameters()
+    for n in names:
+        if n in decl and decl[n].kind != "real":
+            raise UsageError(f"fit: '{n}' is {decl[n].expected()}, not a real number; only real-valued parameters "
+                             f"can be fitted (set it with --set {n}=...)")
+    input = input or next(iter(model.inputs), "")
+    output = output or next(iter(model.outputs), "")
+    seed = getattr(loaded.module, "seed", None)
+    if seed is not None:  # the model file's seeding procedure (start values read off the data)
+        start = seed(loaded.params, data)
+        model.values.update({k: v for k, v in start.items() if k in names})
+    ident = Identification(model, data, input, output, validation=validation, split=split)
+    check_start(ident.sim, inputs={input: ident.signal}, t0=float(data.t[0]))
+    linear = detect_linear(ident, names)
+    res = ident.fit(ident.specs(names, linear), loss=loss, starts=starts, progress=progress)
+    params = {**model.values, **res.values}
+    unit = model.outputs[output].unit if output in model.outputs else ""
+    settings = {"validation": validation, "split": split, "loss": loss, "starts": starts}
+    return ModelFit(res, linear, params, input, output, unit, settings)

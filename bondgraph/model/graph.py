@@ -1,0 +1,421 @@
+"""Acausal bond graphs: elements joined by bonds, composite components with named ports.
+
+A :class:`Component` is a bond graph fragment with named ports; adding one to another
+copies its elements under a name space (``creep.k1``), so the flat view of any model is one
+dict of elements and one list of bonds.  A :class:`Model` is the top-level component with
+inputs, outputs and declared parameters.
+
+Power convention: ``bond(a, b)`` draws the half-arrow from ``a`` to ``b`` (positive power
+flows from a to b).  Endpoints are written ``"element"`` for one-port elements and
+junctions, ``"element.port"`` for multiport elements, ``"component.port"`` for the
+exposed ports of components.
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from typing import Any
+
+import sympy as sp
+
+from .elements import Element, Junction, sympify
+from ..support.errors import ModelError, did_you_mean
+from .memory import MemoryOperator
+from .parameters import Parameter
+
+
+def input_rate_symbol(u: sp.Symbol) -> sp.Symbol:
+    """The symbol of du/dt for input symbol ``u`` (named ``du/dt``)."""
+    return sp.Symbol(f"d{u.name}/dt", real=True)
+
+
+@dataclass(frozen=True)
+class Bond:
+    """A bond from ``tail`` to ``head``: (element name, port name) pairs; ``index`` is 1-based."""
+
+    index: int
+    tail: tuple[str, str]
+    head: tuple[str, str]
+
+
+@dataclass
+class InternalState:
+    """A state of an element with internal dynamics (e.g. Bouc–Wen z): d(symbol)/dt = rate."""
+
+    symbol: sp.Symbol
+    rate: sp.Expr
+    x0: sp.Expr
+    unit: str = ""
+    doc: str = ""
+
+
+@dataclass
+class OperatorBlock:
+    """A memory operator applied to a scalar expression: symbol = op[input]."""
+
+    symbol: sp.Symbol
+    operator: MemoryOperator
+    input: sp.Expr
+    params: list[sp.Symbol] = field(default_factory=list)
+
+
+@dataclass
+class Output:
+    name: str
+    expr: sp.Expr
+    unit: str = ""
+    doc: str = ""
+
+
+@dataclass
+class Input:
+    name: str
+    symbol: sp.Symbol
+    unit: str = ""
+    doc: str = ""
+
+
+class Quantity(sp.Symbol):
+    """Placeholder for a port variable (effort, flow, state, displacement) of an element.
+
+    Created by :meth:`Component.effort` and friends; resolved to the bond variables when
+    equations are derived.  ``what`` is one of e, f, q, p, x and ``endpoint`` is the
+    element (and port) it refers to.
+    """
+
+    def __new__(cls, what: str, endpoint: str):
+        obj = super().__new__(cls, f"{what}[{endpoint}]", real=True)
+        obj.what, obj.endpoint = what, endpoint
+        return obj
+
+    def __getnewargs_ex__(self):
+        return (self.what, self.endpoint), {}
+
+    def _hashable_content(self):
+        return (self.name, "quantity")
+
+
+class Component:
+    """A bond-graph fragment: elements, bonds, exposed ports, own parameters and blocks."""
+
+    def __init__(self, name: str, doc: str = ""):
+        self.name = name
+        self.doc = doc
+        self.elements: dict[str, Element] = {}
+        self.bonds: list[Bond] = []
+        self.ports: dict[str, str] = {}
+        self.parameters: dict[str, tuple[Parameter, Any]] = {}
+        self.internal_states: dict[str, InternalState] = {}
+        self.operators: dict[str, OperatorBlock] = {}
+        self.components: dict[str, str] = {}  # flattened sub-component name -> its doc
+
+    # ---- building -------------------------------------------------------------------
+    def add(self, *items):
+        """Add elements or components; returns the (last) item added."""
+        for item in items:
+            if isinstance(item, Component):
+                self._add_component(item)
+            elif isinstance(item, Element):
+                self._check_new_name(item.name)
+                self.elements[item.name] = item
+            else:
+                raise ModelError(f"{self.name}: can only add elements or components, not {item!r}")
+        return items[-1] if items else None
+
+    def _check_new_name(self, name: str):
+        if name in self.elements or name in self.components or name in self.ports:
+            raise ModelError(f"{self.name}: the name '{name}' is used twice")
+
+    def bond(self, a: str, b: str) -> Bond:
+        """Connect endpoint ``a`` to ``b`` (half-arrow a → b); see the module docstring."""
+        tail, head = self.resolve(a), self.resolve(b)
+        if tail[0] == head[0]:
+            raise ModelError(f"{self.name}: bond {a} → {b} connects element '{tail[0]}' to itself")
+        index = max((b.index for b in self.bonds), default=0) + 1
+        tail = (tail[0], tail[1] if tail[1] is not None else f"#{index}")
+        head = (head[0], head[1] if head[1] is not None else f"#{index}")
+        for end in (tail, head):
+            elem = self.elements[end[0]]
+            if not isinstance(elem, Junction) and any(end in (bd.tail, bd.head) for bd in self.bonds):
+                if len(elem.ports) == 1:
+                    raise ModelError(f"{self.name}: one-port {elem.kind} '{elem.name}' already has a bond; "
+                                     f"put a junction between it and its neighbours")
+                raise ModelError(f"{self.name}: port '{end[1]}' of '{elem.name}' already has a bond")
+        bd = Bond(index, tail, head)
+        self.bonds.append(bd)
+        return bd
+
+    def unbond(self, a: str, b: str) -> None:
+        """Remove the bond a → b (to splice elements into an existing graph)."""
+        ta, hb = self.resolve(a), self.resolve(b)
+        for bd in self.bonds:
+            if bd.tail[0] == ta[0] and bd.head[0] == hb[0] and (ta[1] is None or bd.tail[1] == ta[1]) \
+                    and (hb[1] is None or bd.head[1] == hb[1]):
+                self.bonds.remove(bd)
+                return
+        raise ModelError(f"{self.name}: there is no bond {a} → {b}")
+
+    def chain(self, *endpoints: str) -> list[Bond]:
+        """Bond a → b → c ... in sequence."""
+        return [self.bond(a, b) for a, b in zip(endpoints, endpoints[1:])]
+
+    def expose(self, port: str, endpoint: str):
+        """Make ``endpoint`` reachable from outside as ``<component>.<port>``."""
+        if port in self.ports:
+            raise ModelError(f"{self.name}: port '{port}' exposed twice")
+        if port in self.elements and endpoint != port:
+            raise ModelError(f"{self.name}: port '{port}' would hide the element of that name")
+        self.resolve(endpoint)
+        self.ports[port] = endpoint
+
+    def resolve(self, endpoint: str) -> tuple[str, str | None]:
+        """(element, port) for an endpoint string; port None means 'a new junction port'."""
+        if not isinstance(endpoint, str):
+            raise ModelError(f"{self.name}: endpoint must be a string like 'm' or 'tf.p1', got {endpoint!r}")
+        if endpoint in self.ports and self.ports[endpoint] != endpoint:
+            return self.resolve(self.ports[endpoint])
+        if endpoint in self.elements:
+            elem = self.elements[endpoint]
+            if isinstance(elem, Junction):
+                return endpoint, None
+            if len(elem.ports) == 1:
+                return endpoint, elem.ports[0]
+            raise ModelError(f"{self.name}: '{endpoint}' is a {elem.kind} with ports "
+                             f"{', '.join(elem.ports)}; bond to '{endpoint}.{elem.ports[0]}' etc.")
+        head, _, port = endpoint.rpartition(".")
+        if head in self.elements and port in self.elements[head].ports:
+            return head, port
+        raise ModelError(f"{self.name}: " + did_you_mean(endpoint, self.endpoint_names(), "element or port"))
+
+    def endpoint_names(self) -> list[str]:
+        names = list(self.ports)
+        for n, e in self.elements.items():
+            if isinstance(e, Junction) or len(e.ports) == 1:
+                names.append(n)
+            else:
+                names += [f"{n}.{p}" for p in e.ports]
+        return names
+
+    # ---- parameters, blocks, port quantities ----------------------------------------------
+    def parameter(self, name: str, value: float, unit: str = "", doc: str = "",
+                  bounds: tuple[float, float] | None = None) -> sp.Symbol:
+        """Declare a real parameter owned by this component; returns its symbol."""
+        decl = Parameter(name, float(value), unit, doc, bounds=bounds)
+        if name in self.parameters:
+            raise ModelError(f"{self.name}: parameter '{name}' declared twice")
+        self.parameters[name] = (decl, float(value))
+        return decl.symbol
+
+    def state(self, name: str, rate, x0=0, unit: str = "", doc: str = "") -> sp.Symbol:
+        """An internal state z with dz/dt = rate (DE-based memory such as Bouc–Wen)."""
+        if name in self.internal_states:
+            raise ModelError(f"{self.name}: internal state '{name}' declared twice")
+        sym = sp.Symbol(name, real=True)
+        self.internal_states[name] = InternalState(sym, sympify(rate, f"state '{name}' rate"),
+                                                   sympify(x0, f"state '{name}' x0"), unit, doc)
+        return sym
+
+    def set_rate(self, name: str, rate):
+        """Set the rate of an internal state declared earlier (for rates that use its symbol)."""
+        self.internal_states[name].rate = sympify(rate, f"state '{name}' rate")
+
+    def operator(self, name: str, op: MemoryOperator, input) -> sp.Symbol:
+        """Apply a memory operator to ``input``; returns the symbol of its output.
+        Its parameters become model parameters ``<name>.<pname>``."""
+        if name in self.operators:
+            raise ModelError(f"{self.name}: operator '{name}' declared twice")
+        if not isinstance(op, MemoryOperator):
+            raise ModelError(f"{self.name}: operator '{name}' must be a MemoryOperator, got {op!r}")
+        op.kernels()  # compiled and checked now: a broken kernel is an error at the line that applies it
+        values = op.parameter_values()
+        syms = [self.parameter(f"{name}.{pn}", v, doc=f"{op.kind} parameter")
+                for pn, v in zip(op.parameter_names, values)]
+        sym = sp.Symbol(name, real=True)
+        self.operators[name] = OperatorBlock(sym, op, sympify(input, f"operator '{name}' input"), syms)
+        return sym
+
+    def effort(self, endpoint: str) -> Quantity:
+        return self._quantity("e", endpoint)
+
+    def flow(self, endpoint: str) -> Quantity:
+        """Flow *into* the element at ``endpoint`` (power-in convention)."""
+        return self._quantity("f", endpoint)
+
+    def displacement(self, endpoint: str) -> Quantity:
+        """Time integral of the flow into ``endpoint`` (q of a C; position of a mass)."""
+        return self._quantity("q", endpoint)
+
+    def momentum(self, endpoint: str) -> Quantity:
+        """Time integral of the effort at ``endpoint`` (p of an I)."""
+        return self._quantity("p", endpoint)
+
+    def _quantity(self, what: str, endpoint: str) -> Quantity:
+        elem, port = self.resolve(endpoint)
+        if port is None:
+            return Quantity(what, elem)
+        return Quantity(what, elem if len(self.elements[elem].ports) == 1 else f"{elem}.{port}")
+
+    # ---- composition -------------------------------------------------------------------------
+    def _add_component(self, comp: "Component"):
+        self._check_new_name(comp.name)
+        prefix = comp.name + "."
+        mapping = comp._rename_map(prefix)
+        for name, elem in comp.elements.items():
+            self._check_new_name(prefix + name)
+            self.elements[prefix + name] = elem.renamed(prefix + name).xreplace(mapping)
+        offset = max((b.index for b in self.bonds), default=0)
+        for bd in comp.bonds:
+            k = bd.index + offset
+            tail, head = ((prefix + e[0], f"#{k}" if e[1].startswith("#") else e[1]) for e in (bd.tail, bd.head))
+            self.bonds.append(Bond(k, tail, head))
+        for port, ep in comp.ports.items():
+            self.ports[prefix + port] = prefix + ep
+        for name, (decl, val) in comp.parameters.items():
+            new = Parameter(prefix + name, val, decl.unit, decl.doc, bounds=decl.bounds)
+            self.parameters[prefix + name] = (new, val)
+        for name, st in comp.internal_states.items():
+            self.internal_states[prefix + name] = InternalState(
+                mapping[st.symbol], st.rate.xreplace(mapping), st.x0.xreplace(mapping), st.unit, st.doc)
+        for name, ob in comp.operators.items():
+            self.operators[prefix + name] = OperatorBlock(
+                mapping[ob.symbol], ob.operator, ob.input.xreplace(mapping), [mapping[s] for s in ob.params])
+        self.components[comp.name] = comp.doc
+        for sub, doc in comp.components.items():
+            self.components[prefix + sub] = doc
+
+    def _rename_map(self, prefix: str) -> dict:
+        mapping: dict = {}
+        for name, (decl, _) in self.parameters.items():
+            mapping[decl.symbol] = sp.Symbol(prefix + name, real=True)
+        for name, st in self.internal_states.items():
+            mapping[st.symbol] = sp.Symbol(prefix + name, real=True)
+        for name, ob in self.operators.items():
+            mapping[ob.symbol] = sp.Symbol(prefix + name, real=True)
+        for sym in self._all_symbols():
+            if isinstance(sym, Quantity):
+                mapping[sym] = Quantity(sym.what, prefix + sym.endpoint)
+        return mapping
+
+    def _all_symbols(self) -> set:
+        syms = set()
+        for e in self.elements.values():
+            syms |= e.free_symbols()
+        for st in self.internal_states.values():
+            syms |= st.rate.free_symbols | st.x0.free_symbols
+        for ob in self.operators.values():
+            syms |= ob.input.free_symbols
+        return syms
+
+    # ---- roles and rewriting ----------------------------------------------------------------------
+    def tag(self, element: str, role: str) -> None:
+        """Give an element a role (e.g. "stiffness", "damping", "polarization") that model
+        extensions (diagnosis) use to find where an effect belongs."""
+        if element not in self.elements:
+            raise ModelError(f"{self.name}: " + did_you_mean(element, self.elements, "element"))
+        self.elements[element].role = role
+
+    def with_role(self, role: str) -> list[str]:
+        """Names of the elements tagged ``role``, in insertion order."""
+        return [n for n, e in self.elements.items() if getattr(e, "role", None) == role]
+
+    def replace(self, element: Element) -> None:
+        """Swap an element for another of the same name and ports (e.g. a new law)."""
+        old = self.elements.get(element.name)
+        if old is None:
+            raise ModelError(f"{self.name}: " + did_you_mean(element.name, self.elements, "element"))
+        if old.ports != element.ports:
+            raise ModelError(f"{self.name}: replacement for '{element.name}' must have ports {old.ports}")
+        element.role = getattr(old, "role", None)
+        self.elements[element.name] = element
+
+    def substitute(self, mapping: dict) -> None:
+        """Replace symbols everywhere (element laws, internal states, operator inputs, outputs)."""
+        self.elements = {n: e.xreplace(mapping) for n, e in self.elements.items()}
+        for st in self.internal_states.values():
+            st.rate, st.x0 = st.rate.xreplace(mapping), st.x0.xreplace(mapping)
+        for ob in self.operators.values():
+            ob.input = ob.input.xreplace(mapping)
+        for o in getattr(self, "outputs", {}).values():
+            o.expr = o.expr.xreplace(mapping)
+
+    def copy(self):
+        """An independent copy (rewrites of the copy leave this model untouched)."""
+        return copy.deepcopy(self)
+
+    # ---- views ---------------------------------------------------------------------------------
+    def bonds_of(self, name: str) -> list[Bond]:
+        return [b for b in self.bonds if b.tail[0] == name or b.head[0] == name]
+
+    def check(self) -> None:
+        """Structural checks; raises ModelError naming the offending elements."""
+        if not self.bonds:
+            raise ModelError(f"{self.name}: the graph has no bonds")
+        count: dict[str, int] = {n: 0 for n in self.elements}
+        ports_used: set = set()
+        for b in self.bonds:
+            for end in (b.tail, b.head):
+                count[end[0]] += 1
+                ports_used.add(end)
+        for name, elem in self.elements.items():
+            if isinstance(elem, Junction):
+                if count[name] < 2:
+                    raise ModelError(f"{self.name}: junction '{name}' has {count[name]} bond(s); "
+                                     f"a junction needs at least two (remove it or bond more elements to it)")
+            else:
+                missing = [p for p in elem.ports if (name, p) not in ports_used]
+                if missing:
+                    which = f"port(s) {', '.join(missing)} of " if len(elem.ports) > 1 else ""
+                    raise ModelError(f"{self.name}: {which}{elem.kind} '{name}' is not connected; "
+                                     f"bond it to a junction or remove it")
+
+
+class Model(Component):
+    """A complete bond-graph model: a component with inputs and named outputs."""
+
+    def __init__(self, name: str, doc: str = ""):
+        super().__init__(name, doc)
+        self.inputs: dict[str, Input] = {}
+        self.outputs: dict[str, Output] = {}
+        self.declared: list[Parameter] = []
+        self.values: dict[str, Any] = {}
+
+    def input(self, name: str, unit: str = "", doc: str = "") -> sp.Symbol:
+        """Declare an input signal (e.g. the drive voltage ``V``); returns its symbol."""
+        if name in self.inputs:
+            return self.inputs[name].symbol
+        sym = sp.Symbol(name, real=True)
+        self.inputs[name] = Input(name, sym, unit, doc)
+        return sym
+
+    def input_rate(self, name: str) -> sp.Symbol:
+        """Symbol of the time derivative of input ``name`` (for rate-dependent laws and states)."""
+        if name not in self.inputs:
+            raise ModelError(f"{self.name}: " + did_you_mean(name, self.inputs, "input"))
+        return input_rate_symbol(self.inputs[name].symbol)
+
+    def output(self, name: str, expr, unit: str = "", doc: str = "") -> None:
+        """Declare a named output; ``expr`` may use port quantities, states, inputs, parameters.
+        A string ``"elem.e"``, ``"elem.f"``, ``"elem.q"``, ``"elem.p"`` names a port quantity."""
+        if name in self.outputs:
+            raise ModelError(f"{self.name}: output '{name}' declared twice")
+        if isinstance(expr, str):
+            endpoint, _, what = expr.rpartition(".")
+            if what not in ("e", "f", "q", "p") or not endpoint:
+                raise ModelError(f"{self.name}: output '{name}': write 'element.e', '.f', '.q' or '.p', got {expr!r}")
+            expr = self._quantity(what, endpoint)
+        self.outputs[name] = Output(name, sympify(expr, f"output '{name}'"), unit, doc)
+
+    def parameter_table(self) -> dict[sp.Symbol, float]:
+        """Numeric value of every symbolic parameter (declared by the file or by components)."""
+        table = {d.symbol: float(self.values[d.name]) for d in self.declared if d.symbolic}
+        for name, (decl, val) in self.parameters.items():
+            table[decl.symbol] = float(self.values.get(name, val))
+        return table
+
+    def all_parameters(self) -> dict[str, Parameter]:
+        out = {d.name: d for d in self.declared}
+        out.update({n: d for n, (d, _) in self.parameters.items()})
+        return out
+
+    def storage_elements(self):
+        return [e for e in self.elements.values() if e.is_storage]

@@ -1,0 +1,105 @@
+"""Elements with memory: the contract between a rate-independent operator and the integrator.
+
+A memory operator maps a scalar input history v(t) to an output y(t) = H[v](t) whose value
+depends on the input's past only through a finite memory vector (play/stop operators, Maxwell
+slip branches, ...).  It is defined by two static functions, compiled by numba in nopython mode:
+
+``output(v, mem, prm) -> float``
+    The output for input ``v`` with the memory frozen at the last accepted integrator step.
+    Must be continuous in ``v`` (so adaptive solvers stay well behaved) and must not modify
+    ``mem``.
+``commit(v, mem, prm) -> None``
+    Advance the memory in place to input ``v``.  The integrator calls it exactly once per
+    *accepted* step, with the input at the end of that step.  Rejected or retried steps only
+    ever call ``output``, so they can never corrupt the memory.
+
+and one Python method, ``initial_memory(v0, prm) -> ndarray``, the memory at rest at input v0.
+
+``prm`` is a contiguous float64 array of the operator's parameters (thresholds, weights, ...);
+they are model parameters, so they can be set, printed and fitted like any other.
+
+The two functions are compiled when the operator is applied (:meth:`Component.operator`), and
+the compiled kernels are what the integrator, the generated model code and :meth:`run` call.
+They may call other functions: plain Python helpers are compiled with them, and functions
+already compiled with ``numba.njit`` are used as they are (or recompiled from their source,
+with their helpers, when numba refuses them); ``output = staticmethod(f)`` and
+``output = numba.njit(f)`` work too.  A function numba cannot compile is a
+:class:`~bondgraph.support.errors.ModelError` naming the operator, the function and the rule it broke.
+Subclass :class:`MemoryOperator` to add an operator; see ``library/hysteresis/`` for the
+play/stop (Prandtl–Ishlinskii) and Maxwell-slip banks.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .operator_kernels import OperatorKernels
+
+
+class MemoryOperator(ABC):
+    """Base class of rate-independent operators with memory.
+
+    Subclasses set ``kind`` (a short identifier used in printouts),
+    implement the static functions ``output`` and ``commit`` described in the module
+    docstring, ``initial_memory``, and provide ``parameter_names``/``parameter_values``
+    (equal-length sequences) and ``n_memory``.
+    """
+
+    kind: str = "operator"
+
+    #: names (without the element prefix) and default values of the operator parameters
+    parameter_names: tuple[str, ...] = ()
+
+    @abstractmethod
+    def parameter_values(self) -> np.ndarray:
+        """Default values of the parameters, in ``parameter_names`` order."""
+
+    @property
+    @abstractmethod
+    def n_memory(self) -> int:
+        """Length of the memory vector."""
+
+    @abstractmethod
+    def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
+        """Memory at rest with input ``v0``."""
+
+    @abstractmethod
+    def small_signal_gain(self, prm: np.ndarray) -> float:
+        """dy/dv for a small excursion from the initial state; used by linearisation."""
+
+    @staticmethod
+    @abstractmethod
+    def output(v, mem, prm):
+        """Output for input ``v`` with frozen memory (pure)."""
+
+    @staticmethod
+    @abstractmethod
+    def commit(v, mem, prm):
+        """Advance ``mem`` in place to input ``v`` (accepted steps only)."""
+
+    def inverse(self) -> "MemoryOperator | None":
+        """Optional: an operator G with G[H[v]] = v from rest (the exact inverse), for feedforward
+        compensation (:mod:`bondgraph.fit.compensate`). The default None means "no closed form": the
+        compensation then inverts ``output``/``commit`` numerically, sample by sample."""
+        return None
+
+    # --- used by the framework -------------------------------------------------------
+    def kernels(self) -> "OperatorKernels":
+        """The compiled ``output`` and ``commit`` (compiled once per class and process)."""
+        from .operator_kernels import compile_kernels  # numba is imported when first needed
+        return compile_kernels(type(self))
+
+    def run(self, v: np.ndarray, prm: np.ndarray | None = None) -> np.ndarray:
+        """Apply the operator to a sampled input sequence, from rest at ``v[0]``, with the
+        compiled kernels the integrator uses (output, then commit, at every sample)."""
+        prm = np.array(self.parameter_values() if prm is None else prm, dtype=np.float64)  # private,
+        v = np.array(v, dtype=np.float64)                                                 # writable copies
+        mem = np.array(self.initial_memory(float(v[0]), prm), dtype=np.float64)
+        k = self.kernels()
+        y = np.empty_like(v)
+        from .operator_kernels import run_kernels
+        run_kernels(k.output, k.commit, v, mem, prm, y)
+        return y

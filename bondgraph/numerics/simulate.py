@@ -1,0 +1,335 @@
+"""Simulation: derive once, compile once, run many times (new parameters, inputs, x0).
+
+Methods: ``dopri5`` (compiled Dormand–Prince 5(4), the default), and scipy's stiff solvers
+``radau``, ``bdf``, ``lsoda`` fed with the compiled right-hand side and Jacobian.  ``auto``
+picks ``radau`` when the Jacobian's eigenvalues at the start make the explicit method
+stability-bound for more than a few million steps.
+
+An integrator sees the inputs only where it evaluates them, and a step the error test allows
+can stride over a feature of a tabulated input that falls between two stages (a pulse reaching
+a model at rest, whose error estimate is zero): with tables, every method's step is capped at
+``simulate.table_steps`` sample intervals of the tables.
+
+Defaults (tolerances, the step cap, the stiffness threshold of ``auto``) are settings of
+:mod:`bondgraph.config` (section ``simulate``), read when a run starts.
+"""
+from __future__ import annotations
+
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+import scipy.integrate as si
+
+from ..support import config
+from .codegen import compile_equations, parameter_vector
+from ..equations.system import Equations
+from ..equations.derivation import derive
+from ..model.experiment import Experiment  # noqa: F401  (bondgraph.numerics.simulate.Experiment)
+from ..support.errors import BondGraphError, ParameterError, SignalError, did_you_mean
+from ..model.graph import Model
+from .integrators import STATUS, Flags, dopri5, eval_inputs
+from .model_functions import ModelFunctions
+from ..model.signals import Constant, Signal
+from .signal_bank import SignalBank
+
+METHODS = ("auto", "dopri5", "radau", "bdf", "lsoda")
+
+
+def _signal(name: str, value) -> Signal:
+    """An input's signal: a :class:`Signal` as given, a number as a constant."""
+    if isinstance(value, Signal):
+        return value
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+        return Constant(float(value))
+    raise SignalError(f"input {name!r}: give a number or a signal (Sine(...), PiecewiseLinear(t, v), ...), "
+                      f"not {type(value).__name__}")
+
+
+class SimulationError(BondGraphError, RuntimeError):
+    """The integrator failed (step-size underflow, non-finite state, too many steps)."""
+
+
+class SimulationTimeout(SimulationError):
+    """The run passed its ``deadline`` (see :meth:`Simulator.run`)."""
+
+
+def _check_deadline(deadline: float | None, t: float) -> None:
+    if deadline is not None and time.monotonic() > deadline:
+        raise SimulationTimeout(f"the run passed its deadline near t = {t:.6g} s")
+
+
+@dataclass
+class SimResult:
+    """Sampled simulation result: ``t`` (s), inputs, outputs and states by name.
+
+    The inputs are sampled when first asked for (fitting loops read only the outputs)."""
+
+    t: np.ndarray
+    outputs: dict[str, np.ndarray]
+    states: dict[str, np.ndarray]
+    stats: dict = field(default_factory=dict)
+    bank: SignalBank | None = field(default=None, repr=False)
+    _inputs: dict | None = field(default=None, repr=False)
+
+    @property
+    def inputs(self) -> dict[str, np.ndarray]:
+        if self._inputs is None:
+            U = self.bank.sample(self.t)
+            self._inputs = {n: U[:, i] for i, n in enumerate(self.bank.names)}
+        return self._inputs
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        for d in (self.outputs, self.inputs, self.states):
+            if name in d:
+                return d[name]
+        raise KeyError(name)
+
+    def columns(self, with_states: bool = False) -> dict[str, np.ndarray]:
+        cols = {**self.inputs, **self.outputs}
+        if with_states:
+            cols.update(self.states)
+        return cols
+
+
+class Simulator:
+    """A model derived and compiled once, ready to simulate with any parameters and inputs."""
+
+    def __init__(self, model: Model | Equations):
+        self.eqs = model if isinstance(model, Equations) else derive(model)
+        self.compiled: ModelFunctions = compile_equations(self.eqs)
+        self._jac: ModelFunctions | None = None
+        self.state_names = [str(s) for s in self.eqs.state_symbols]
+        self.output_names = list(self.eqs.outputs)
+        self.input_names = [str(u) for u in self.eqs.inputs]
+        self._theta = parameter_vector(self.eqs)
+        self._index = {p.name: i for i, p in enumerate(self.eqs.params)}
+        used = self._uses([*self.eqs.rates.values(), *self.eqs.outputs.values()])
+        #: laws use input rates, so slope jumps of the inputs are discontinuities to stop at
+        self.uses_input_rates = bool(used & set(self.eqs.input_rates))
+        signals = set(self.eqs.inputs) | set(self.eqs.input_rates)
+        outs = self._uses(self.eqs.outputs.values()) & signals
+        opins = self._uses(st.expr for st in self.eqs.program if st.op is not None) & signals
+        self._flags = Flags(self.uses_input_rates, bool(outs), bool(opins))
+
+    def _uses(self, exprs) -> set:
+        """Symbols the given expressions depend on through the program."""
+        return self.eqs.needed(list(exprs))[1]
+
+    # ---- setup -------------------------------------------------------------------------------
+    def theta(self, params: Mapping | None = None) -> np.ndarray:
+        """θ from the model's values with ``params`` (name → value) overriding some."""
+        th = self._theta.copy()
+        for k, v in (params or {}).items():
+            if str(k) not in self._index:
+                raise ParameterError(did_you_mean(str(k), self._index, "parameter"))
+            th[self._index[str(k)]] = float(v)
+        return th
+
+    def initial_state(self, th: np.ndarray) -> np.ndarray:
+        values = dict(zip(self.eqs.params, th))
+        return np.array([float(s.x0.xreplace(values)) for s in self.eqs.states], float)
+
+    def signal_bank(self, inputs: Mapping[str, Signal] | None) -> SignalBank:
+        inputs = dict(inputs or {})
+        unknown = set(inputs) - set(self.input_names)
+        if unknown:
+            raise SignalError(f"model has no input {sorted(unknown)[0]!r}; inputs: {', '.join(self.input_names) or 'none'}")
+        return SignalBank({n: _signal(n, inputs.get(n, 0.0)) for n in self.input_names},
+                          kinks=self.uses_input_rates or bool(self.eqs.operators))
+
+    def initial_memory(self, t0, x0, th, bank: SignalBank) -> np.ndarray:
+        """The operators' memory at rest at the initial state and inputs."""
+        lay = self.compiled.layout
+        mem = np.zeros(max(lay.n_mem, 1))
+        if not self.eqs.operators:
+            return mem
+        u, du = np.zeros(max(len(self.input_names), 1)), np.zeros(max(len(self.input_names), 1))
+        eval_inputs(t0, *bank.args(), u, du)
+        v = np.zeros(len(self.eqs.operators))
+        for _ in range(2):  # second pass lets cascaded operators see settled upstream memory
+            for k, ob in enumerate(self.eqs.operators):
+                (a, b), (c, d) = lay.mem_slices[k], lay.prm_slices[k]
+                mem[a:b] = ob.operator.initial_memory(float(v[k]), th[c:d])
+            self.compiled.opin(t0, x0, u, du, th, mem, self.compiled.aux, v)
+        return mem
+
+    # ---- running -----------------------------------------------------------------------------
+    def run(self, t, inputs: Mapping[str, Signal] | None = None, params: Mapping | None = None,
+            x0=None, method: str = "auto", rtol: float | None = None, atol=None, max_step: float = np.inf,
+            max_steps: int | None = None, progress=None, deadline: float | None = None) -> SimResult:
+        """Simulate and sample at times ``t`` (increasing array, or a scalar end time → 1001 samples).
+
+        ``inputs`` maps input names to signals or numbers (constants; an input not given is 0);
+        ``params`` maps parameter names to values; ``progress(fraction)`` is called between
+        chunks of long runs.  ``rtol``, ``atol`` and ``max_steps`` default to the settings
+        ``simulate.rtol``, ``simulate.atol_floor`` and ``simulate.max_steps``.  ``deadline``
+        (a ``time.monotonic()`` value): past it the stiff solvers (radau, bdf, lsoda) stop with
+        :class:`SimulationTimeout` at their next step; the compiled dopri5 checks it between
+        chunks only (one chunk unless ``progress`` is given)."""
+        rtol = config.get("simulate.rtol") if rtol is None else rtol
+        atol = config.get("simulate.atol_floor") if atol is None else atol
+        max_steps = config.get("simulate.max_steps") if max_steps is None else max_steps
+        t = np.array(t, float)  # a private, writable, contiguous copy
+        if t.ndim == 0:
+            t = np.linspace(0.0, float(t), 1001)
+        if t.size < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
+            raise SignalError("output times must be finite and strictly increasing (at least two)")
+        if method not in METHODS:
+            raise SignalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+        th = self.theta(params)
+        x = self.initial_state(th) if x0 is None else np.asarray(x0, float).copy()
+        bank = self.signal_bank(inputs)
+        mem = self.initial_memory(t[0], x, th, bank)
+        aux = self.compiled.aux.copy()  # the tape's registers are written
+        n = x.size
+        atol_v = np.broadcast_to(np.asarray(atol, float), (n,)).copy()
+        if method == "auto":
+            method = self.choose_method(t, x, th, mem, bank)
+        max_step = min(max_step, config.get("simulate.table_steps") * bank.table_spacing())
+        X = np.empty((t.size, n))
+        Y = np.empty((t.size, len(self.output_names)))
+        stats: Counter = Counter()
+        n_chunks = 1 if progress is None else int(min(50, max(1, t.size // 20000)))
+        bounds = np.linspace(0, t.size - 1, n_chunks + 1).round().astype(int)
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            tc = t[a:b + 1]
+            breaks = bank.breaks(tc[0], tc[-1])
+            Xc, Yc = X[a:b + 1], Y[a:b + 1]
+            if method == "dopri5":
+                st = dopri5(*self.compiled.integrator_functions, x, th, mem, aux, len(self.eqs.operators),
+                            *bank.args(), np.ascontiguousarray(tc), breaks, float(rtol), atol_v, 0.0,
+                            float(max_step), int(max_steps), Xc, Yc, self._flags)
+                if st.status != 0:
+                    raise SimulationError(f"integration failed ({STATUS[st.status]}) near t = "
+                                          f"{tc[max(st.written - 1, 0)]:.6g} s; check parameters or try --method radau")
+                stats.update(steps=st.steps, rejected=st.rejected, rhs_calls=st.rhs_calls,
+                             reversal_rejections=st.reversal_rejections)
+            else:
+                stats += self._run_scipy(method, tc, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, Xc, Yc,
+                                         deadline)
+            x = np.ascontiguousarray(Xc[-1])
+            if b < t.size - 1:
+                _check_deadline(deadline, float(t[b]))
+            if progress is not None:
+                progress(b / (t.size - 1))
+        return SimResult(t, {n: Y[:, i] for i, n in enumerate(self.output_names)},
+                         {n: X[:, i] for i, n in enumerate(self.state_names)},
+                         {"method": method, **{k: int(stats[k]) for k in
+                                               ("steps", "rejected", "rhs_calls", "reversal_rejections")}}, bank)
+
+    def jacobian_at(self, t0, x, th, mem, bank) -> np.ndarray:
+        """∂(dx/dt)/∂x from the compiled symbolic Jacobian."""
+        if self._jac is None:
+            self._jac = compile_equations(self.eqs, with_jacobian=True)
+        n = x.size
+        u, du = np.zeros(max(len(self.input_names), 1)), np.zeros(max(len(self.input_names), 1))
+        eval_inputs(t0, *bank.args(), u, du)
+        J = np.zeros(n * n)
+        self._jac.jac(t0, x, u, du, th, mem, self._jac.aux, J)
+        return J.reshape(n, n)
+
+    def choose_method(self, t, x, th, mem, bank) -> str:
+        """dopri5 unless the start-point Jacobian (finite differences) makes it stability-bound."""
+        n = x.size
+        if n == 0:
+            return "dopri5"
+        nu = max(len(self.input_names), 1)
+        u, du = np.zeros(nu), np.zeros(nu)
+        eval_inputs(t[0], *bank.args(), u, du)
+        f0, f1 = np.zeros(n), np.zeros(n)
+        aux = self.compiled.aux.copy()
+        self.compiled.rhs(t[0], x, u, du, th, mem, aux, f0)
+        J = np.zeros((n, n))
+        for j in range(n):
+            xp = x.copy()
+            dxj = 1e-7 * max(abs(x[j]), 1e-9)
+            xp[j] += dxj
+            self.compiled.rhs(t[0], xp, u, du, th, mem, aux, f1)
+            J[:, j] = (f1 - f0) / dxj
+        lam = np.max(np.abs(np.linalg.eigvals(J))) if np.all(np.isfinite(J)) else 0.0
+        steps = (t[-1] - t[0]) * lam / 3.3
+        return "radau" if steps > config.get("simulate.explicit_step_limit") else "dopri5"
+
+    def _run_scipy(self, method, t, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, X, Y,
+                   deadline: float | None = None) -> Counter:
+        """scipy's stiff solvers; returns the step and right-hand-side counts."""
+        c = self.compiled
+        stats: Counter = Counter()
+        nu = max(len(self.input_names), 1)
+        u, du = np.zeros(nu), np.zeros(nu)
+        dx = np.zeros(x.size)
+        y = np.zeros(max(len(self.output_names), 1))
+        nv = len(self.eqs.operators)
+        v = np.zeros(max(nv, 1))
+        args = bank.args()
+
+        def f(tt, xx):
+            eval_inputs(tt, *args, u, du)
+            c.rhs(tt, np.ascontiguousarray(xx), u, du, th, mem, aux, dx)
+            return dx.copy()
+
+        def jac(tt, xx):
+            return self.jacobian_at(tt, np.ascontiguousarray(xx), th, mem, bank)
+
+        solver_cls = {"radau": si.Radau, "bdf": si.BDF, "lsoda": si.LSODA}[method]
+        atol_v = np.maximum(atol_v, self._scale_atol(solver_cls, f, t, x, rtol, breaks, deadline))
+        edges = [t[0], *breaks, t[-1]]
+        k = 0
+
+        def emit(tt, xx):
+            eval_inputs(tt, *args, u, du)
+            c.output(tt, xx, u, du, th, mem, aux, y)
+            return y[:len(self.output_names)]
+
+        X[0], Y[0] = x, emit(t[0], x)
+        k = 1
+        for a, b in zip(edges[:-1], edges[1:]):
+            kw = {"jac": jac} if method != "lsoda" else {}
+            s = solver_cls(f, a, x, b, rtol=rtol, atol=atol_v, max_step=max_step, **kw)
+            while s.status == "running":
+                _check_deadline(deadline, s.t)
+                t_old = s.t
+                msg = s.step()
+                if s.status == "failed":
+                    raise SimulationError(f"integration failed near t = {s.t:.6g} s ({msg})")
+                dense = s.dense_output()
+                while k < t.size and t[k] <= s.t:
+                    X[k] = dense(t[k])
+                    Y[k] = emit(t[k], np.ascontiguousarray(X[k]))
+                    k += 1
+                if nv:  # commit along the step so reversals inside it are followed
+                    for th_ in np.linspace(0.0, 1.0, 9)[1:]:
+                        tt = t_old + th_ * (s.t - t_old)
+                        xx = np.ascontiguousarray(dense(tt))
+                        eval_inputs(tt, *args, u, du)
+                        c.commit(tt, xx, u, du, th, mem, aux, v)
+                stats["steps"] += 1
+            x = np.ascontiguousarray(s.y)
+            stats["rhs_calls"] += s.nfev
+        return stats
+
+    def _scale_atol(self, solver_cls, f, t, x, rtol, breaks, deadline=None):
+        """atol_i = rtol·max|x_i| from a loose first pass (scipy's solvers weigh errors by
+        atol + rtol·|x|, which chases rounding noise when a state crosses zero)."""
+        peak = np.abs(x).copy()
+        floor = config.get("simulate.atol_floor")
+        edges = [t[0], *breaks, t[-1]]
+        xx = x.copy()
+        for a, b in zip(edges[:-1], edges[1:]):
+            s = solver_cls(f, a, xx, b, rtol=1e-3, atol=floor)
+            while s.status == "running":
+                _check_deadline(deadline, s.t)
+                s.step()
+                if s.status == "failed":
+                    break
+                peak = np.maximum(peak, np.abs(s.y))
+            xx = s.y
+        return np.maximum(rtol * peak, floor)
+
+
+def simulate(model: Model | Equations, t, inputs: Mapping[str, Signal] | None = None, **kw) -> SimResult:
+    """One-shot simulation: derive, compile (cached) and run; see :meth:`Simulator.run`."""
+    return Simulator(model).run(t, inputs, **kw)

@@ -1,0 +1,66 @@
+"""Figures: the shared pieces of every plot (matplotlib, optional extra ``plot``).
+
+Every figure is written atomically, in the format of its file name (png, pdf or svg);
+without matplotlib a one-line error names the extra to install.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..support.atomic import atomic_write
+from ..support.errors import UsageError
+
+
+def pyplot():
+    """matplotlib's pyplot on the Agg backend, or a one-line :class:`UsageError` without it."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise UsageError("plots need matplotlib: pip install 'bondgraph[plot]'") from None
+    return plt
+
+
+def save(fig, path: str) -> None:
+    """Write ``fig`` atomically; the format follows the file name's suffix (png, pdf, svg)."""
+    plt = pyplot()
+    fmt = os.path.splitext(os.fspath(path))[1].lstrip(".").lower() or "png"
+    try:
+        with atomic_write(path, "wb") as fh:
+            fig.savefig(fh, format=fmt, dpi=110, bbox_inches="tight")
+    finally:
+        plt.close(fig)
+
+
+def axis_label(name: str, unit: str) -> str:
+    """``x (m)``, or just ``x`` for a quantity without unit (``(m)`` without a name)."""
+    return f"{name} ({unit})".strip() if unit else name
+
+
+def varies(y) -> bool:
+    """Whether a sampled signal changes at all (beyond rounding)."""
+    y = np.asarray(y, float)
+    if y.size < 2:
+        return False
+    peak = float(np.max(np.abs(y)))
+    return peak > 0 and float(np.ptp(y)) > 1e-12 * peak
+
+
+def envelope(t, y, limit: int = 20000):
+    """At most about ``limit`` points that keep every bucket's minimum and maximum (a
+    million-sample signal draws as fast as a short one and loses no peak)."""
+    n = t.size
+    if n <= limit:
+        return t, y
+    k = int(np.ceil(n / (limit // 2)))
+    m = n // k * k
+    tb, yb = t[:m].reshape(-1, k), y[:m].reshape(-1, k)
+    lo, hi = yb.argmin(axis=1), yb.argmax(axis=1)
+    rows = np.arange(tb.shape[0])
+    first, second = np.minimum(lo, hi), np.maximum(lo, hi)
+    tt = np.column_stack([tb[rows, first], tb[rows, second]]).ravel()
+    yy = np.column_stack([yb[rows, first], yb[rows, second]]).ravel()
+    return np.concatenate([tt, t[m:]]), np.concatenate([yy, y[m:]])

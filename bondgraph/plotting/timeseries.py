@@ -1,0 +1,90 @@
+"""Signals against time, fits and Bode diagrams.
+
+Axes carry the quantity and its unit (taken from the model's declared inputs and outputs);
+signals that never change are left out (and listed in the title); curves that share a unit
+share a panel, with a legend.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import figures
+
+
+def plot_signals(t, signals: dict, units: dict, path: str, title: str = "") -> None:
+    """Signals against time, one panel per unit: signals that share a unit share the panel
+    (with a legend), the y axis says the unit; signals that never change are left out and
+    listed in the title.  ``signals``: name → samples; ``units``: name → unit text."""
+    plt = figures.pyplot()
+    panels: dict = {}
+    constant = []
+    for name, y in signals.items():
+        if not figures.varies(y):
+            constant.append(f"{name} = {float(np.asarray(y)[0]):.4g}" + (f" {units.get(name)}" if units.get(name) else ""))
+            continue
+        unit = units.get(name, "")
+        panels.setdefault(unit if unit else ("", name), []).append(name)  # unitless: a panel each
+    n = max(len(panels), 1)
+    fig, axes = plt.subplots(n, 1, figsize=(8, 1.9 * n + 0.8), sharex=True, squeeze=False)
+    for ax, names in zip(axes[:, 0], panels.values()):
+        unit = units.get(names[0], "")
+        for name in names:
+            ax.plot(*figures.envelope(np.asarray(t), np.asarray(signals[name], float)), lw=1.0, label=name)
+        joined = ", ".join(names)
+        ax.set_ylabel(figures.axis_label(joined if len(joined) <= 24 else "", unit).strip() if unit else joined)
+        if len(names) > 1:
+            ax.legend(fontsize=8, loc="best")
+        ax.grid(alpha=0.3)
+    if not panels:
+        axes[0, 0].text(0.5, 0.5, "every signal is constant", ha="center", va="center", transform=axes[0, 0].transAxes)
+    axes[-1, 0].set_xlabel("t (s)")
+    head = title + (": " if title and constant else "") + ("constant " + ", ".join(constant) if constant else "")
+    if head:
+        axes[0, 0].set_title(head, fontsize=9)
+    figures.save(fig, path)
+
+
+def plot_simulation(res, path: str, title: str = "", units: dict | None = None, columns: dict | None = None) -> None:
+    """Inputs and outputs of a :class:`~bondgraph.numerics.simulate.SimResult` against time (see
+    :func:`plot_signals`); ``units`` name → unit (e.g. from the model's inputs and outputs),
+    ``columns`` replaces the result's signals (e.g. outputs with a fit's offset added)."""
+    plot_signals(res.t, columns if columns is not None else {**res.inputs, **res.outputs}, units or {}, path, title)
+
+
+def plot_fit(t, measured, fitted, path: str, name: str = "y", unit: str = "", title: str = "") -> None:
+    """Measured and fitted output (offset included) on one panel, the residual below."""
+    plt = figures.pyplot()
+    t = np.asarray(t, float)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
+    a1.plot(*figures.envelope(t, np.asarray(measured, float)), lw=0.8, label="measured")
+    a1.plot(*figures.envelope(t, np.asarray(fitted, float)), lw=0.8, label="fitted model")
+    a1.set_ylabel(figures.axis_label(name, unit))
+    a1.legend(fontsize=8, loc="best")
+    a2.plot(*figures.envelope(t, np.asarray(measured, float) - np.asarray(fitted, float)), lw=0.6, color="tab:red")
+    a2.set_ylabel(figures.axis_label("residual", unit))
+    a2.set_xlabel("t (s)")
+    for a in (a1, a2):
+        a.grid(alpha=0.3)
+    if title:
+        a1.set_title(title, fontsize=9)
+    figures.save(fig, path)
+
+
+def plot_bode(w, H, path: str, title: str = "", input: tuple[str, str] = ("u", ""),
+              output: tuple[str, str] = ("y", "")) -> None:
+    """Magnitude and phase of the frequency response H(jω) of ``output`` to ``input``
+    (each a (name, unit) pair; the magnitude's unit is theirs divided)."""
+    plt = figures.pyplot()
+    (u, uu), (y, yu) = input, output
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
+    a1.loglog(w, np.abs(H))
+    unit = f"{yu or '1'}/{uu}" if uu else yu
+    a1.set_ylabel(figures.axis_label(f"|{y}/{u}|", unit))
+    a2.semilogx(w, np.degrees(np.unwrap(np.angle(H))))
+    a2.set_ylabel("phase (deg)")
+    a2.set_xlabel("ω (rad/s)")
+    for a in (a1, a2):
+        a.grid(alpha=0.3, which="both")
+    if title:
+        a1.set_title(title)
+    figures.save(fig, path)
