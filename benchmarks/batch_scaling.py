@@ -23,6 +23,7 @@ loaded machine does not distort: (CPU of the workers + CPU of this process, whic
 scheduler and the client) over the draws, minus the serial loop's CPU per simulation; for
 batched tasks (the default) and for one task per job.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -76,14 +77,23 @@ def serial(draws: int) -> dict:
         x = sim.run(t, lm.experiment.inputs, params=p)["x"]
         peaks.append(float(np.max(np.abs(x))))
         float(np.sqrt(np.mean(np.square(x))))
-    return {"build_s": t1 - t0, "loop_s": time.perf_counter() - t1, "loop_cpu_s": time.process_time() - c1,
-            "peaks": np.array(peaks)}
+    return {
+        "build_s": t1 - t0,
+        "loop_s": time.perf_counter() - t1,
+        "loop_cpu_s": time.process_time() - c1,
+        "peaks": np.array(peaks),
+    }
 
 
 def cold_compile() -> float:
     with tempfile.TemporaryDirectory() as cache:
-        out = subprocess.run([sys.executable, "-c", COMPILE.format(model=MODEL)], capture_output=True, text=True,
-                             env={**os.environ, "BONDGRAPH_CACHE": cache}, check=True)
+        out = subprocess.run(
+            [sys.executable, "-c", COMPILE.format(model=MODEL)],
+            capture_output=True,
+            text=True,
+            env={**os.environ, "BONDGRAPH_CACHE": cache},
+            check=True,
+        )
     return float(out.stdout.strip().splitlines()[-1])
 
 
@@ -94,8 +104,12 @@ def on_cluster(n: int, draws: int) -> dict:
     from bondgraph.batch.jobs import memo_info
 
     t0 = time.perf_counter()
-    with distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                                  silence_logs=logging.CRITICAL) as cluster, distributed.Client(cluster) as client:
+    with (
+        distributed.LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.CRITICAL
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         out = {"workers": n, "startup_s": time.perf_counter() - t0}
         for label, kw in (("cold", {}), ("warm", {}), ("per_task_1", {"per_task": 1})):
             before, cpu_before, here = client.run(memo_info), client.run(time.process_time), time.process_time()
@@ -110,8 +124,9 @@ def on_cluster(n: int, draws: int) -> dict:
         cpu_before, here, t1 = client.run(time.process_time), time.process_time(), time.perf_counter()
         time.sleep(IDLE_S)  # what the idle cluster (event loops, heartbeats) costs per second
         cpu_after = client.run(time.process_time)
-        out["idle_cpu_per_s"] = (sum(cpu_after[w] - cpu_before[w] for w in cpu_after)
-                                 + time.process_time() - here) / (time.perf_counter() - t1)
+        out["idle_cpu_per_s"] = (sum(cpu_after[w] - cpu_before[w] for w in cpu_after) + time.process_time() - here) / (
+            time.perf_counter() - t1
+        )
     return out
 
 
@@ -131,30 +146,50 @@ def main(argv=None) -> int:
         assert np.array_equal(r.pop("peaks"), peaks), "Dask and serial results differ"
     single, single_cpu = ref["loop_s"] / args.draws, ref["loop_cpu_s"] / args.draws
     first = runs[0]
-    result = {"draws": args.draws, "single_run_s": single, "single_run_cpu_s": single_cpu, **ref,
-              "cold_compile_s": compile_s, "runs": runs, "load_before": load0, "load_after": load1,
-              "cpus": os.cpu_count(), "python": platform.python_version(), "machine": platform.machine()}
+    result = {
+        "draws": args.draws,
+        "single_run_s": single,
+        "single_run_cpu_s": single_cpu,
+        **ref,
+        "cold_compile_s": compile_s,
+        "runs": runs,
+        "load_before": load0,
+        "load_after": load1,
+        "cpus": os.cpu_count(),
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+    }
     with open(args.out, "w") as fh:
         json.dump(result, fh, indent=1)
-    print(f"APA-120ML sweep, {args.draws} simulations; load average {load0[0]:.1f} before, {load1[0]:.1f} after "
-          f"({os.cpu_count()} CPUs)\n")
-    print(f"single run {1e3 * single:.1f} ms wall, {1e3 * single_cpu:.1f} ms CPU; serial loop {ref['loop_s']:.2f} s "
-          f"(+ {ref['build_s']:.2f} s model build); cold derive + compile {compile_s:.1f} s "
-          f"(x {args.draws} = {compile_s * args.draws / 60:.0f} min without reuse)\n")
-    print("| workers | cluster start (s) | cold sweep (s) | warm sweep (s) | speed-up | builds per worker | "
-          "overhead per job, CPU (ms) | of which idle loops (ms) | one task per job (s) | "
-          "overhead per job, one task each, CPU (ms) |")
+    print(
+        f"APA-120ML sweep, {args.draws} simulations; load average {load0[0]:.1f} before, {load1[0]:.1f} after "
+        f"({os.cpu_count()} CPUs)\n"
+    )
+    print(
+        f"single run {1e3 * single:.1f} ms wall, {1e3 * single_cpu:.1f} ms CPU; serial loop {ref['loop_s']:.2f} s "
+        f"(+ {ref['build_s']:.2f} s model build); cold derive + compile {compile_s:.1f} s "
+        f"(x {args.draws} = {compile_s * args.draws / 60:.0f} min without reuse)\n"
+    )
+    print(
+        "| workers | cluster start (s) | cold sweep (s) | warm sweep (s) | speed-up | builds per worker | "
+        "overhead per job, CPU (ms) | of which idle loops (ms) | one task per job (s) | "
+        "overhead per job, one task each, CPU (ms) |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in runs:
         over = (r["warm_cpu_s"] / args.draws - single_cpu) * 1e3
         idle = r["idle_cpu_per_s"] * r["warm_s"] / args.draws * 1e3
         over1 = (r["per_task_1_cpu_s"] / args.draws - single_cpu) * 1e3
-        print(f"| {r['workers']} | {r['startup_s']:.1f} | {r['cold_s']:.2f} | {r['warm_s']:.2f} | "
-              f"{first['warm_s'] / r['warm_s']:.2f} | {r['cold_builds_per_worker']} | {over:.2f} | {idle:.2f} | "
-              f"{r['per_task_1_s']:.2f} | {over1:.2f} |")
-    print(f"\nspeed-up: warm sweep with {first['workers']} worker(s) / with N; overhead per job: CPU time of the "
-          f"workers and of the client/scheduler process per job, minus the serial loop's CPU per simulation; "
-          f"idle loops: the idle cluster's CPU per second times the sweep's wall time, per job")
+        print(
+            f"| {r['workers']} | {r['startup_s']:.1f} | {r['cold_s']:.2f} | {r['warm_s']:.2f} | "
+            f"{first['warm_s'] / r['warm_s']:.2f} | {r['cold_builds_per_worker']} | {over:.2f} | {idle:.2f} | "
+            f"{r['per_task_1_s']:.2f} | {over1:.2f} |"
+        )
+    print(
+        f"\nspeed-up: warm sweep with {first['workers']} worker(s) / with N; overhead per job: CPU time of the "
+        f"workers and of the client/scheduler process per job, minus the serial loop's CPU per simulation; "
+        f"idle loops: the idle cluster's CPU per second times the sweep's wall time, per job"
+    )
     return 0
 
 

@@ -8,6 +8,7 @@ Every coefficient is its own symbolic parameter, as in the peers' runs.
 Bond graph: Se(F) -> 1(v1); I(m_i) on 1(v_i); between masses a 0-junction (the spring-damper
 force) with a 1-junction for the relative velocity v_i - v_{i+1} carrying C(1/k_i) and R(c_i).
 """
+
 from __future__ import annotations
 
 import os
@@ -20,9 +21,9 @@ def chain_values(n: int) -> dict[str, float]:
     """Numeric values: slightly non-uniform so the modes are distinct (SI units)."""
     vals = {}
     for i in range(1, n + 1):
-        vals[f"m{i}"] = 0.5 + 0.05 * i          # kg
+        vals[f"m{i}"] = 0.5 + 0.05 * i  # kg
         vals[f"k{i}"] = 1.0e4 * (1 + 0.02 * i)  # N/m
-        vals[f"c{i}"] = 2.0 + 0.1 * i           # N s/m
+        vals[f"c{i}"] = 2.0 + 0.1 * i  # N s/m
     return vals
 
 

@@ -13,6 +13,7 @@ columns first named cause), the score (right = ``none`` on a null, else the true
 first; ``electrical-*`` counts as ``electrical``), false alarms on nulls and wall times.
 A seed whose effect stays invisible (blindgen.Refused) is listed and left out of the score.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -64,8 +65,9 @@ def diagnose(model: str, data: str, timeout: float) -> dict:
     """Run the diagnosis in its own process group; the parsed JSON or an error."""
     cmd = [sys.executable, "-m", "bondgraph", "diagnose", model, data, "--json"]
     t0 = time.time()
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = subprocess.Popen(
+        cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
     try:
         out, err = proc.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -100,10 +102,15 @@ def run_seed(seed: int, timeout: float, tmp: str) -> dict:
         return row
     out = res["json"]
     names, gains = _names(out.get("causes"))
-    if not any(g is not None for g in gains):   # a chain of names: each step's gain from its step
-        gains = [s.get("gain") for s in out.get("steps") or []][:len(names)]
-    row.update(named=normalise(out.get("cause")), causes=[normalise(n) for n in names],
-               gains=gains, gain=out.get("gain"), diagnosis=out)
+    if not any(g is not None for g in gains):  # a chain of names: each step's gain from its step
+        gains = [s.get("gain") for s in out.get("steps") or []][: len(names)]
+    row.update(
+        named=normalise(out.get("cause")),
+        causes=[normalise(n) for n in names],
+        gains=gains,
+        gain=out.get("gain"),
+        diagnosis=out,
+    )
     return row
 
 
@@ -116,33 +123,41 @@ def outcome(row) -> str:
 
 def summary(rows: list[dict]) -> str:
     done = [r for r in rows if "refused" not in r]
-    lines = ["seed family  truth              mechanism           vis/noise  named              "
-             "chain                                  gain      gen s   diag s  ok"]
+    lines = [
+        "seed family  truth              mechanism           vis/noise  named              "
+        "chain                                  gain      gen s   diag s  ok"
+    ]
     for r in rows:
         if "refused" in r:
             lines.append(f"{r['seed']:4d} {r['family']:7s} {r['cause']:18s} {str(r['mechanism']):19s} REFUSED")
             continue
         vis = f"{r['truth']['visible_ratio']:9.3g}" if r["cause"] != "none" else f"{'-':>9s}"
-        chain = " > ".join(f"{c} x{g:.3g}" if isinstance(g, (int, float)) else c
-                           for c, g in zip(r.get("causes", []), r.get("gains", []) + [None] * 9))[:38]
+        chain = " > ".join(
+            f"{c} x{g:.3g}" if isinstance(g, (int, float)) else c
+            for c, g in zip(r.get("causes", []), r.get("gains", []) + [None] * 9)
+        )[:38]
         gain = r.get("gain")
         gain = f"{gain:.3g}" if isinstance(gain, (int, float)) else str(gain)
         ok = "yes" if outcome(r) == r["cause"] else "no"
-        lines.append(f"{r['seed']:4d} {r['family']:7s} {r['cause']:18s} {str(r['mechanism']):19s} "
-                     f"{vis}  {outcome(r):18s} {chain:38s} {gain:9s} {r['generate_s']:6.1f} "
-                     f"{r.get('diagnose_s', float('nan')):8.1f}  {ok}")
+        lines.append(
+            f"{r['seed']:4d} {r['family']:7s} {r['cause']:18s} {str(r['mechanism']):19s} "
+            f"{vis}  {outcome(r):18s} {chain:38s} {gain:9s} {r['generate_s']:6.1f} "
+            f"{r.get('diagnose_s', float('nan')):8.1f}  {ok}"
+        )
     truths = sorted({r["cause"] for r in done}, key=lambda c: (c != "none", c))
     cols = sorted({outcome(r) for r in done} | set(truths), key=lambda c: (c != "none", c))
-    lines += ["", "confusion (rows truth, columns first named cause)",
-              "                   " + " ".join(f"{c[:10]:>10s}" for c in cols)]
+    lines += [
+        "",
+        "confusion (rows truth, columns first named cause)",
+        "                   " + " ".join(f"{c[:10]:>10s}" for c in cols),
+    ]
     for t in truths:
         counts = [sum(1 for r in done if r["cause"] == t and outcome(r) == c) for c in cols]
         lines.append(f"{t:18s} " + " ".join(f"{n:10d}" for n in counts))
     right = sum(outcome(r) == r["cause"] for r in done)
     nulls = [r for r in done if r["cause"] == "none"]
     alarms = sum(outcome(r) != "none" for r in nulls)
-    lines += ["", f"score: {right}/{len(done)} right"
-              + (f" ({100 * right / len(done):.0f} %)" if done else "")]
+    lines += ["", f"score: {right}/{len(done)} right" + (f" ({100 * right / len(done):.0f} %)" if done else "")]
     for fam in sorted({r["family"] for r in done}):
         sub = [r for r in done if r["family"] == fam]
         lines.append(f"  {fam}: {sum(outcome(r) == r['cause'] for r in sub)}/{len(sub)}")
@@ -153,8 +168,9 @@ def summary(rows: list[dict]) -> str:
     diag = [r["diagnose_s"] for r in done if "diagnose_s" in r]
     gen = [r["generate_s"] for r in rows]
     if diag:
-        lines.append(f"diagnose wall time: total {sum(diag):.0f} s, mean {sum(diag) / len(diag):.1f} s, "
-                     f"max {max(diag):.1f} s")
+        lines.append(
+            f"diagnose wall time: total {sum(diag):.0f} s, mean {sum(diag) / len(diag):.1f} s, max {max(diag):.1f} s"
+        )
     if gen:
         lines.append(f"generation wall time: mean {sum(gen) / len(gen):.1f} s, max {max(gen):.1f} s")
     return "\n".join(lines)
@@ -183,8 +199,10 @@ def main(argv=None):
             with open(args.out + ".tmp", "w") as f:
                 json.dump({"generator": "benchmarks/blindgen", "records": rows}, f, indent=1, default=str)
             os.replace(args.out + ".tmp", args.out)
-            print(f"seed {seed}: {row['family']} {row['cause']} -> "
-                  f"{'REFUSED' if 'refused' in row else outcome(row)}", flush=True)
+            print(
+                f"seed {seed}: {row['family']} {row['cause']} -> {'REFUSED' if 'refused' in row else outcome(row)}",
+                flush=True,
+            )
     text = summary(rows)
     print("\n" + text)
     if args.markdown:

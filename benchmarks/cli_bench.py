@@ -15,6 +15,7 @@ printouts), as wall time and as CPU time (user + system: less sensitive to other
 in-process parts give CPU time only).  The machine is shared: read the ratios, not the
 absolute times.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -44,11 +45,15 @@ def wall(argv, repeat: int) -> tuple[float, float]:
 
 def startup(repeat: int) -> list[tuple[str, float]]:
     py = sys.executable
-    rows = [("python -c pass", wall([py, "-c", "pass"], repeat)),
-            ("bondgraph --help", wall([py, "-m", "bondgraph", "--help"], repeat)),
-            ("bondgraph simulate --help", wall([py, "-m", "bondgraph", "simulate", "--help"], repeat)),
-            ("python -c 'import bondgraph.numerics.simulate' (the former eager import)",
-             wall([py, "-c", "import bondgraph.numerics.simulate"], repeat))]
+    rows = [
+        ("python -c pass", wall([py, "-c", "pass"], repeat)),
+        ("bondgraph --help", wall([py, "-m", "bondgraph", "--help"], repeat)),
+        ("bondgraph simulate --help", wall([py, "-m", "bondgraph", "simulate", "--help"], repeat)),
+        (
+            "python -c 'import bondgraph.numerics.simulate' (the former eager import)",
+            wall([py, "-c", "import bondgraph.numerics.simulate"], repeat),
+        ),
+    ]
     return rows
 
 
@@ -56,14 +61,18 @@ def printouts(layers: list[int], repeat: int, compare: bool) -> list[tuple[str, 
     rows = []
     py = sys.executable
     for n in layers:
-        rows.append((f"bondgraph equations models/stack.py --set layers={n} (fresh process)",
-                     wall([py, "-m", "bondgraph", "equations", "models/stack.py", "--set", f"layers={n}"], repeat)))
+        rows.append(
+            (
+                f"bondgraph equations models/stack.py --set layers={n} (fresh process)",
+                wall([py, "-m", "bondgraph", "equations", "models/stack.py", "--set", f"layers={n}"], repeat),
+            )
+        )
     sys.path.insert(0, str(ROOT))
     import sympy as sp
 
     from bondgraph.equations.derivation import derive
-    from bondgraph.model.modelfile import load_model
     from bondgraph.equations.printing import render
+    from bondgraph.model.modelfile import load_model
 
     for n in layers:
         clock = time.process_time
@@ -74,8 +83,11 @@ def printouts(layers: list[int], repeat: int, compare: bool) -> list[tuple[str, 
         t2 = clock()
         text = render(eqs)
         t3 = clock()
-        rows += [(f"  layers={n}: build the model", (None, t1 - t0)), (f"  layers={n}: derive", (None, t2 - t1)),
-                 (f"  layers={n}: render ({len(text) / 1e6:.1f} MB of text)", (None, t3 - t2))]
+        rows += [
+            (f"  layers={n}: build the model", (None, t1 - t0)),
+            (f"  layers={n}: derive", (None, t2 - t1)),
+            (f"  layers={n}: render ({len(text) / 1e6:.1f} MB of text)", (None, t3 - t2)),
+        ]
         if compare:
             t4 = clock()
             plain = [sp.sstr(rhs) for rhs in eqs.state_equations().values()]
@@ -91,12 +103,15 @@ def main() -> None:
     ap.add_argument("--layers", default="200,400")
     ap.add_argument("--compare", action="store_true", help="also time sympy's plain printer (slow)")
     args = ap.parse_args()
-    env_note = f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, load average " \
-               f"{', '.join(f'{x:.1f}' for x in os.getloadavg())}"
+    env_note = (
+        f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, load average "
+        f"{', '.join(f'{x:.1f}' for x in os.getloadavg())}"
+    )
     print(f"# {time.strftime('%Y-%m-%d %H:%M')}; {env_note}")
     print("| what | wall (s) | CPU (s) |\n|---|---|---|")
-    for name, (w, c) in startup(args.repeat) + printouts([int(x) for x in args.layers.split(",")],
-                                                          max(1, args.repeat // 2), args.compare):
+    for name, (w, c) in startup(args.repeat) + printouts(
+        [int(x) for x in args.layers.split(",")], max(1, args.repeat // 2), args.compare
+    ):
         print(f"| {name} | {'' if w is None else f'{w:.2f}'} | {c:.2f} |")
 
 

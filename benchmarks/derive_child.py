@@ -15,6 +15,7 @@ the parent: a new empty directory for a cold compilation, the same one again for
 second run.  Also reports how long source generation alone takes (``generate_source``) and the
 peak resident memory of the process.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -39,8 +40,9 @@ def peak_mb() -> float:
 
 
 def cmd_derive(a):
-    import bondgraph as bg
     from sympy.core.cache import clear_cache
+
+    import bondgraph as bg
 
     bg.derive(build(a.kind, 2))  # warm-up
     spent = 0.0
@@ -52,13 +54,16 @@ def cmd_derive(a):
         eqs = bg.derive(model)
         dt = time.perf_counter() - t0
         spent += dt
-        print(json.dumps({"rep": rep, "seconds": dt, "states": len(eqs.states),
-                          "statements": len(eqs.program)}), flush=True)
+        print(
+            json.dumps({"rep": rep, "seconds": dt, "states": len(eqs.states), "statements": len(eqs.program)}),
+            flush=True,
+        )
         if spent > a.budget:
             break
     if a.eig and eqs is not None:
         import numpy as np
         import sympy as sp
+
         xs = eqs.state_symbols
         J = eqs.jacobian([eqs.rates[s] for s in xs], xs)
         table = eqs.model.parameter_table()
@@ -70,10 +75,10 @@ def cmd_derive(a):
 
 def cmd_compile(a):
     import numpy as np
+    from sympy.core.cache import clear_cache
 
     import bondgraph as bg
     from bondgraph.numerics.codegen import compile_equations, generate_source
-    from sympy.core.cache import clear_cache
 
     t0 = time.perf_counter()
     model = build(a.kind, a.n)
@@ -95,10 +100,22 @@ def cmd_compile(a):
     comp.rhs(0.0, x, u, u, th, mem, comp.aux.copy(), out)
     comp.output(0.0, x, u, u, th, mem, comp.aux.copy(), out)
     t5 = time.perf_counter()
-    print(json.dumps({"build": t1 - t0, "derive": t2 - t1, "generate_source": t3 - t2,
-                      "compile": t5 - t4, "source_bytes": len(src), "states": nx,
-                      "statements": len(eqs.program), "peak_mb": peak_mb(),
-                      "cache": os.environ.get("BONDGRAPH_CACHE", "")}), flush=True)
+    print(
+        json.dumps(
+            {
+                "build": t1 - t0,
+                "derive": t2 - t1,
+                "generate_source": t3 - t2,
+                "compile": t5 - t4,
+                "source_bytes": len(src),
+                "states": nx,
+                "statements": len(eqs.program),
+                "peak_mb": peak_mb(),
+                "cache": os.environ.get("BONDGRAPH_CACHE", ""),
+            }
+        ),
+        flush=True,
+    )
 
 
 def main():

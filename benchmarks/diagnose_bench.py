@@ -5,12 +5,12 @@ Generates the file once (the APA-120ML with the modified-PI capacitor driven by 
 benchmarks/.data/) and times ``bondgraph diagnose models/apa120ml.py FILE --json`` end to end
 in a wrapper process that reports the peak resident memory of the command alone.
 """
+
 from __future__ import annotations
 
 import os
 import subprocess
 import sys
-import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -48,8 +48,13 @@ def timed(cmd: list[str], timeout: float = TIMEOUT) -> dict:
     try:
         return json.loads(r.stdout.strip().splitlines()[-1])
     except (ValueError, IndexError):
-        return {"rc": f"wrapper failed: {r.stdout[-300:]!r} {r.stderr[-300:]!r}", "seconds": 0.0, "peak_mb": 0.0,
-                "stdout": "", "stderr": ""}
+        return {
+            "rc": f"wrapper failed: {r.stdout[-300:]!r} {r.stderr[-300:]!r}",
+            "seconds": 0.0,
+            "peak_mb": 0.0,
+            "stdout": "",
+            "stderr": "",
+        }
 
 
 def make_data(path: str, samples: int = SAMPLES) -> None:
@@ -58,6 +63,7 @@ def make_data(path: str, samples: int = SAMPLES) -> None:
 
     sys.path.insert(0, HERE)
     from bench_models import apa_pi
+
     from bondgraph import Simulator
     from bondgraph.data import write_csv
 
@@ -65,8 +71,17 @@ def make_data(path: str, samples: int = SAMPLES) -> None:
     t = np.arange(samples) * DT
     res = Simulator(lm.model).run(t, dict(lm.experiment.inputs), method="dopri5")
     cols = {"V": res["V"], "x": res["x"], "i": res["i"]}
-    write_csv(path, t, cols, {"model": "models/apa120ml.py", "param hysteresis": "pi",
-                              "input V": str(lm.experiment.inputs["V"]), "note": "synthetic benchmark data"})
+    write_csv(
+        path,
+        t,
+        cols,
+        {
+            "model": "models/apa120ml.py",
+            "param hysteresis": "pi",
+            "input V": str(lm.experiment.inputs["V"]),
+            "note": "synthetic benchmark data",
+        },
+    )
 
 
 def run(quick: bool = False, log=print) -> dict:
@@ -81,8 +96,11 @@ def run(quick: bool = False, log=print) -> dict:
     rec = timed(cmd)
     if rec["rc"] == "timeout":
         log(f"  diagnose: > {TIMEOUT:.0f} s (killed)")
-        return {"status": f"> {TIMEOUT:.0f} s (killed at the benchmark's time limit)", "command": cmd,
-                "peak_mb": rec["peak_mb"]}
+        return {
+            "status": f"> {TIMEOUT:.0f} s (killed at the benchmark's time limit)",
+            "command": cmd,
+            "peak_mb": rec["peak_mb"],
+        }
     if rec["rc"] != 0:
         log(f"  diagnose failed (exit {rec['rc']}): {rec['stderr'].strip().splitlines()[-1:]}")
         return {"status": f"failed: exit {rec['rc']}: {rec['stderr'].strip()[-300:]}", "command": cmd}

@@ -16,6 +16,7 @@ Models written by hand:
 * ``apa_pi``: the APA-120ML with the modified-PI polarization (states q_K, q_CNL, p_M, as
   ours); input V = sine (amplitude, frequency, phase, offset) like ``bondgraph.Sine``, F = 0.
 """
+
 from __future__ import annotations
 
 import math
@@ -159,7 +160,7 @@ def make_dopri5(rhs, output, opin, commit):
                 n_rej += 1
                 continue
             if en > 1.0:
-                h *= max(0.2, 0.9 * en ** -0.2)
+                h *= max(0.2, 0.9 * en**-0.2)
                 n_rej += 1
                 continue
             if n_ops > 0 and check_reversals:
@@ -206,7 +207,7 @@ def make_dopri5(rhs, output, opin, commit):
             else:
                 for i in range(n):
                     K[0, i] = K[ns, i]
-            fac = 10.0 if en == 0.0 else min(10.0, 0.9 * en ** -0.2)
+            fac = 10.0 if en == 0.0 else min(10.0, 0.9 * en**-0.2)
             h = (h_full if hit else h) * fac
         stats[0] = n_steps
         stats[1] = n_rej
@@ -229,15 +230,15 @@ def chain_force(t, prm):
 @njit
 def chain_rhs(t, x, prm, mem, out):
     n = int(prm[0])
-    m = prm[5:5 + n]
-    k = prm[5 + n:5 + 2 * n]
-    c = prm[5 + 2 * n:5 + 3 * n]
+    m = prm[5 : 5 + n]
+    k = prm[5 + n : 5 + 2 * n]
+    c = prm[5 + 2 * n : 5 + 3 * n]
     F = chain_force(t, prm)
     prev = F  # force pushing mass i from the left
     for i in range(n):
         v = x[i] / m[i]
-        s = v - x[i + 1] / m[i + 1] if i < n - 1 else v   # relative velocity of link i
-        f = k[i] * x[n + i] + c[i] * s                       # link force (compression)
+        s = v - x[i + 1] / m[i + 1] if i < n - 1 else v  # relative velocity of link i
+        f = k[i] * x[n + i] + c[i] * s  # link force (compression)
         out[i] = prev - f
         out[n + i] = s
         prev = f
@@ -246,8 +247,8 @@ def chain_rhs(t, x, prm, mem, out):
 @njit
 def chain_output(t, x, prm, mem, out):
     n = int(prm[0])
-    out[0] = x[2 * n - 1]          # xN = q_N (wall spring)
-    out[1] = x[0] / prm[5]         # v1 = p_1 / m_1
+    out[0] = x[2 * n - 1]  # xN = q_N (wall spring)
+    out[1] = x[0] / prm[5]  # v1 = p_1 / m_1
 
 
 @njit
@@ -261,9 +262,13 @@ def no_commit(t, x, prm, mem):
 
 
 def chain_prm(n, values, amp, f0, f1, t1):
-    return np.array([n, amp, f0, f1, t1] + [values[f"m{i}"] for i in range(1, n + 1)]
-                    + [values[f"k{i}"] for i in range(1, n + 1)]
-                    + [values[f"c{i}"] for i in range(1, n + 1)], float)
+    return np.array(
+        [n, amp, f0, f1, t1]
+        + [values[f"m{i}"] for i in range(1, n + 1)]
+        + [values[f"k{i}"] for i in range(1, n + 1)]
+        + [values[f"c{i}"] for i in range(1, n + 1)],
+        float,
+    )
 
 
 # ---- APA-120ML with the modified PI (12 plays, 6 dead zones) -------------------------------
@@ -295,12 +300,12 @@ def _mpi(v, mem, prm):
 def apa_rhs(t, x, prm, mem, out):
     Re, l, a, K, c, M, T = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
     V = prm[10] + prm[7] * math.sin(2.0 * math.pi * prm[8] * t + prm[9])
-    h = _mpi(x[1], mem, prm)                      # field E2 = H[p]
+    h = _mpi(x[1], mem, prm)  # field E2 = H[p]
     ratio = T * a / l
-    i = (V - l * (ratio * K * x[0] + h)) / Re     # drive current
-    out[0] = ratio * l * i - x[2] / M            # q_K' (layer spring compression)
-    out[1] = l * i                               # p'   (dipole)
-    out[2] = K * x[0] - c * x[2] / M             # p_M' (F = 0)
+    i = (V - l * (ratio * K * x[0] + h)) / Re  # drive current
+    out[0] = ratio * l * i - x[2] / M  # q_K' (layer spring compression)
+    out[1] = l * i  # p'   (dipole)
+    out[2] = K * x[0] - c * x[2] / M  # p_M' (F = 0)
 
 
 @njit
@@ -309,10 +314,10 @@ def apa_output(t, x, prm, mem, out):
     V = prm[10] + prm[7] * math.sin(2.0 * math.pi * prm[8] * t + prm[9])
     h = _mpi(x[1], mem, prm)
     ratio = T * a / l
-    out[0] = ratio * x[1] - x[0]                          # x
-    out[1] = (V - l * (ratio * K * x[0] + h)) / Re        # i
-    out[2] = x[1]                                         # p
-    out[3] = h                                            # E
+    out[0] = ratio * x[1] - x[0]  # x
+    out[1] = (V - l * (ratio * K * x[0] + h)) / Re  # i
+    out[2] = x[1]  # p
+    out[3] = h  # E
 
 
 @njit

@@ -16,6 +16,7 @@ The sympy cache is cleared before every repetition, and a warm-up on a 2-mass ch
 Prints one JSON line per repetition, flushed, so the parent can enforce a timeout per run.
 ``--eig`` also prints the eigenvalues of the numeric state matrix (cross-check against ours).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -39,8 +40,8 @@ def values(n):
 
 # ---- PyPI bondgraph 0.2.0 -------------------------------------------------------------------
 def build_pypi(n):
-    from bondgraph.core import BondGraph
     from bondgraph.common import Bond
+    from bondgraph.core import BondGraph
     from bondgraph.elements import Element_C, Element_I, Element_R, Source_effort
     from bondgraph.junctions import JunctionEqualEffort, JunctionEqualFlow
 
@@ -79,7 +80,7 @@ def build_bgt(n):
     import BondGraphTools as bgt
 
     model = bgt.new(name=f"chain{n}")
-    src = bgt.new("Se", name="src")           # no value: a control variable u_0
+    src = bgt.new("Se", name="src")  # no value: a control variable u_0
     v = [bgt.new("1", name=f"v{i}") for i in range(1, n + 1)]
     masses = [bgt.new("I", name=f"M{i}", value=sp.Symbol(f"m{i}")) for i in range(1, n + 1)]
     bgt.add(model, src, *v, *masses)
@@ -122,8 +123,10 @@ def bgt_matrix(rels, n):
     return [[float(a) for a in row] for row in A.tolist()]
 
 
-PEERS = {"pypi-bondgraph": (build_pypi, derive_pypi, pypi_matrix),
-         "bondgraphtools": (build_bgt, derive_bgt, bgt_matrix)}
+PEERS = {
+    "pypi-bondgraph": (build_pypi, derive_pypi, pypi_matrix),
+    "bondgraphtools": (build_bgt, derive_bgt, bgt_matrix),
+}
 
 
 def main():
@@ -149,6 +152,7 @@ def main():
             break
     if a.eig:
         import numpy as np
+
         A = np.array(matrix(eqs, a.n))
         ev = np.linalg.eigvals(A)
         print(json.dumps({"eig": sorted([[float(e.real), float(e.imag)] for e in ev])}), flush=True)
@@ -156,6 +160,7 @@ def main():
     for mod in ("sympy", "bondgraph", "BondGraphTools"):
         try:
             from importlib.metadata import version
+
             versions[mod] = version(mod if mod != "BondGraphTools" else "bondgraphtools")
         except Exception:  # noqa: BLE001
             pass

@@ -18,6 +18,7 @@ and prints count × cost per kernel as a share of the measured run time; the rem
 integrator's own arithmetic (stage sums, error norm, weights, bookkeeping).  The hand-written
 limit's kernels (handwritten.py) are costed the same way for comparison.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -66,22 +67,30 @@ def fc_loop(fn_type):
     """A loop calling a first-class function of the integrator's type (fresh per type)."""
     from numba import types
 
-    sig = types.float64(fn_type, types.int64, types.float64, types.float64[::1], types.float64[::1],
-                        types.float64[::1], types.float64[::1], types.float64[::1], types.float64[::1],
-                        types.float64[::1])
+    sig = types.float64(
+        fn_type,
+        types.int64,
+        types.float64,
+        types.float64[::1],
+        types.float64[::1],
+        types.float64[::1],
+        types.float64[::1],
+        types.float64[::1],
+        types.float64[::1],
+        types.float64[::1],
+    )
     return njit(sig)(_loop_fc.py_func)
 
 
 def profile_case(case, t_end: float):
     import bondgraph.numerics.integrators as integ
+    from bondgraph import Simulator, config
     from bondgraph.numerics.model_functions import FUNCTION_TYPE
-    from bondgraph import Simulator
-    from bondgraph import config
 
     ATOL_FLOOR = config.get("simulate.atol_floor")
 
     import sim_bench
-    from handwritten import integrator, _A, _P
+    from handwritten import integrator
 
     sim = Simulator(case["model"])
     t = np.linspace(0.0, t_end, int(round(t_end / sim_bench.DT)) + 1)
@@ -153,7 +162,8 @@ def profile_case(case, t_end: float):
         rows.append((k, n, cost[k], n * cost[k]))
     accounted = sum(r[3] for r in rows) + fixed
     # the hand-written limit, run the same way
-    from handwritten import chain_rhs, apa_rhs
+    from handwritten import apa_rhs, chain_rhs
+
     fn = integrator(case["limit"])
     lim_times = []
     for _ in range(3):
@@ -164,9 +174,18 @@ def profile_case(case, t_end: float):
     prm = case["limit_prm"]
     m2 = np.zeros(16)
     lim_rhs = _per_call(lambda n: _loop_static(hand, n, 0.0, x, prm, m2, out))
-    return {"case": case["name"], "total": total, "fixed_python": fixed, "rows": rows, "accounted": accounted,
-            "stats": st, "samples": samples, "limit_total": float(np.median(lim_times)), "limit_rhs": lim_rhs,
-            "limit_stats": lst}
+    return {
+        "case": case["name"],
+        "total": total,
+        "fixed_python": fixed,
+        "rows": rows,
+        "accounted": accounted,
+        "stats": st,
+        "samples": samples,
+        "limit_total": float(np.median(lim_times)),
+        "limit_rhs": lim_rhs,
+        "limit_stats": lst,
+    }
 
 
 def main():
@@ -174,19 +193,26 @@ def main():
     ap.add_argument("--t-end", type=float, default=10.0)
     a = ap.parse_args()
     import sim_bench
+
     for setup in (sim_bench.setup_chain, sim_bench.setup_apa):
         p = profile_case(setup(), a.t_end)
         st = p["stats"]
-        print(f"\n{p['case']}: run {p['total'] * 1e3:.1f} ms ({st['steps']} steps, {st['rejected']} rejected, "
-              f"{st['rhs_calls']} rhs calls, {p['samples']} samples); hand-written limit {p['limit_total'] * 1e3:.1f} ms")
+        print(
+            f"\n{p['case']}: run {p['total'] * 1e3:.1f} ms ({st['steps']} steps, {st['rejected']} rejected, "
+            f"{st['rhs_calls']} rhs calls, {p['samples']} samples); hand-written limit {p['limit_total'] * 1e3:.1f} ms"
+        )
         print(f"  {'kernel':<14}{'calls':>10}{'ns/call':>10}{'ms':>9}{'share':>8}")
         for k, n, c, tt in sorted(p["rows"], key=lambda r: -r[3]):
             print(f"  {k:<14}{n:>10}{c * 1e9:>10.1f}{tt * 1e3:>9.1f}{100 * tt / p['total']:>7.1f}%")
-        print(f"  {'Python (run set-up, result)':<34}{p['fixed_python'] * 1e3:>9.1f}{100 * p['fixed_python'] / p['total']:>7.1f}%")
+        print(
+            f"  {'Python (run set-up, result)':<34}{p['fixed_python'] * 1e3:>9.1f}{100 * p['fixed_python'] / p['total']:>7.1f}%"
+        )
         rest = p["total"] - p["accounted"]
         print(f"  {'integrator arithmetic (rest)':<34}{rest * 1e3:>9.1f}{100 * rest / p['total']:>7.1f}%")
-        print(f"  hand-written rhs: {p['limit_rhs'] * 1e9:.1f} ns/call (generated, first-class: "
-              f"{dict((r[0], r[2]) for r in p['rows'])['rhs'] * 1e9:.1f} ns)")
+        print(
+            f"  hand-written rhs: {p['limit_rhs'] * 1e9:.1f} ns/call (generated, first-class: "
+            f"{dict((r[0], r[2]) for r in p['rows'])['rhs'] * 1e9:.1f} ns)"
+        )
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ named cause, the gain, the baseline RMS against the sensor noise (an effect the 
 reveal leaves the baseline at the noise, and ``none`` is then the right answer), and the wall
 time.  Data files are cached in benchmarks/.data/robustness/.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -84,8 +85,9 @@ def t215_truth(effect: str):
     import bondgraph as bg
     from bondgraph.model.modelfile import load_model
 
-    tab = {str(k): v for k, v in load_model(truth.MODELS / "bimorph_t215.py", {"modes": 3}).model
-           .parameter_table().items()}
+    tab = {
+        str(k): v for k, v in load_model(truth.MODELS / "bimorph_t215.py", {"modes": 3}).model.parameter_table().items()
+    }
     p = {k: v * T215_CHANGES.get(k, 1.0) for k, v in tab.items()}
     g = bg.Model(f"T215 truth ({effect})")
     V = g.input("V", "V")
@@ -94,9 +96,9 @@ def t215_truth(effect: str):
         w, z, mp, phi = p[f"omega_{i}"], p[f"zeta_{i}"], p[f"mp_{i}"], p[f"phi_{i}"]
         g.add(bg.Se(f"f{i}", mp * V), bg.J1(f"m{i}"), bg.I(f"M{i}", 1))
         if i == 1 and effect == "softening":
-            g.add(bg.C(f"K{i}", law=lambda q, w=w: w ** 2 * q - 8.5e17 * q ** 3))
+            g.add(bg.C(f"K{i}", law=lambda q, w=w: w**2 * q - 8.5e17 * q**3))
         else:
-            g.add(bg.C(f"K{i}", 1 / w ** 2))
+            g.add(bg.C(f"K{i}", 1 / w**2))
         if i == 1 and effect == "nonlinear-damping":
             g.add(bg.R(f"D{i}", law=lambda f, z=z, w=w: (2 * z * w + 1.5e4 * sp.Abs(f)) * f))
         else:
@@ -121,8 +123,11 @@ def truth_of(family: str, effect: str):
     return t215_truth(effect)
 
 
-FAMILIES = {"apa": ("apa120ml", 18.0, 10_000.0), "t226": ("bimorph_t226", 5.0, 50_000.0),
-            "t215": ("bimorph_t215", 5.0, 50_000.0)}
+FAMILIES = {
+    "apa": ("apa120ml", 18.0, 10_000.0),
+    "t226": ("bimorph_t226", 5.0, 50_000.0),
+    "t215": ("bimorph_t215", 5.0, 50_000.0),
+}
 #: (name, family, drive, hidden effect)
 CASES = [
     ("apa-holds-hysteresis", "apa", sine_and_holds, "hysteresis"),
@@ -170,12 +175,17 @@ def main():
             rep = json.loads(rec["stdout"])
             rec.update(cause=rep["cause"], gain=rep["gain"], ratio=rep["baseline_rms"] / NOISE[family])
         rows.append((name, effect, rec))
-        print(f"{name}: hidden {effect}, named {rec.get('cause', '-')}, gain {rec.get('gain', float('nan')):.2f}, "
-              f"{rec['seconds']:.0f} s, exit {rec['rc']}", flush=True)
+        print(
+            f"{name}: hidden {effect}, named {rec.get('cause', '-')}, gain {rec.get('gain', float('nan')):.2f}, "
+            f"{rec['seconds']:.0f} s, exit {rec['rc']}",
+            flush=True,
+        )
     print("\n| case | hidden | named | gain | baseline RMS / noise | wall |\n|---|---|---|---:|---:|---:|")
     for name, effect, rec in rows:
-        print(f"| {name} | {effect} | {rec.get('cause', 'exit ' + str(rec['rc']))} | "
-              f"{rec.get('gain', float('nan')):.2f} | {rec.get('ratio', float('nan')):.1f} | {rec['seconds']:.0f} s |")
+        print(
+            f"| {name} | {effect} | {rec.get('cause', 'exit ' + str(rec['rc']))} | "
+            f"{rec.get('gain', float('nan')):.2f} | {rec.get('ratio', float('nan')):.1f} | {rec['seconds']:.0f} s |"
+        )
 
 
 if __name__ == "__main__":

@@ -23,6 +23,7 @@ Every time is a median over repetitions (--repeat, default 3; a point whose repe
 take more than a minute gets fewer, and the table says how many).  Ratios are taken from
 figures measured in this run.  The JSON holds every raw time.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -54,12 +55,12 @@ QUICK_STACK_N = [10, 50]
 QUICK_PEER_N = [10, 20]
 
 GOALS = {
-    "derive_vs_peer": 5.0,        # N = 10 chain: at least 5x faster than the fastest peer
-    "derive_exponent": 1.3,       # chain N = 20..320
-    "stack400_total_s": 20.0,     # 400-layer stack derived + compiled
-    "compile_chain320_s": 5.0,    # N = 320 chain compiled
-    "sim_vs_naive": 20.0,         # at least 20x faster than lambdify + solve_ivp
-    "sim_vs_limit": 3.0,          # within 3x of the hand-written compiled limit
+    "derive_vs_peer": 5.0,  # N = 10 chain: at least 5x faster than the fastest peer
+    "derive_exponent": 1.3,  # chain N = 20..320
+    "stack400_total_s": 20.0,  # 400-layer stack derived + compiled
+    "compile_chain320_s": 5.0,  # N = 320 chain compiled
+    "sim_vs_naive": 20.0,  # at least 20x faster than lambdify + solve_ivp
+    "sim_vs_limit": 3.0,  # within 3x of the hand-written compiled limit
     "diagnose_s": 120.0,
     "diagnose_mb": 2048.0,
 }
@@ -146,8 +147,19 @@ def our_python():
 
 # ---- workload 1: derivation and compilation ---------------------------------------------------------
 def derive_points(kind, n, repeat, timeout, eig=False):
-    cmd = [our_python(), os.path.join(HERE, "derive_child.py"), "derive", "--kind", kind, "--n", str(n),
-           "--reps", str(repeat), "--budget", "60"] + (["--eig"] if eig else [])
+    cmd = [
+        our_python(),
+        os.path.join(HERE, "derive_child.py"),
+        "derive",
+        "--kind",
+        kind,
+        "--n",
+        str(n),
+        "--reps",
+        str(repeat),
+        "--budget",
+        "60",
+    ] + (["--eig"] if eig else [])
     lines, to, rc, err = run_lines(cmd, timeout)
     times = [ln["seconds"] for ln in lines if "seconds" in ln]
     eigs = next((ln["eig"] for ln in lines if "eig" in ln), None)
@@ -155,9 +167,14 @@ def derive_points(kind, n, repeat, timeout, eig=False):
         return {"times": times, "timeout": True, "error": None, "eig": eigs}
     if rc != 0 or not times:
         return {"times": times, "timeout": False, "error": err.strip().splitlines()[-1:] or [f"exit {rc}"], "eig": eigs}
-    return {"times": times, "timeout": False, "error": None, "eig": eigs,
-            "states": next((ln.get("states") for ln in lines if "states" in ln), None),
-            "statements": next((ln.get("statements") for ln in lines if "statements" in ln), None)}
+    return {
+        "times": times,
+        "timeout": False,
+        "error": None,
+        "eig": eigs,
+        "states": next((ln.get("states") for ln in lines if "states" in ln), None),
+        "statements": next((ln.get("statements") for ln in lines if "statements" in ln), None),
+    }
 
 
 def compile_point(kind, n, repeat, timeout):
@@ -183,18 +200,20 @@ def compile_point(kind, n, repeat, timeout):
         spent += first["compile"] + first["derive"]
         if spent > 60.0:
             break
-    rec.update({
-        "reps": len(cold),
-        "compile_s": [c["compile"] for c in cold],
-        "generate_source_s": [c["generate_source"] for c in cold],
-        "derive_cold_s": [c["derive"] for c in cold],
-        "build_s": [c["build"] for c in cold],
-        "cached_compile_s": [c["compile"] for c in cached],
-        "peak_mb": [c["peak_mb"] for c in cold],
-        "source_bytes": cold[0]["source_bytes"] if cold else None,
-        "states": cold[0]["states"] if cold else None,
-        "statements": cold[0]["statements"] if cold else None,
-    })
+    rec.update(
+        {
+            "reps": len(cold),
+            "compile_s": [c["compile"] for c in cold],
+            "generate_source_s": [c["generate_source"] for c in cold],
+            "derive_cold_s": [c["derive"] for c in cold],
+            "build_s": [c["build"] for c in cold],
+            "cached_compile_s": [c["compile"] for c in cached],
+            "peak_mb": [c["peak_mb"] for c in cold],
+            "source_bytes": cold[0]["source_bytes"] if cold else None,
+            "states": cold[0]["states"] if cold else None,
+            "statements": cold[0]["statements"] if cold else None,
+        }
+    )
     return rec
 
 
@@ -207,16 +226,22 @@ def workload_derive(args):
             d = derive_points(kind, n, args.repeat, args.timeout)
             c = compile_point(kind, n, args.repeat, args.timeout * 5)
             out[kind][n] = {"derive": d, "compile": c}
-            log(f"  {kind:5s} N={n:4d}: derive {fmt_s(median(d['times']))} (n={len(d['times'])}), "
+            log(
+                f"  {kind:5s} N={n:4d}: derive {fmt_s(median(d['times']))} (n={len(d['times'])}), "
                 f"compile {fmt_s(median(c.get('compile_s', [])))} (n={c.get('reps')}; source generation "
                 f"{fmt_s(median(c.get('generate_source_s', [])))}), cached {fmt_s(median(c.get('cached_compile_s', [])))}"
-                + (f"  [{c['error']}]" if c.get("error") else ""))
+                + (f"  [{c['error']}]" if c.get("error") else "")
+            )
     lo, hi = 20, 320
     ns = [n for n in chain_ns if lo <= n <= hi]
     out["chain_exponent_derive"] = fit_exponent(ns, [median(out["chain"][n]["derive"]["times"]) for n in ns])
     out["chain_exponent_compile"] = fit_exponent(ns, [median(out["chain"][n]["compile"]["compile_s"]) for n in ns])
-    out["stack_exponent_derive"] = fit_exponent(stack_ns, [median(out["stack"][n]["derive"]["times"]) for n in stack_ns])
-    out["stack_exponent_compile"] = fit_exponent(stack_ns, [median(out["stack"][n]["compile"]["compile_s"]) for n in stack_ns])
+    out["stack_exponent_derive"] = fit_exponent(
+        stack_ns, [median(out["stack"][n]["derive"]["times"]) for n in stack_ns]
+    )
+    out["stack_exponent_compile"] = fit_exponent(
+        stack_ns, [median(out["stack"][n]["compile"]["compile_s"]) for n in stack_ns]
+    )
     out["exponent_range"] = [min(ns), max(ns)] if ns else None
     return out
 
@@ -233,8 +258,11 @@ def ensure_peer_venv():
             return {p: f"cannot create the virtual environment: {r.stderr.strip()[-300:]}" for p in PEER_PACKAGES}
         subprocess.run([py, "-m", "pip", "install", "-q", "--upgrade", "pip"], capture_output=True, text=True)
     for peer, spec in PEER_PACKAGES.items():
-        probe = "import BondGraphTools" if peer == "bondgraphtools" else \
-            "import importlib.metadata as m; assert m.version('bondgraph') == '0.2.0'; import bondgraph.core"
+        probe = (
+            "import BondGraphTools"
+            if peer == "bondgraphtools"
+            else "import importlib.metadata as m; assert m.version('bondgraph') == '0.2.0'; import bondgraph.core"
+        )
         # -I: isolated mode, so our own `bondgraph` (the current directory) is never imported
         ok = subprocess.run([py, "-I", "-c", probe], capture_output=True, text=True, cwd=HERE).returncode == 0
         if not ok:
@@ -253,8 +281,17 @@ def peer_versions():
     py = os.path.join(PEER_VENV, "bin", "python")
     if not os.path.exists(py):
         return {}
-    r = subprocess.run([py, "-I", "-c", "import json, importlib.metadata as m; print(json.dumps({k: m.version(k) for k in "
-                        "('bondgraph', 'bondgraphtools', 'sympy')}))"], capture_output=True, text=True)
+    r = subprocess.run(
+        [
+            py,
+            "-I",
+            "-c",
+            "import json, importlib.metadata as m; print(json.dumps({k: m.version(k) for k in "
+            "('bondgraph', 'bondgraphtools', 'sympy')}))",
+        ],
+        capture_output=True,
+        text=True,
+    )
     try:
         return json.loads(r.stdout)
     except json.JSONDecodeError:
@@ -265,8 +302,10 @@ def workload_peers(args, derive_results=None):
     ns = QUICK_PEER_N if args.quick else PEER_N
     out = {"ns": ns, "peers": {}, "ours": {}, "skipped": {}}
     if not args.peers:
-        log("  peers: skipped (run with --peers to install BondGraphTools and PyPI bondgraph 0.2.0 "
-            "into benchmarks/.peers-venv)")
+        log(
+            "  peers: skipped (run with --peers to install BondGraphTools and PyPI bondgraph 0.2.0 "
+            "into benchmarks/.peers-venv)"
+        )
         out["skipped"] = {p: "not requested (--peers)" for p in PEER_PACKAGES}
         return out
     status = ensure_peer_venv()
@@ -289,8 +328,19 @@ def workload_peers(args, derive_results=None):
                 res[n] = {"times": [], "timeout": True, "note": f"not run: N={dead} already exceeded the timeout"}
                 log(f"  {PEER_LABEL[peer]:15s} N={n:3d}: > {args.timeout:.0f} s (not run: N={dead} timed out)")
                 continue
-            cmd = [py, "-I", os.path.join(HERE, "peer_chain.py"), "--peer", peer, "--n", str(n), "--reps", str(args.repeat),
-                   "--budget", "60"] + (["--eig"] if n == 10 else [])
+            cmd = [
+                py,
+                "-I",
+                os.path.join(HERE, "peer_chain.py"),
+                "--peer",
+                peer,
+                "--n",
+                str(n),
+                "--reps",
+                str(args.repeat),
+                "--budget",
+                "60",
+            ] + (["--eig"] if n == 10 else [])
             lines, to, rc, err = run_lines(cmd, args.timeout)
             times = [ln["seconds"] for ln in lines if "seconds" in ln]
             rec = {"times": times, "timeout": to}
@@ -298,7 +348,9 @@ def workload_peers(args, derive_results=None):
                 eig = next((ln["eig"] for ln in lines if "eig" in ln), None)
                 if eig is not None and ref_eig is not None:
                     a, b = np.array(eig), np.array(ref_eig)
-                    rec["eig_max_rel_diff"] = float(np.max(np.abs(a - b)) / np.max(np.abs(b))) if a.shape == b.shape else None
+                    rec["eig_max_rel_diff"] = (
+                        float(np.max(np.abs(a - b)) / np.max(np.abs(b))) if a.shape == b.shape else None
+                    )
             if to and not times:
                 dead = n
                 log(f"  {PEER_LABEL[peer]:15s} N={n:3d}: > {args.timeout:.0f} s (timeout)")
@@ -307,9 +359,14 @@ def workload_peers(args, derive_results=None):
                 log(f"  {PEER_LABEL[peer]:15s} N={n:3d}: failed: {rec['error']}")
                 dead = n
             else:
-                log(f"  {PEER_LABEL[peer]:15s} N={n:3d}: {fmt_s(median(times))} (n={len(times)})"
-                    + (f", state-matrix eigenvalues match ours to {rec['eig_max_rel_diff']:.1e}"
-                       if rec.get("eig_max_rel_diff") is not None else ""))
+                log(
+                    f"  {PEER_LABEL[peer]:15s} N={n:3d}: {fmt_s(median(times))} (n={len(times)})"
+                    + (
+                        f", state-matrix eigenvalues match ours to {rec['eig_max_rel_diff']:.1e}"
+                        if rec.get("eig_max_rel_diff") is not None
+                        else ""
+                    )
+                )
             res[n] = rec
         out["peers"][peer] = res
         ok = [n for n in ns if res[n]["times"]]
@@ -322,12 +379,14 @@ def workload_peers(args, derive_results=None):
 # ---- workload 3: simulation ------------------------------------------------------------------------------
 def workload_simulate(args):
     import sim_bench
+
     return sim_bench.run(args.repeat, args.naive_limit, quick=args.quick, log=log)
 
 
 # ---- workload 4: diagnosis ---------------------------------------------------------------------------------
 def workload_diagnose(args):
     import diagnose_bench
+
     return diagnose_bench.run(quick=args.quick, log=log)
 
 
@@ -346,10 +405,11 @@ def machine():
     try:
         with open("/proc/meminfo") as fh:
             kb = int(fh.readline().split()[1])
-            mem = f"{kb / 1024 ** 2:.0f} GiB"
+            mem = f"{kb / 1024**2:.0f} GiB"
     except (OSError, ValueError, IndexError):
         pass
-    from importlib.metadata import version, PackageNotFoundError
+    from importlib.metadata import PackageNotFoundError, version
+
     vers = {}
     for pkg in ("bondgraph", "sympy", "numba", "llvmlite", "numpy", "scipy", "networkx"):
         try:
@@ -357,6 +417,7 @@ def machine():
         except PackageNotFoundError:
             pass
     import hashlib
+
     h = hashlib.sha256()
     for sub in ("bondgraph", "library", "models"):
         folder = os.path.join(ROOT, sub)
@@ -364,9 +425,16 @@ def machine():
             if name.endswith(".py"):
                 with open(os.path.join(folder, name), "rb") as fh:
                     h.update(name.encode() + fh.read())
-    return {"source_sha256": h.hexdigest()[:16], "cpu": cpu, "cores": os.cpu_count(), "memory": mem, "python": platform.python_version(),
-            "platform": platform.platform(), "packages": vers,
-            "openblas_coretype": os.environ.get("OPENBLAS_CORETYPE", "")}
+    return {
+        "source_sha256": h.hexdigest()[:16],
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "memory": mem,
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "packages": vers,
+        "openblas_coretype": os.environ.get("OPENBLAS_CORETYPE", ""),
+    }
 
 
 def goal_rows(res):
@@ -381,45 +449,88 @@ def goal_rows(res):
         if peer10:
             fastest = min(peer10, key=peer10.get)
             ratio = peer10[fastest] / ours10
-            rows.append((f"derivation, N=10 chain, >= {GOALS['derive_vs_peer']:.0f}x faster than the fastest peer",
-                         f"{ratio:.0f}x ({PEER_LABEL[fastest]} {fmt_s(peer10[fastest])} vs ours {fmt_s(ours10)})",
-                         ratio >= GOALS["derive_vs_peer"]))
+            rows.append(
+                (
+                    f"derivation, N=10 chain, >= {GOALS['derive_vs_peer']:.0f}x faster than the fastest peer",
+                    f"{ratio:.0f}x ({PEER_LABEL[fastest]} {fmt_s(peer10[fastest])} vs ours {fmt_s(ours10)})",
+                    ratio >= GOALS["derive_vs_peer"],
+                )
+            )
     if d:
         e = d["chain_exponent_derive"]
         lo, hi = d.get("exponent_range") or (20, 320)
-        rows.append((f"derivation growth exponent <= {GOALS['derive_exponent']} (chain N={lo}..{hi})",
-                     f"{e:.2f}", e <= GOALS["derive_exponent"]))
+        rows.append(
+            (
+                f"derivation growth exponent <= {GOALS['derive_exponent']} (chain N={lo}..{hi})",
+                f"{e:.2f}",
+                e <= GOALS["derive_exponent"],
+            )
+        )
         s400 = d["stack"].get(400) or d["stack"].get(max(d["stack"]))
         nmax = 400 if 400 in d["stack"] else max(d["stack"])
         tot = median(s400["derive"]["times"]) + median(s400["compile"].get("compile_s", []))
-        rows.append((f"{nmax}-layer stack derived + compiled < {GOALS['stack400_total_s']:.0f} s",
-                     f"{fmt_s(tot)} (derive {fmt_s(median(s400['derive']['times']))} + compile "
-                     f"{fmt_s(median(s400['compile'].get('compile_s', [])))})", tot < GOALS["stack400_total_s"]))
+        rows.append(
+            (
+                f"{nmax}-layer stack derived + compiled < {GOALS['stack400_total_s']:.0f} s",
+                f"{fmt_s(tot)} (derive {fmt_s(median(s400['derive']['times']))} + compile "
+                f"{fmt_s(median(s400['compile'].get('compile_s', [])))})",
+                tot < GOALS["stack400_total_s"],
+            )
+        )
         c = d["chain"].get(320) or d["chain"][max(d["chain"])]
         nmax = 320 if 320 in d["chain"] else max(d["chain"])
         ct = median(c["compile"].get("compile_s", []))
-        rows.append((f"compilation of the N={nmax} chain < {GOALS['compile_chain320_s']:.0f} s", fmt_s(ct),
-                     ct < GOALS["compile_chain320_s"]))
+        rows.append(
+            (
+                f"compilation of the N={nmax} chain < {GOALS['compile_chain320_s']:.0f} s",
+                fmt_s(ct),
+                ct < GOALS["compile_chain320_s"],
+            )
+        )
         # the cache matters for models numba compiles (larger ones run on the tape interpreter,
         # which has nothing to compile): judge it on the largest chain compiled by numba
         compiled = [n for n in sorted(d["chain"]) if median(d["chain"][n]["compile"].get("compile_s", [0])) > 0.5]
         nc = compiled[-1] if compiled else nmax
         cold = median(d["chain"][nc]["compile"].get("compile_s", []))
         cc = median(d["chain"][nc]["compile"].get("cached_compile_s", []))
-        rows.append((f"second run of the same model skips compilation (cached; N={nc}, numba-compiled)",
-                     f"{fmt_s(cc)} vs {fmt_s(cold)} cold", cc < 0.2 * cold))
+        rows.append(
+            (
+                f"second run of the same model skips compilation (cached; N={nc}, numba-compiled)",
+                f"{fmt_s(cc)} vs {fmt_s(cold)} cold",
+                cc < 0.2 * cold,
+            )
+        )
     for s in res.get("simulate") or []:
-        rows.append((f"simulation {s['case']}: >= {GOALS['sim_vs_naive']:.0f}x faster than the naive route",
-                     f"{s['speedup_vs_naive']:.1f}x", s["speedup_vs_naive"] >= GOALS["sim_vs_naive"]))
-        rows.append((f"simulation {s['case']}: within {GOALS['sim_vs_limit']:.0f}x of the compiled limit",
-                     f"{s['ratio_to_limit']:.2f}x", s["ratio_to_limit"] <= GOALS["sim_vs_limit"]))
-        rows.append((f"simulation {s['case']}: results equal to the naive route within tolerance",
-                     "yes" if s["agree_ok"] else "NO", s["agree_ok"]))
+        rows.append(
+            (
+                f"simulation {s['case']}: >= {GOALS['sim_vs_naive']:.0f}x faster than the naive route",
+                f"{s['speedup_vs_naive']:.1f}x",
+                s["speedup_vs_naive"] >= GOALS["sim_vs_naive"],
+            )
+        )
+        rows.append(
+            (
+                f"simulation {s['case']}: within {GOALS['sim_vs_limit']:.0f}x of the compiled limit",
+                f"{s['ratio_to_limit']:.2f}x",
+                s["ratio_to_limit"] <= GOALS["sim_vs_limit"],
+            )
+        )
+        rows.append(
+            (
+                f"simulation {s['case']}: results equal to the naive route within tolerance",
+                "yes" if s["agree_ok"] else "NO",
+                s["agree_ok"],
+            )
+        )
     dg = res.get("diagnose")
     if dg and dg.get("status") == "ok":
-        rows.append((f"diagnosis of 250k samples < {GOALS['diagnose_s']:.0f} s and < {GOALS['diagnose_mb']:.0f} MB",
-                     f"{fmt_s(dg['seconds'])}, {dg['peak_mb']:.0f} MB",
-                     dg["seconds"] < GOALS["diagnose_s"] and dg["peak_mb"] < GOALS["diagnose_mb"]))
+        rows.append(
+            (
+                f"diagnosis of 250k samples < {GOALS['diagnose_s']:.0f} s and < {GOALS['diagnose_mb']:.0f} MB",
+                f"{fmt_s(dg['seconds'])}, {dg['peak_mb']:.0f} MB",
+                dg["seconds"] < GOALS["diagnose_s"] and dg["peak_mb"] < GOALS["diagnose_mb"],
+            )
+        )
     return rows
 
 
@@ -429,29 +540,46 @@ def tables(res) -> str:
     d = res.get("derive")
     if d:
         out.append("### 1. Derivation and compilation (medians; n = repetitions)\n")
-        out.append("| model | N | states | derivation | compilation, cold (fresh process, empty cache) | of which source generation | compilation, cached second run | peak RSS (compile) |")
+        out.append(
+            "| model | N | states | derivation | compilation, cold (fresh process, empty cache) | of which source generation | compilation, cached second run | peak RSS (compile) |"
+        )
         out.append("|---|---:|---:|---:|---:|---:|---:|---:|")
         for kind in ("chain", "stack"):
             for n, r in d[kind].items():
                 c = r["compile"]
                 dd = r["derive"]
-                dtxt = "> timeout" if dd.get("timeout") and not dd["times"] else f"{fmt_s(median(dd['times']))} (n={len(dd['times'])})"
-                ctxt = c.get("error") if c.get("error") and not c.get("compile_s") else \
-                    f"{fmt_s(median(c.get('compile_s', [])))} (n={c.get('reps')})"
-                out.append(f"| {kind} | {n} | {c.get('states') or dd.get('states') or '-'} | {dtxt} | {ctxt} | "
-                           f"{fmt_s(median(c.get('generate_source_s', [])))} | {fmt_s(median(c.get('cached_compile_s', [])))} | "
-                           f"{median(c.get('peak_mb', [])):.0f} MB |")
+                dtxt = (
+                    "> timeout"
+                    if dd.get("timeout") and not dd["times"]
+                    else f"{fmt_s(median(dd['times']))} (n={len(dd['times'])})"
+                )
+                ctxt = (
+                    c.get("error")
+                    if c.get("error") and not c.get("compile_s")
+                    else f"{fmt_s(median(c.get('compile_s', [])))} (n={c.get('reps')})"
+                )
+                out.append(
+                    f"| {kind} | {n} | {c.get('states') or dd.get('states') or '-'} | {dtxt} | {ctxt} | "
+                    f"{fmt_s(median(c.get('generate_source_s', [])))} | {fmt_s(median(c.get('cached_compile_s', [])))} | "
+                    f"{median(c.get('peak_mb', [])):.0f} MB |"
+                )
         rng = d.get("exponent_range")
         out.append("")
-        out.append(f"Growth exponents (least squares on log-log): chain N = {rng[0]}..{rng[1]}: derivation "
-                   f"**{d['chain_exponent_derive']:.2f}**, compilation **{d['chain_exponent_compile']:.2f}**; "
-                   f"stack N = {min(d['stack'])}..{max(d['stack'])}: derivation {d['stack_exponent_derive']:.2f}, "
-                   f"compilation {d['stack_exponent_compile']:.2f}.\n")
+        out.append(
+            f"Growth exponents (least squares on log-log): chain N = {rng[0]}..{rng[1]}: derivation "
+            f"**{d['chain_exponent_derive']:.2f}**, compilation **{d['chain_exponent_compile']:.2f}**; "
+            f"stack N = {min(d['stack'])}..{max(d['stack'])}: derivation {d['stack_exponent_derive']:.2f}, "
+            f"compilation {d['stack_exponent_compile']:.2f}.\n"
+        )
     p = res.get("peers")
     if p:
-        out.append("### 2. Derivation of the N-mass chain against peers (medians; sympy cache cleared per repetition)\n")
+        out.append(
+            "### 2. Derivation of the N-mass chain against peers (medians; sympy cache cleared per repetition)\n"
+        )
         if not p.get("peers"):
-            out.append("Peers not run: " + "; ".join(f"{PEER_LABEL[k]}: {v}" for k, v in p.get("skipped", {}).items()) + "\n")
+            out.append(
+                "Peers not run: " + "; ".join(f"{PEER_LABEL[k]}: {v}" for k, v in p.get("skipped", {}).items()) + "\n"
+            )
         else:
             names = list(p["peers"])
             out.append("| N | ours | " + " | ".join(f"{PEER_LABEL[k]} | ratio" for k in names) + " |")
@@ -471,19 +599,30 @@ def tables(res) -> str:
                 out.append("| " + " | ".join(cells) + " |")
             out.append("")
             ex = p.get("exponents", {})
-            out.append("Peer growth exponents over the N they finished: "
-                       + ", ".join(f"{PEER_LABEL[k]} {v:.2f}" for k, v in ex.items()) + ". "
-                       + "State-matrix eigenvalues of the N = 10 chain: "
-                       + ", ".join(f"{PEER_LABEL[k]} equal to ours within {p['peers'][k].get(10, {}).get('eig_max_rel_diff', float('nan')):.0e}"
-                                   for k in names) + ". Versions: "
-                       + ", ".join(f"{k} {v}" for k, v in p.get("versions", {}).items()) + ".\n")
+            out.append(
+                "Peer growth exponents over the N they finished: "
+                + ", ".join(f"{PEER_LABEL[k]} {v:.2f}" for k, v in ex.items())
+                + ". "
+                + "State-matrix eigenvalues of the N = 10 chain: "
+                + ", ".join(
+                    f"{PEER_LABEL[k]} equal to ours within {p['peers'][k].get(10, {}).get('eig_max_rel_diff', float('nan')):.0e}"
+                    for k in names
+                )
+                + ". Versions: "
+                + ", ".join(f"{k} {v}" for k, v in p.get("versions", {}).items())
+                + ".\n"
+            )
             for k, v in p.get("skipped", {}).items():
                 out.append(f"{PEER_LABEL[k]} skipped: {v}\n")
     sims = res.get("simulate")
     if sims:
-        out.append(f"### 3. Simulation: {sims[0]['t_end']:g} s of model time, 10 kHz output ({sims[0]['samples']} samples), "
-                   f"rtol = {sims[0]['rtol']:g} (medians)\n")
-        out.append("| workload | ours | naive (lambdify + solve_ivp) | speed-up | compiled limit (hand-written numba) | ours / limit | steps ours / limit / naive | max difference / range (naive, limit) |")
+        out.append(
+            f"### 3. Simulation: {sims[0]['t_end']:g} s of model time, 10 kHz output ({sims[0]['samples']} samples), "
+            f"rtol = {sims[0]['rtol']:g} (medians)\n"
+        )
+        out.append(
+            "| workload | ours | naive (lambdify + solve_ivp) | speed-up | compiled limit (hand-written numba) | ours / limit | steps ours / limit / naive | max difference / range (naive, limit) |"
+        )
         out.append("|---|---:|---:|---:|---:|---:|---:|---|")
         for s in sims:
             worst_n = max(s["agree_naive"].items(), key=lambda kv: kv[1] / s["agree_tol"][kv[0]])
@@ -491,23 +630,29 @@ def tables(res) -> str:
             naive_txt = fmt_s(median(s["naive_s"]))
             if s.get("naive_scaled"):
                 naive_txt += f" (scaled from {s['naive_scaled']['t_end']:g} s)"
-            out.append(f"| {s['case']} | {fmt_s(median(s['ours_s']))} | {naive_txt} | {s['speedup_vs_naive']:.1f}x | "
-                       f"{fmt_s(median(s['limit_s']))} | {s['ratio_to_limit']:.2f}x | "
-                       f"{s['ours_stats']['steps']} / {s['limit_stats']['steps']} / {s['naive_stats'].get('steps') or '-'} | "
-                       f"{worst_n[0]}: {worst_n[1]:.1e}, {worst_l[0]}: {worst_l[1]:.1e} "
-                       f"({'within' if s['agree_ok'] else 'NOT within'} tolerance) |")
+            out.append(
+                f"| {s['case']} | {fmt_s(median(s['ours_s']))} | {naive_txt} | {s['speedup_vs_naive']:.1f}x | "
+                f"{fmt_s(median(s['limit_s']))} | {s['ratio_to_limit']:.2f}x | "
+                f"{s['ours_stats']['steps']} / {s['limit_stats']['steps']} / {s['naive_stats'].get('steps') or '-'} | "
+                f"{worst_n[0]}: {worst_n[1]:.1e}, {worst_l[0]}: {worst_l[1]:.1e} "
+                f"({'within' if s['agree_ok'] else 'NOT within'} tolerance) |"
+            )
         out.append("")
         for s in sims:
-            out.append(f"- {s['case']}: {s['desc']}; ours {s['ours_stats']['rhs_calls']} RHS calls, "
-                       f"{s['ours_stats']['rejected']} rejected steps ({s['ours_stats'].get('reversal_rejections', 0)} at "
-                       f"operator reversals); naive set-up (lambdify) {fmt_s(s['naive_setup_s'])}; ratios per round "
-                       f"(ours/limit) {', '.join(f'{x:.2f}' for x in s.get('ratio_rounds', []))}.")
+            out.append(
+                f"- {s['case']}: {s['desc']}; ours {s['ours_stats']['rhs_calls']} RHS calls, "
+                f"{s['ours_stats']['rejected']} rejected steps ({s['ours_stats'].get('reversal_rejections', 0)} at "
+                f"operator reversals); naive set-up (lambdify) {fmt_s(s['naive_setup_s'])}; ratios per round "
+                f"(ours/limit) {', '.join(f'{x:.2f}' for x in s.get('ratio_rounds', []))}."
+            )
         out.append("")
     dg = res.get("diagnose")
     if dg:
         out.append("### 4. Diagnosis\n")
         if dg.get("status") == "ok":
-            out.append(f"`bondgraph diagnose` on {dg['samples']} samples: {fmt_s(dg['seconds'])} wall, peak {dg['peak_mb']:.0f} MB.\n")
+            out.append(
+                f"`bondgraph diagnose` on {dg['samples']} samples: {fmt_s(dg['seconds'])} wall, peak {dg['peak_mb']:.0f} MB.\n"
+            )
         else:
             out.append(f"{dg.get('status')}\n")
     return "\n".join(out)
@@ -529,18 +674,29 @@ def write_readme(res, path):
     """Replace the generated section of benchmarks/README.md with this run's figures."""
     start, end = "<!-- results:start -->", "<!-- results:end -->"
     m = res["machine"]
-    body = [start, "",
-            f"Latest run: {res['date']}, command `{res['command']}` ({res['wall_s'] / 60:.1f} min)."
-            + "".join(f" Figures of workloads {', '.join(e['workloads'])} from the run of {e['date']}, `{e['command']}`."
-                      for e in res.get("earlier_runs", [])),
-            f"Machine: {m['cpu']}, {m['cores']} cores, {m['memory']}, {m['platform']}; Python {m['python']}; "
-            + ", ".join(f"{k} {v}" for k, v in m["packages"].items())
-            + f"; framework sources (bondgraph/, library/, models/) sha256 {m['source_sha256']}.",
-            "Shared machine: every figure is a median of the repetitions shown; each ratio is taken between figures of one invocation.", "",
-            "#### Goals", "", goals_table(res), "", tables(res), end]
+    body = [
+        start,
+        "",
+        f"Latest run: {res['date']}, command `{res['command']}` ({res['wall_s'] / 60:.1f} min)."
+        + "".join(
+            f" Figures of workloads {', '.join(e['workloads'])} from the run of {e['date']}, `{e['command']}`."
+            for e in res.get("earlier_runs", [])
+        ),
+        f"Machine: {m['cpu']}, {m['cores']} cores, {m['memory']}, {m['platform']}; Python {m['python']}; "
+        + ", ".join(f"{k} {v}" for k, v in m["packages"].items())
+        + f"; framework sources (bondgraph/, library/, models/) sha256 {m['source_sha256']}.",
+        "Shared machine: every figure is a median of the repetitions shown; each ratio is taken between figures of one invocation.",
+        "",
+        "#### Goals",
+        "",
+        goals_table(res),
+        "",
+        tables(res),
+        end,
+    ]
     text = open(path, encoding="utf-8").read() if os.path.exists(path) else ""
     if start in text and end in text:
-        text = text[:text.index(start)] + "\n".join(body) + text[text.index(end) + len(end):]
+        text = text[: text.index(start)] + "\n".join(body) + text[text.index(end) + len(end) :]
     else:
         text = text.rstrip() + "\n\n" + "\n".join(body) + "\n"
     with open(path, "w", encoding="utf-8") as fh:
@@ -557,19 +713,28 @@ def _int_keys(obj):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("--quick", action="store_true", help="small sizes, 1 s of model time: a smoke test of the suite")
     ap.add_argument("--peers", action="store_true", help="install and time the peers (BondGraphTools, PyPI bondgraph)")
     ap.add_argument("--workloads", default="derive,peers,simulate,diagnose")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--timeout", type=float, default=120.0, help="per peer/derivation run (s); compilation gets 5x")
-    ap.add_argument("--naive-limit", type=float, default=600.0,
-                    help="run the naive simulation on a shorter horizon if it would take longer (s)")
+    ap.add_argument(
+        "--naive-limit",
+        type=float,
+        default=600.0,
+        help="run the naive simulation on a shorter horizon if it would take longer (s)",
+    )
     ap.add_argument("--out", default=os.path.join(HERE, "results.json"))
     ap.add_argument("--readme", action="store_true", help="write the figures into benchmarks/README.md")
-    ap.add_argument("--merge", action="store_true",
-                    help="keep the other workloads' figures from an existing --out file (each ratio still "
-                         "comes from one invocation)")
+    ap.add_argument(
+        "--merge",
+        action="store_true",
+        help="keep the other workloads' figures from an existing --out file (each ratio still "
+        "comes from one invocation)",
+    )
     args = ap.parse_args(argv)
     sys.path.insert(0, HERE)
     wl = [w.strip() for w in args.workloads.split(",") if w.strip()]
@@ -577,9 +742,13 @@ def main(argv=None):
     if unknown:
         ap.error(f"unknown workload(s) {sorted(unknown)}")
     t0 = time.time()
-    res = {"date": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
-           "command": "python benchmarks/run.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-           "machine": machine(), "args": vars(args), "goals": GOALS}
+    res = {
+        "date": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
+        "command": "python benchmarks/run.py " + " ".join(argv if argv is not None else sys.argv[1:]),
+        "machine": machine(),
+        "args": vars(args),
+        "goals": GOALS,
+    }
     if args.merge and os.path.exists(args.out):
         with open(args.out, encoding="utf-8") as fh:
             old = json.load(fh)
@@ -588,14 +757,25 @@ def main(argv=None):
                 res[key] = _int_keys(old[key])
         kept = [k for k in ("derive", "peers", "simulate", "diagnose") if k in old and k not in wl]
         earlier = [dict(e, workloads=[k for k in e["workloads"] if k not in wl]) for e in old.get("earlier_runs", [])]
-        earlier.append({"date": old.get("date"), "command": old.get("command"),
-                        "workloads": [k for k in kept if not any(k in e["workloads"] for e in earlier)]})
+        earlier.append(
+            {
+                "date": old.get("date"),
+                "command": old.get("command"),
+                "workloads": [k for k in kept if not any(k in e["workloads"] for e in earlier)],
+            }
+        )
         res["earlier_runs"] = [e for e in earlier if e["workloads"]]
     m = res["machine"]
-    log(f"machine: {m['cpu']}, {m['cores']} cores, {m['memory']}; Python {m['python']}; "
-        + ", ".join(f"{k} {v}" for k, v in m["packages"].items()))
-    workloads = [("derive", "derivation and compilation", workload_derive), ("peers", "peers", workload_peers),
-                 ("simulate", "simulation", workload_simulate), ("diagnose", "diagnosis", workload_diagnose)]
+    log(
+        f"machine: {m['cpu']}, {m['cores']} cores, {m['memory']}; Python {m['python']}; "
+        + ", ".join(f"{k} {v}" for k, v in m["packages"].items())
+    )
+    workloads = [
+        ("derive", "derivation and compilation", workload_derive),
+        ("peers", "peers", workload_peers),
+        ("simulate", "simulation", workload_simulate),
+        ("diagnose", "diagnosis", workload_diagnose),
+    ]
     for k, (key, title, work) in enumerate(workloads, 1):
         if key in wl:
             log(f"\n[{k}] {title}")

@@ -8,6 +8,7 @@ the record (the null rows); records with creep or hysteresis and no added drift 
 option costs (the effect rows).  Each is diagnosed through the command line as a user runs it;
 the table (markdown) gives the chain named without and with ``--drift``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,7 +28,9 @@ sys.path.insert(0, HERE)
 from diagnosis_accuracy import cached_draw  # noqa: E402
 
 NULLS = "bench:2004,bench:2016,bench:2064,bench:2011,bench:2065,bench:2002,ci:1008,ci:1011,ci:1012"
-EFFECTS = "bench:2019,bench:2022,bench:2038,bench:2046,bench:2070,bench:2032,bench:2060,bench:2001,bench:2018,bench:2042"
+EFFECTS = (
+    "bench:2019,bench:2022,bench:2038,bench:2046,bench:2070,bench:2032,bench:2060,bench:2001,bench:2018,bench:2042"
+)
 
 
 def chain(rec, x: np.ndarray, drift: bool, workdir: str) -> tuple[str, float]:
@@ -66,8 +69,11 @@ def main(argv=None) -> int:
                 xd = x + added * (t - t[0]) / (t[-1] - t[0])
                 plain, _ = chain(rec, xd, False, work)
                 with_drift, _ = chain(rec, xd, True, work)
-                print(f"| {size} {seed} | {rec.label} ({', '.join(rec.mechanisms) or '-'}) | "
-                      f"{added / rec.noise_rms:.1f} | {plain} | {with_drift} |", flush=True)
+                print(
+                    f"| {size} {seed} | {rec.label} ({', '.join(rec.mechanisms) or '-'}) | "
+                    f"{added / rec.noise_rms:.1f} | {plain} | {with_drift} |",
+                    flush=True,
+                )
     return 0
 
 

@@ -27,6 +27,7 @@ below 1e-4 (rtol = 1e-6).  If a pilot run of the naive route predicts more than
 ``naive_limit`` seconds, it is run on a shorter horizon and its time scaled up, and the result
 says so.
 """
+
 from __future__ import annotations
 
 import math
@@ -102,8 +103,9 @@ def _sensitivity(sim, case, states: dict, outputs: dict) -> dict:
 
 # ---- model set-up ----------------------------------------------------------------------------
 def setup_chain():
-    import bondgraph as bg
     from bench_models import chain_model, chain_values
+
+    import bondgraph as bg
 
     n = 10
     model = chain_model(n)
@@ -112,14 +114,22 @@ def setup_chain():
     def u_py(t):  # the same chirp in plain Python, value and derivative
         beta = (sig["f1"] - sig["f0"]) / sig["t1"]
         ph = 2.0 * math.pi * (sig["f0"] * t + 0.5 * beta * t * t)
-        return [sig["amplitude"] * math.cos(ph)], \
-               [-sig["amplitude"] * math.sin(ph) * 2.0 * math.pi * (sig["f0"] + beta * t)]
+        return [sig["amplitude"] * math.cos(ph)], [
+            -sig["amplitude"] * math.sin(ph) * 2.0 * math.pi * (sig["f0"] + beta * t)
+        ]
 
     from handwritten import chain_prm
-    return {"name": "chain10", "model": model, "inputs": {"F": bg.Chirp(**sig)}, "u_py": u_py,
-            "outputs": ["xN", "v1"], "limit": "chain",
-            "limit_prm": chain_prm(n, chain_values(n), sig["amplitude"], sig["f0"], sig["f1"], sig["t1"]),
-            "desc": "N=10 chain, F = chirp(10 N, 1->50 Hz in 10 s)"}
+
+    return {
+        "name": "chain10",
+        "model": model,
+        "inputs": {"F": bg.Chirp(**sig)},
+        "u_py": u_py,
+        "outputs": ["xN", "v1"],
+        "limit": "chain",
+        "limit_prm": chain_prm(n, chain_values(n), sig["amplitude"], sig["f0"], sig["f1"], sig["t1"]),
+        "desc": "N=10 chain, F = chirp(10 N, 1->50 Hz in 10 s)",
+    }
 
 
 def setup_apa():
@@ -135,12 +145,20 @@ def setup_apa():
         return [offset + amp * math.sin(w * t + V.par[2]), 0.0], [amp * w * math.cos(w * t + V.par[2]), 0.0]
 
     from handwritten import apa_prm
+
     op = next(iter(model.operators.values())).operator
-    return {"name": "apa_pi", "model": model, "inputs": {"V": V}, "u_py": u_py,
-            "outputs": ["x", "i", "p", "E"], "limit": "apa_pi",
-            "limit_prm": apa_prm(model.parameter_table(), op, amp, freq, phase, offset), "op": op,
-            "desc": f"APA-120ML, modified PI ({op.thresholds.size} plays, {op.deadzones.size} dead zones), "
-                    f"V = {offset:g} + {amp:g} sin(2 pi {freq:g} t {phase:+g} deg) V"}
+    return {
+        "name": "apa_pi",
+        "model": model,
+        "inputs": {"V": V},
+        "u_py": u_py,
+        "outputs": ["x", "i", "p", "E"],
+        "limit": "apa_pi",
+        "limit_prm": apa_prm(model.parameter_table(), op, amp, freq, phase, offset),
+        "op": op,
+        "desc": f"APA-120ML, modified PI ({op.thresholds.size} plays, {op.deadzones.size} dead zones), "
+        f"V = {offset:g} + {amp:g} sin(2 pi {freq:g} t {phase:+g} deg) V",
+    }
 
 
 # ---- routes ------------------------------------------------------------------------------------
@@ -178,6 +196,7 @@ def make_naive(sim, case):
         from scipy.integrate import RK45, solve_ivp
 
         if not ops:
+
             def fun(tt, x):
                 u, du = u_py(tt)
                 return np.array(f_rates(tt, x, u, du, th, ()))
@@ -258,13 +277,16 @@ def run_limit(case, sim, t, atol_vec):
         raise RuntimeError(f"hand-written integrator failed (status {status})")
     res = {k: Y[:, j] for j, k in enumerate(case["outputs"])}
     res.update({f"state {x}": X[:, j] for j, x in enumerate(sim.state_names)})
-    return res, \
-        {"steps": int(stats[0]), "rejected": int(stats[1]), "rhs_calls": int(stats[2]), "reversal_rejections": int(stats[3])}
+    return res, {
+        "steps": int(stats[0]),
+        "rejected": int(stats[1]),
+        "rhs_calls": int(stats[2]),
+        "reversal_rejections": int(stats[3]),
+    }
 
 
 def bench_case(case, repeat: int, naive_limit: float, t_end: float = T_END, log=print) -> dict:
-    from bondgraph import Simulator
-    from bondgraph import config
+    from bondgraph import Simulator, config
 
     ATOL_FLOOR = config.get("simulate.atol_floor")
 
@@ -273,12 +295,15 @@ def bench_case(case, repeat: int, naive_limit: float, t_end: float = T_END, log=
     t0 = time.perf_counter()
     sim = Simulator(case["model"])
     res["ours_setup_s"] = time.perf_counter() - t0  # derive + compile (from the cache if warm)
-    res["auto_method"] = sim.choose_method(t, sim.initial_state(sim.theta()), sim.theta(),
-                                           sim.initial_memory(0.0, sim.initial_state(sim.theta()), sim.theta(),
-                                                              sim.signal_bank(case["inputs"])),
-                                           sim.signal_bank(case["inputs"]))
+    res["auto_method"] = sim.choose_method(
+        t,
+        sim.initial_state(sim.theta()),
+        sim.theta(),
+        sim.initial_memory(0.0, sim.initial_state(sim.theta()), sim.theta(), sim.signal_bank(case["inputs"])),
+        sim.signal_bank(case["inputs"]),
+    )
     run_ours(sim, case, t[:11])  # warm-up: loads the compiled integrator
-    r = run_ours(sim, case, t)      # reference result (also sets the naive route's atol)
+    r = run_ours(sim, case, t)  # reference result (also sets the naive route's atol)
     ours = {k: r[k] for k in case["outputs"]}
     ours.update({f"state {x}": r.states[x] for x in sim.state_names})
     kappa = _sensitivity(sim, case, r.states, ours)
@@ -306,8 +331,10 @@ def bench_case(case, repeat: int, naive_limit: float, t_end: float = T_END, log=
         n_short = max(int((t.size - 1) * frac) + 1, n_pilot)
         tn = t[:n_short]
         res["naive_scaled"] = {"t_end": float(tn[-1]), "factor": (t.size - 1) / (n_short - 1)}
-        log(f"  {case['name']}: naive route predicted {predicted:.0f} s > {naive_limit:.0f} s: running "
-            f"{tn[-1]:g} s of model time and scaling its time by {(t.size - 1) / (n_short - 1):.2f}")
+        log(
+            f"  {case['name']}: naive route predicted {predicted:.0f} s > {naive_limit:.0f} s: running "
+            f"{tn[-1]:g} s of model time and scaling its time by {(t.size - 1) / (n_short - 1):.2f}"
+        )
     else:
         tn = t
         res["naive_scaled"] = None
@@ -327,8 +354,10 @@ def bench_case(case, repeat: int, naive_limit: float, t_end: float = T_END, log=
             t0 = time.perf_counter()
             nv, nst = naive(tn, atol_vec)
             naive_t.append(time.perf_counter() - t0)
-        log(f"  {case['name']} round {rnd + 1}: ours {ours_t[-1]:.3f} s, limit {lim_t[-1]:.3f} s"
-            + (f", naive {naive_t[-1]:.2f} s" if len(naive_t) == rnd + 1 else ""))
+        log(
+            f"  {case['name']} round {rnd + 1}: ours {ours_t[-1]:.3f} s, limit {lim_t[-1]:.3f} s"
+            + (f", naive {naive_t[-1]:.2f} s" if len(naive_t) == rnd + 1 else "")
+        )
     res["ours_s"] = ours_t
     res["limit_s"] = lim_t
     res["ratio_rounds"] = ratios
@@ -338,9 +367,11 @@ def bench_case(case, repeat: int, naive_limit: float, t_end: float = T_END, log=
     res["naive_s"] = [x * scale for x in naive_t]
     res["naive_stats"] = nst
     res["agree_naive"] = _agreement(ours, nv, tn.size)
-    log(f"  {case['name']}: ours {_median(ours_t):.3f} s ({r.stats['steps']} steps), limit {_median(lim_t):.3f} s "
+    log(
+        f"  {case['name']}: ours {_median(ours_t):.3f} s ({r.stats['steps']} steps), limit {_median(lim_t):.3f} s "
         f"({lst['steps']} steps), naive {_median(naive_t):.2f} s over {tn[-1]:g} s"
-        + (f" (x{scale:.2f} -> {_median(res['naive_s']):.1f} s)" if scale != 1 else ""))
+        + (f" (x{scale:.2f} -> {_median(res['naive_s']):.1f} s)" if scale != 1 else "")
+    )
     res["speedup_vs_naive"] = _median(res["naive_s"]) / _median(res["ours_s"])
     res["ratio_to_limit"] = _median(res["ours_s"]) / _median(res["limit_s"])
     res["agree_ok"] = all(res[f"agree_{r}"][k] < tol[k] for r in ("naive", "limit") for k in tol)
@@ -360,4 +391,5 @@ def run(repeat: int, naive_limit: float, quick: bool = False, log=print) -> list
 
 if __name__ == "__main__":
     import json
+
     print(json.dumps(run(3, 600.0, quick="--quick" in sys.argv), indent=1, default=str))

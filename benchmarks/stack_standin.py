@@ -17,6 +17,7 @@ Each runs ``bondgraph diagnose models/stack.py FILE --json`` (wall time measured
 command: two worker processes, on a shared machine) and prints the chain, the step gains and
 the time.  The target: each answered in < 2 min with rate-independent hysteresis first.
 """
+
 from __future__ import annotations
 
 import json
@@ -38,7 +39,7 @@ CHANGES = {"a": 1.15, "K": 0.8, "c": 1.3, "kx": 1.2, "Re": 1.25}
 def standin_truth():
     """The lumped stack with Bouc–Wen polarization and Kelvin–Voigt creep cells (see the module doc)."""
     import bondgraph as bg
-    from bondgraph import C, I, J0, J1, R, Se
+    from bondgraph import J0, J1, C, I, R, Se
     from bondgraph.model.modelfile import load_model
     from library.piezo import bouc_wen_polarization, layer_extension, piezo_layer
 
@@ -49,8 +50,14 @@ def standin_truth():
     g = bg.Model("stack truth: Bouc-Wen polarization + creep")
     V = g.input("V", "V")
     # Bouc-Wen in the polarization domain: kw sets the loop (about 12 % of the stroke at 150 V)
-    layer = piezo_layer("stack", l=val["l"], a=val["a"], K=val["K"], R_NL=val["c"],
-                        polarization=lambda c, name: bouc_wen_polarization(c, name, kx, 0.9e5, 4.0e7, 0.5, 1.0))
+    layer = piezo_layer(
+        "stack",
+        l=val["l"],
+        a=val["a"],
+        K=val["K"],
+        R_NL=val["c"],
+        polarization=lambda c, name: bouc_wen_polarization(c, name, kx, 0.9e5, 4.0e7, 0.5, 1.0),
+    )
     layer.unbond("pol", "C_NL")
     layer.add(J0("cr"))
     layer.bond("pol", "cr")
@@ -67,7 +74,8 @@ def standin_truth():
     g.bond("i", "Re")
     g.bond("stack.mech", "M")
     x = layer_extension("stack", val["a"], val["l"]) + sum(
-        val["a"] / val["l"] * bg.Quantity("q", f"stack.Cc{k}") for k in range(2))
+        val["a"] / val["l"] * bg.Quantity("q", f"stack.Cc{k}") for k in range(2)
+    )
     g.output("x", x, "m")
     return g
 
@@ -84,22 +92,31 @@ def standin_file() -> str:
     V = 150.0 * np.sin(2 * math.pi * 1.0 * t)
     res = bg.simulate(standin_truth(), t, {"V": bg.PiecewiseLinear(t, V)}, method="radau", rtol=1e-7)
     x = res["x"] + np.random.default_rng(7).normal(0, 0.002 * np.ptp(res["x"]), t.size)
-    write_csv(path, t, {"V": V, "x": x}, {"truth": "lumped stack, Bouc-Wen polarization, two creep cells",
-                                          "drive": "150 V, 1 Hz sine"})
+    write_csv(
+        path,
+        t,
+        {"V": V, "x": x},
+        {"truth": "lumped stack, Bouc-Wen polarization, two creep cells", "drive": "150 V, 1 Hz sine"},
+    )
     return path
 
 
 def main():
-    files = [("P-885 real record (200 Hz x 70 s)", os.path.join(ROOT, "tests", "data", "p885_bursts.csv")),
-             ("stand-in: ±150 V 1 Hz, 5 kHz x 10 s, hysteresis + creep", standin_file())]
+    files = [
+        ("P-885 real record (200 Hz x 70 s)", os.path.join(ROOT, "tests", "data", "p885_bursts.csv")),
+        ("stand-in: ±150 V 1 Hz, 5 kHz x 10 s, hysteresis + creep", standin_file()),
+    ]
     rows = []
     for name, path in files:
         rec = timed(_cli() + ["diagnose", os.path.join(ROOT, "models", "stack.py"), path, "--json"])
         out = json.loads(rec["stdout"]) if rec["rc"] == 0 else {}
         steps = " → ".join(f"{s['cause']} ×{s['gain']:.3g}" for s in out.get("steps", [])) or "none"
         rows.append((name, steps, out.get("gain", float("nan")), rec["seconds"], rec["rc"]))
-        print(f"{name}: {steps}; total gain {out.get('gain', float('nan')):.3g}; {rec['seconds']:.0f} s "
-              f"(exit {rec['rc']})", flush=True)
+        print(
+            f"{name}: {steps}; total gain {out.get('gain', float('nan')):.3g}; {rec['seconds']:.0f} s "
+            f"(exit {rec['rc']})",
+            flush=True,
+        )
         if rec["rc"] != 0:
             print(rec.get("stderr", "")[-800:])
     print("\n| record | chain (step gains) | total gain | wall |\n|---|---|---:|---:|")

@@ -19,29 +19,54 @@ The names below are imported on first use (PEP 562), so ``import bondgraph`` and
 ``bondgraph --help`` command stay fast: sympy and the compiled integrator load only when a
 name that needs them is touched.
 """
+
 from __future__ import annotations
 
 import importlib
 
 #: public name -> the module that defines it
 _EXPORTS = {
-    "BondGraphError": "support.errors", "CausalityError": "support.errors", "DataError": "support.errors",
-    "ModelError": "support.errors", "ParameterError": "support.errors", "SignalError": "support.errors",
+    "BondGraphError": "support.errors",
+    "CausalityError": "support.errors",
+    "DataError": "support.errors",
+    "ModelError": "support.errors",
+    "ParameterError": "support.errors",
+    "SignalError": "support.errors",
     "UsageError": "support.errors",
-    "C": "model.elements", "CField": "model.elements", "GY": "model.elements", "I": "model.elements",
-    "J0": "model.elements", "J1": "model.elements", "R": "model.elements", "Se": "model.elements",
-    "Sf": "model.elements", "TF": "model.elements", "Element": "model.elements",
-    "Component": "model.graph", "Model": "model.graph", "Quantity": "model.graph",
+    "C": "model.elements",
+    "CField": "model.elements",
+    "GY": "model.elements",
+    "I": "model.elements",
+    "J0": "model.elements",
+    "J1": "model.elements",
+    "R": "model.elements",
+    "Se": "model.elements",
+    "Sf": "model.elements",
+    "TF": "model.elements",
+    "Element": "model.elements",
+    "Component": "model.graph",
+    "Model": "model.graph",
+    "Quantity": "model.graph",
     "MemoryOperator": "model.memory",
     "Parameter": "model.parameters",
-    "Chirp": "model.signals", "Constant": "model.signals", "PiecewiseLinear": "model.signals",
-    "Ramp": "model.signals", "Signal": "model.signals", "Sine": "model.signals", "Step": "model.signals",
+    "Chirp": "model.signals",
+    "Constant": "model.signals",
+    "PiecewiseLinear": "model.signals",
+    "Ramp": "model.signals",
+    "Signal": "model.signals",
+    "Sine": "model.signals",
+    "Step": "model.signals",
     "Triangle": "model.signals",
     "Experiment": "model.experiment",
-    "Causality": "equations.causality", "assign_causality": "equations.causality",
-    "Equations": "equations.system", "derive": "equations.derivation",
-    "SimResult": "numerics.simulate", "Simulator": "numerics.simulate", "simulate": "numerics.simulate",
-    "LinearModel": "linear.linearize", "linearize": "linear.linearize",
+    "Causality": "equations.causality",
+    "assign_causality": "equations.causality",
+    "Equations": "equations.system",
+    "derive": "equations.derivation",
+    "SimResult": "numerics.simulate",
+    "Simulator": "numerics.simulate",
+    "simulate": "numerics.simulate",
+    "LinearModel": "linear.linearize",
+    "linearize": "linear.linearize",
 }
 
 #: public module -> its place in the package (``from bondgraph import config``)

@@ -3,6 +3,7 @@
 A Ctrl-C (or SIGTERM) handler is the very first thing installed, so even an interrupt during
 start-up ends with one line and status 130 (143); :mod:`bondgraph.support.interrupt` then takes over.
 """
+
 import os
 import signal
 import sys
@@ -20,6 +21,7 @@ def run() -> None:
 
     with interrupt.handle_signals():
         from .cli import main
+
         code = main()
     sys.exit(code)
 

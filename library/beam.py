@@ -21,6 +21,7 @@ int delta'(x - l) phi dx = -phi'(l) (eq. 21), m_p,i = M_p (phi_i'(l2) - phi_i'(l
 sign of e31: for PZT (e31 < 0) M_p < 0, so a positive V bends the tip towards negative w. Mode
 signs are fixed by phi_i(L) > 0. A global sign of V cancels in the zeros of w(x_t)/V.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -98,9 +99,11 @@ class Bimorph:
     @property
     def segments(self) -> tuple[Segment, ...]:
         """Non-empty uniform segments from clamp to tip."""
-        parts = ((0.0, self.l1, self.rhoA_bare, self.EI_bare),
-                 (self.l1, self.l2, self.rhoA_covered, self.EI_covered),
-                 (self.l2, self.L, self.rhoA_bare, self.EI_bare))
+        parts = (
+            (0.0, self.l1, self.rhoA_bare, self.EI_bare),
+            (self.l1, self.l2, self.rhoA_covered, self.EI_covered),
+            (self.l2, self.L, self.rhoA_bare, self.EI_bare),
+        )
         return tuple(Segment(*p) for p in parts if p[1] > p[0])
 
     @property
@@ -114,11 +117,13 @@ class Bimorph:
 
 
 # Ghafarirad et al. 2015, Table 1: Piezo Systems T215-A4-103X, PZT-5A on brass, fully covered.
-T215_A4_103X = Bimorph(L=21.6e-3, b=3.2e-3, t_p=0.13e-3, t_b=0.12e-3, rho_p=7800.0, rho_b=9000.0,
-                       c_p=59e9, c_b=105e9, e31=-12.54)
+T215_A4_103X = Bimorph(
+    L=21.6e-3, b=3.2e-3, t_p=0.13e-3, t_b=0.12e-3, rho_p=7800.0, rho_b=9000.0, c_p=59e9, c_b=105e9, e31=-12.54
+)
 # Shahabi, Ghafarirad & Taghvaeipour 2019, Table 1: Piezo Systems T226-H4-203X, PZT-5H on brass, fully covered.
-T226_H4_203X = Bimorph(L=24.53e-3, b=6.4e-3, t_p=0.265e-3, t_b=0.140e-3, rho_p=7500.0,
-                       rho_b=9000.0, c_p=51.51e9, c_b=105e9, e31=-13.11)
+T226_H4_203X = Bimorph(
+    L=24.53e-3, b=6.4e-3, t_p=0.265e-3, t_b=0.140e-3, rho_p=7500.0, rho_b=9000.0, c_p=51.51e9, c_b=105e9, e31=-13.11
+)
 
 
 def _basis(beta, xi, h, d):
@@ -128,8 +133,7 @@ def _basis(beta, xi, h, d):
     high modes and long segments cannot overflow.
     """
     ph = beta * xi + d * np.pi / 2
-    return np.stack([np.sin(ph), np.cos(ph), np.exp(beta * (xi - h)),
-                     (-1.0) ** d * np.exp(-beta * xi)], axis=-1)
+    return np.stack([np.sin(ph), np.cos(ph), np.exp(beta * (xi - h)), (-1.0) ** d * np.exp(-beta * xi)], axis=-1)
 
 
 def _matrix(segs, betas):
@@ -137,17 +141,17 @@ def _matrix(segs, betas):
     m = len(segs)
     h = [s.end - s.start for s in segs]
     A = np.zeros((4 * m, 4 * m))
-    A[0, :4] = _basis(betas[0], 0.0, h[0], 0)            # phi(0) = 0
-    A[1, :4] = _basis(betas[0], 0.0, h[0], 1)            # phi'(0) = 0
+    A[0, :4] = _basis(betas[0], 0.0, h[0], 0)  # phi(0) = 0
+    A[1, :4] = _basis(betas[0], 0.0, h[0], 1)  # phi'(0) = 0
     r = 2
-    for k in range(m - 1):                               # phi, phi', EI phi'', (EI phi'')' continuous
+    for k in range(m - 1):  # phi, phi', EI phi'', (EI phi'')' continuous
         for d in range(4):
             w = (segs[k + 1].EI / segs[k].EI if d >= 2 else 1.0) * (betas[k + 1] / betas[k]) ** d
-            A[r, 4 * k:4 * k + 4] = _basis(betas[k], h[k], h[k], d)
-            A[r, 4 * k + 4:4 * k + 8] = -w * _basis(betas[k + 1], 0.0, h[k + 1], d)
+            A[r, 4 * k : 4 * k + 4] = _basis(betas[k], h[k], h[k], d)
+            A[r, 4 * k + 4 : 4 * k + 8] = -w * _basis(betas[k + 1], 0.0, h[k + 1], d)
             r += 1
-    A[r, -4:] = _basis(betas[-1], h[-1], h[-1], 2)       # moment-free tip
-    A[r + 1, -4:] = _basis(betas[-1], h[-1], h[-1], 3)   # shear-free tip
+    A[r, -4:] = _basis(betas[-1], h[-1], h[-1], 2)  # moment-free tip
+    A[r + 1, -4:] = _basis(betas[-1], h[-1], h[-1], 3)  # shear-free tip
     return A
 
 
@@ -161,10 +165,10 @@ def _modal_analysis(beam: Bimorph, n: int) -> Modes:
     if n < 1:
         raise ValueError("n must be >= 1")
     segs = beam.segments
-    kappa = np.array([(s.rhoA / s.EI) ** 0.25 for s in segs])   # beta_k = kappa_k sqrt(omega)
+    kappa = np.array([(s.rhoA / s.EI) ** 0.25 for s in segs])  # beta_k = kappa_k sqrt(omega)
     phase = float(np.sum(kappa * [s.end - s.start for s in segs]))
 
-    def det(theta):   # theta = sum_k beta_k h_k; modes sit roughly pi apart in theta
+    def det(theta):  # theta = sum_k beta_k h_k; modes sit roughly pi apart in theta
         return np.linalg.det(_matrix(segs, kappa * theta / phase))
 
     # Eigenvalues of the clamped-free Euler–Bernoulli problem are simple (oscillation theory), so
@@ -231,8 +235,7 @@ class Modes:
     def input_gains(self) -> np.ndarray:
         """m_p,i = M_p (phi_i'(l2) - phi_i'(l1)): modal force per volt (N kg^-1/2 V^-1)."""
         b = self.beam
-        return np.array([b.M_p * (self.slope(i, b.l2) - self.slope(i, b.l1))
-                         for i in range(len(self.omegas))])
+        return np.array([b.M_p * (self.slope(i, b.l2) - self.slope(i, b.l1)) for i in range(len(self.omegas))])
 
     def damping_ratios(self, alpha: float, beta: float) -> np.ndarray:
         """Proportional damping: 2 zeta_i omega_i = alpha + beta omega_i^2 (alpha 1/s, beta s)."""
@@ -273,13 +276,13 @@ def effective_mass(beam: Bimorph) -> float:
     a0 = np.array([s.start for s in segs])
     a1 = np.array([s.end for s in segs])
 
-    def delta(x):   # EI(x) delta'' = L - x, delta(0) = delta'(0) = 0, per unit tip force (m/N)
+    def delta(x):  # EI(x) delta'' = L - x, delta(0) = delta'(0) = 0, per unit tip force (m/N)
         x = np.asarray(x, dtype=float)[..., None]
         P = lambda s: x * beam.L * s - (x + beam.L) * s**2 / 2 + s**3 / 3
         return np.sum((P(np.minimum(x, a1)) - P(np.minimum(x, a0))) / EI, axis=-1)
 
     energy = 0.0
-    for s in segs:   # delta is cubic on each segment: 4-point Gauss is exact
+    for s in segs:  # delta is cubic on each segment: 4-point Gauss is exact
         x, w = _gauss(s.start, s.end, 4)
         energy += s.rhoA * w @ delta(x) ** 2
     return float(energy / delta(beam.L) ** 2)
@@ -304,24 +307,24 @@ def cantilever_mass_factor(w_r: float = 1.0, l_r: float = 0.0, d_r: float = 0.0)
     :func:`extension_mass_factor` for eq. 11. Dimensionless; 0 < w_r < 2."""
     if not 0.0 < w_r < 2.0 or l_r < 0.0 or d_r < 0.0:
         raise ValueError(f"need 0 < w_r < 2, l_r >= 0, d_r >= 0; got w_r={w_r}, l_r={l_r}, d_r={d_r}")
-    tip = 1.0 + l_r                                   # lengths in units of l
+    tip = 1.0 + l_r  # lengths in units of l
 
     def width(x):
         return w_r + 2.0 * (1.0 - w_r) * x
 
-    def slope(x):                                      # delta'(x) = int_0^x (tip - s)/w(s) ds
+    def slope(x):  # delta'(x) = int_0^x (tip - s)/w(s) ds
         return quad(lambda s: (tip - s) / width(s), 0.0, x, epsabs=0.0, epsrel=1e-13)[0]
 
-    def deflection(x):                                 # delta(x) = int_0^x (x - s)(tip - s)/w(s) ds
+    def deflection(x):  # delta(x) = int_0^x (x - s)(tip - s)/w(s) ds
         return quad(lambda s: (x - s) * (tip - s) / width(s), 0.0, x, epsabs=0.0, epsrel=1e-13)[0]
 
     d1, a1 = deflection(1.0), slope(1.0)
     beam = quad(lambda x: deflection(x) ** 2 * width(x), 0.0, 1.0, epsabs=0.0, epsrel=1e-12)[0]
     ext_w = d_r * (2.0 - w_r)
     # the straight extension: int_0^{l_r} (d1 + a1 s)^2 ds in closed form
-    ext = ext_w * (d1 ** 2 * l_r + d1 * a1 * l_r ** 2 + a1 ** 2 * l_r ** 3 / 3.0)
+    ext = ext_w * (d1**2 * l_r + d1 * a1 * l_r**2 + a1**2 * l_r**3 / 3.0)
     d_tip = d1 + a1 * l_r
-    return float((beam + ext) / ((1.0 + ext_w * l_r) * d_tip ** 2))
+    return float((beam + ext) / ((1.0 + ext_w * l_r) * d_tip**2))
 
 
 def extension_mass_factor(l_r, d_r):
@@ -334,7 +337,7 @@ def extension_mass_factor(l_r, d_r):
     The numerator is as printed; the denominator, lost in the text, is derived from eq. 9
     (tests check both against :func:`cantilever_mass_factor`). Numbers or arrays."""
     num = 33 + 7 * l_r * (13 + 9 * l_r + 5 * d_r * (4 + 3 * l_r * (6 + l_r * (11 + 2 * l_r * (5 + 2 * l_r)))))
-    return num / (140 * (1 + d_r * l_r) * (1 + 3 * l_r + 3 * l_r ** 2) ** 2)
+    return num / (140 * (1 + d_r * l_r) * (1 + 3 * l_r + 3 * l_r**2) ** 2)
 
 
 def cantilever_tip_compliance(EI_nom: float, l: float, w_r: float = 1.0, l_r: float = 0.0) -> float:
@@ -342,14 +345,13 @@ def cantilever_tip_compliance(EI_nom: float, l: float, w_r: float = 1.0, l_r: fl
     bending stiffness EI_nom (N m^2) at mid-length, scaled with the width; at the end of the rigid
     extension: delta = l^3/EI_nom int_0^1 (1 + l_r - s)^2 / w(s) ds (Castigliano)."""
     tip = 1.0 + l_r
-    integral = quad(lambda s: (tip - s) ** 2 / (w_r + 2.0 * (1.0 - w_r) * s), 0.0, 1.0,
-                    epsabs=0.0, epsrel=1e-13)[0]
-    return float(l ** 3 / EI_nom * integral)
+    integral = quad(lambda s: (tip - s) ** 2 / (w_r + 2.0 * (1.0 - w_r) * s), 0.0, 1.0, epsabs=0.0, epsrel=1e-13)[0]
+    return float(l**3 / EI_nom * integral)
 
 
 def cantilever_beta_L(n: int) -> np.ndarray:
     """First n roots of 1 + cos(bL) cosh(bL) = 0 (1.8751, 4.6941, 7.8548, ...)."""
-    f = lambda z: np.cos(z) + 1 / np.cosh(z)   # same roots, no overflow
+    f = lambda z: np.cos(z) + 1 / np.cosh(z)  # same roots, no overflow
     return np.array([brentq(f, (k - 1) * np.pi, k * np.pi, xtol=1e-15) for k in range(1, n + 1)])
 
 

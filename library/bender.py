@@ -23,6 +23,7 @@ velocity (m/s); the tip deflection delta (m) is taken at the end of the rigid ex
 * eq. 16, m_eff delta'' + b_a(f, E) delta' + k_a(E) delta = F_a + F_ext (:func:`bending_actuator`;
   F_a counted positive along delta, the opposite of the paper's sign).
 """
+
 from __future__ import annotations
 
 import math
@@ -30,7 +31,7 @@ from typing import Sequence
 
 import numpy as np
 
-from bondgraph import C, Component, I, J0, J1, MemoryOperator, R, Se
+from bondgraph import J0, J1, C, Component, I, MemoryOperator, R, Se
 
 
 def kelvin_voigt_chain(name: str, k0, cells: Sequence[tuple] = (), doc: str = "") -> Component:
@@ -63,20 +64,21 @@ def creep_step_response(t, F0: float, k0: float, cells: Sequence[tuple] = ()) ->
     return F0 * np.where(t >= 0.0, out, 0.0)
 
 
-def thermoelastic_relaxation(*, alpha: float, E_Y: float, T: float, c_v: float, kappa: float,
-                             thickness: float) -> tuple[float, float]:
+def thermoelastic_relaxation(
+    *, alpha: float, E_Y: float, T: float, c_v: float, kappa: float, thickness: float
+) -> tuple[float, float]:
     """(Delta, f_r) of eqs. 14-15: relaxation strength Delta = alpha^2 E_Y T / c_v (alpha: thermal
     expansion, 1/K; E_Y: Young's modulus, Pa; T: temperature, K; c_v: volumetric heat capacity,
     J/(m^3 K)) and relaxation frequency f_r = pi kappa / (2 c_v t^2) (kappa: thermal conductivity,
     W/(m K); t: beam thickness, m), Hz. The extracted eq. 14 reads "2EYT" for the prefactor; we
     take Zener's alpha^2 E T / c_v, which the units require."""
-    return alpha ** 2 * E_Y * T / c_v, math.pi * kappa / (2.0 * c_v * thickness ** 2)
+    return alpha**2 * E_Y * T / c_v, math.pi * kappa / (2.0 * c_v * thickness**2)
 
 
 def thermoelastic_loss(f, delta: float, f_r: float):
     """Eq. 14: loss factor eta(f) = Delta (f/f_r) / (1 + (f/f_r)^2) (peak Delta/2 at f = f_r)."""
     r = np.asarray(f, float) / f_r
-    return delta * r / (1.0 + r ** 2)
+    return delta * r / (1.0 + r**2)
 
 
 def damping_coefficient(zeta, m, k):
@@ -131,8 +133,9 @@ def loss_factor(op: MemoryOperator, amplitude: float, n: int = 400) -> float:
     return area / (2 * math.pi * w) if w > 0 else 0.0
 
 
-def bending_actuator(name: str, *, m_eff, k_a, b_a, F_a, creep: Sequence[tuple] = (),
-                     thermoelastic: tuple | None = None, doc: str = "") -> Component:
+def bending_actuator(
+    name: str, *, m_eff, k_a, b_a, F_a, creep: Sequence[tuple] = (), thermoelastic: tuple | None = None, doc: str = ""
+) -> Component:
     """Eq. 16 as a bond graph: a 1-junction ``tip`` (tip velocity) carrying the effective mass
     ``m_eff`` (kg), the damper ``b_a`` (N s/m), the piezoelectric force ``F_a`` (N, an expression
     of the model's inputs; positive along delta) and the actuator's elastic chain: stiffness ``k_a``
@@ -140,8 +143,7 @@ def bending_actuator(name: str, *, m_eff, k_a, b_a, F_a, creep: Sequence[tuple] 
     plus, with ``thermoelastic`` = (Delta, f_r), the relaxation arm of :func:`thermoelastic_arm`.
     Port ``tip`` takes external forces (power in). Tip deflection: :func:`tip_deflection`."""
     c = Component(name, doc or "high-field piezoelectric bending actuator (eq. 16)")
-    c.add(J1("v"), I("m_eff", m_eff), R("b_a", b_a), Se("F_a", F_a),
-          kelvin_voigt_chain("chain", k_a, creep))
+    c.add(J1("v"), I("m_eff", m_eff), R("b_a", b_a), Se("F_a", F_a), kelvin_voigt_chain("chain", k_a, creep))
     c.bond("F_a", "v")
     c.bond("v", "m_eff")
     c.bond("v", "b_a")

@@ -34,6 +34,7 @@ equation (and the zeros of w/V do not depend on a global sign), so one conventio
 Units of the per-mode nonlinear coefficients (q in kg^1/2 m, modal force in kg^1/2 m s^-2):
 k1 [kg^-1 m^-2 s^-2], k2 [kg^-2 m^-4 s^-2], mu1 [kg^-1 m^-2 s^-1].
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -42,10 +43,11 @@ from typing import Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from bondgraph import I, J1, Model, ModelError, R, Se
+from bondgraph import J1, I, Model, ModelError, R, Se
 from bondgraph import C as Cap
 
-from .beam import Bimorph, Modes, effective_mass as _static_effective_mass
+from .beam import Bimorph, Modes
+from .beam import effective_mass as _static_effective_mass
 
 #: units of the per-mode quantities (mass-normalised modal coordinate q in kg^1/2 m)
 UNITS = {
@@ -97,11 +99,23 @@ class BimorphModes:
         return len(self.omega)
 
 
-def add_bimorph_modes(m: Model, beam: Bimorph, n_modes: int = 2, target: float = 1.0, *,
-                      alpha: float = 0.0, beta: float = 0.0, zetas: Sequence[float] | None = None,
-                      omegas: Sequence[float] | None = None, drive=None, hysteresis=None,
-                      nonlinear: Mapping[int, ModeNonlinearity] | Sequence | None = None,
-                      output: str | None = "x", prefix: str = "", source: str = "") -> BimorphModes:
+def add_bimorph_modes(
+    m: Model,
+    beam: Bimorph,
+    n_modes: int = 2,
+    target: float = 1.0,
+    *,
+    alpha: float = 0.0,
+    beta: float = 0.0,
+    zetas: Sequence[float] | None = None,
+    omegas: Sequence[float] | None = None,
+    drive=None,
+    hysteresis=None,
+    nonlinear: Mapping[int, ModeNonlinearity] | Sequence | None = None,
+    output: str | None = "x",
+    prefix: str = "",
+    source: str = "",
+) -> BimorphModes:
     """Add ``n_modes`` modal resonators of ``beam`` to ``m`` and (unless ``output`` is None) the
     sensor output ``x = w(target·L) = sum_i phi_i(target·L) q_i`` (m).
 
@@ -159,14 +173,16 @@ def add_bimorph_modes(m: Model, beam: Bimorph, n_modes: int = 2, target: float =
         else:
             z_val = z_given[i]
             z_doc = f"damping ratio of mode {k}"
-        w_doc = (f"natural frequency of mode {k}" +
-                 (" (exact Euler-Bernoulli modes)" if w_given[i] is None else ""))
+        w_doc = f"natural frequency of mode {k}" + (" (exact Euler-Bernoulli modes)" if w_given[i] is None else "")
         omega = param(f"omega_{k}", w_val, UNITS["omega"], w_doc)
         zeta = param(f"zeta_{k}", z_val, UNITS["zeta"], z_doc)
-        mp = param(f"mp_{k}", gains[i], UNITS["mp"],
-                   f"modal input gain of mode {k}, M_p (phi_{k}'(l2) - phi_{k}'(l1))")
-        phi = param(f"phi_{k}", float(modes.shape(i, x_t)), UNITS["phi"],
-                    f"mass-normalised mode shape {k} at the target x = {x_t * 1e3:.4g} mm")
+        mp = param(f"mp_{k}", gains[i], UNITS["mp"], f"modal input gain of mode {k}, M_p (phi_{k}'(l2) - phi_{k}'(l1))")
+        phi = param(
+            f"phi_{k}",
+            float(modes.shape(i, x_t)),
+            UNITS["phi"],
+            f"mass-normalised mode shape {k} at the target x = {x_t * 1e3:.4g} mm",
+        )
 
         j, se, ms, sp_, dm = (f"{prefix}{s}_{k}" for s in ("mode", "force", "mass", "spring", "damper"))
         m.add(J1(j), Se(se, mp * drive), I(ms, 1))
@@ -176,8 +192,9 @@ def add_bimorph_modes(m: Model, beam: Bimorph, n_modes: int = 2, target: float =
         else:
             k1 = param(f"k1_{k}", nli.k1, UNITS["k1"], f"cubic modal stiffness of mode {k}")
             k2 = param(f"k2_{k}", nli.k2, UNITS["k2"], f"quintic modal stiffness of mode {k}")
-            mu1 = param(f"mu1_{k}", nli.mu1, UNITS["mu1"],
-                        f"nonlinear damping of mode {k}: (2 zeta omega + mu1 q^2) q'")
+            mu1 = param(
+                f"mu1_{k}", nli.mu1, UNITS["mu1"], f"nonlinear damping of mode {k}: (2 zeta omega + mu1 q^2) q'"
+            )
             m.add(Cap(sp_, energy=lambda qq, w=omega, a=k1, b=k2: w**2 * qq**2 / 2 + a * qq**4 / 4 + b * qq**6 / 6))
             q = m.displacement(sp_)
             m.add(R(dm, law=lambda f, z=zeta, w=omega, c=mu1, qq=q: (2 * z * w + c * qq**2) * f))
@@ -221,8 +238,9 @@ def pi_operator(thresholds: Sequence[float], weights: Sequence[float]):
     try:
         from library.hysteresis import PrandtlIshlinskii
     except ImportError as exc:  # the hysteresis library is optional for the linear models
-        raise ModelError("PI hysteresis needs library/hysteresis/ (PrandtlIshlinskii), which is not "
-                         f"available: {exc}") from None
+        raise ModelError(
+            f"PI hysteresis needs library/hysteresis/ (PrandtlIshlinskii), which is not available: {exc}"
+        ) from None
     return PrandtlIshlinskii(np.asarray(thresholds, float), np.asarray(weights, float))
 
 
@@ -243,8 +261,9 @@ def effective_tip_mass(beam: Bimorph, mode: int | None = None, x: float | None =
 
 
 # ---- Shahabi et al. 2019: multiple-scales steady state ---------------------------------------------------------
-def amplitude_equation_roots(omega_drive: float, omega_n: float, zeta: float, force: float,
-                             k1: float = 0.0, k2: float = 0.0, mu1: float = 0.0) -> np.ndarray:
+def amplitude_equation_roots(
+    omega_drive: float, omega_n: float, zeta: float, force: float, k1: float = 0.0, k2: float = 0.0, mu1: float = 0.0
+) -> np.ndarray:
     """Steady-state amplitudes a > 0 of q'' + (mu + mu1 q^2) q' + omega_n^2 q + k1 q^3 + k2 q^5
     = force cos(omega_drive t), mu = 2 zeta omega_n, by first-order multiple scales (Shahabi et al. 2019
     eq. 54 with the modal force m_p V written out as ``force``):
@@ -260,18 +279,25 @@ def amplitude_equation_roots(omega_drive: float, omega_n: float, zeta: float, fo
     c1, c3 = mu * wn / 2, mu1 * wn / 8
     d1, d3, d5 = sigma * wn**2, -3 / 8 * k1, -10 / 32 * k2
     # in s = a^2: s [(c1 + c3 s)^2 + (d1 + d3 s + d5 s^2)^2] - force^2/4 = 0
-    poly = np.polyadd(np.polymul([c3, c1], [c3, c1]),
-                      np.polymul([d5, d3, d1], [d5, d3, d1]))
+    poly = np.polyadd(np.polymul([c3, c1], [c3, c1]), np.polymul([d5, d3, d1], [d5, d3, d1]))
     poly = np.polymul(poly, [1.0, 0.0])
-    poly = np.polyadd(poly, [-force**2 / 4])
+    poly = np.polyadd(poly, [-(force**2) / 4])
     poly = np.trim_zeros(poly, "f")
     roots = np.roots(poly)
     s = roots[(np.abs(roots.imag) <= 1e-9 * np.abs(roots)) & (roots.real > 0)].real
     return np.sort(np.sqrt(s))
 
 
-def amplitude_equation_phase(a: float, omega_drive: float, omega_n: float, zeta: float, force: float,
-                             k1: float = 0.0, k2: float = 0.0, mu1: float = 0.0) -> float:
+def amplitude_equation_phase(
+    a: float,
+    omega_drive: float,
+    omega_n: float,
+    zeta: float,
+    force: float,
+    k1: float = 0.0,
+    k2: float = 0.0,
+    mu1: float = 0.0,
+) -> float:
     """Phase lag gamma (rad) of the multiple-scales steady state q ≈ a cos(omega t - gamma)
     for the forcing ``force cos(omega t)`` (Shahabi et al. 2019, eqs. 52-53)."""
     sigma = omega_drive / omega_n - 1.0
@@ -282,8 +308,9 @@ def amplitude_equation_phase(a: float, omega_drive: float, omega_n: float, zeta:
     return float(np.arctan2(sin_g, cos_g))
 
 
-def amplitude_equation_peak(omega_n: float, zeta: float, force: float, k1: float = 0.0, k2: float = 0.0,
-                            mu1: float = 0.0) -> tuple[float, float]:
+def amplitude_equation_peak(
+    omega_n: float, zeta: float, force: float, k1: float = 0.0, k2: float = 0.0, mu1: float = 0.0
+) -> tuple[float, float]:
     """(omega_peak, a_peak): the largest steady-state amplitude of the multiple-scales equation
     (see :func:`amplitude_equation_roots`) and the drive frequency where it occurs.
 
@@ -294,8 +321,11 @@ def amplitude_equation_peak(omega_n: float, zeta: float, force: float, k1: float
     if mu1 < 0:
         raise ValueError("mu1 must be >= 0 (nonlinear damping)")
     mu = 2 * zeta * omega_n
-    roots = np.roots([mu1 * omega_n / 8, 0.0, mu * omega_n / 2, -abs(force) / 2]) if mu1 > 0 \
+    roots = (
+        np.roots([mu1 * omega_n / 8, 0.0, mu * omega_n / 2, -abs(force) / 2])
+        if mu1 > 0
         else np.array([abs(force) / (mu * omega_n)])
+    )
     a = float(np.max(roots[np.abs(roots.imag) <= 1e-9 * np.abs(roots)].real))
     sigma = (3 / 8 * k1 * a**2 + 10 / 32 * k2 * a**4) / omega_n**2
     return omega_n * (1 + sigma), a

@@ -1,5 +1,6 @@
 """Plausibility checks of measured piezo-actuator records, installed into
 :func:`bondgraph.data.check_units` through the ``bondgraph.data_checks`` entry point."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -17,6 +18,8 @@ def displacement_in_metres(ds) -> list[str]:
     peak = float(np.max(np.abs(x)))
     if peak <= X_MAX_METRES:
         return []
-    return [f"{ds.path or 'dataset'}: column 'x' reaches |x| = {peak:.4g}, which is {peak:.4g} m if in "
-            f"metres; piezo displacements are micrometres, so 'x' is probably in µm: "
-            f"scale it by 1e-6 (by 1e-3 if in mm)"]
+    return [
+        f"{ds.path or 'dataset'}: column 'x' reaches |x| = {peak:.4g}, which is {peak:.4g} m if in "
+        f"metres; piezo displacements are micrometres, so 'x' is probably in µm: "
+        f"scale it by 1e-6 (by 1e-3 if in mm)"
+    ]

@@ -16,6 +16,7 @@ Operator models (Sec. 5.3): thresholds on a grid over the input range (r_i = P_i
 weights by non-negative least squares (the "slopes" of the loop), then the dead-zone weights of
 the modified PI the same way on the PI sum, with the dead zones measured from the last reversal.
 """
+
 from __future__ import annotations
 
 import math

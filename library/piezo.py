@@ -20,11 +20,12 @@ so that V = (E2 + E3)·l, i.e. the paper's V = (E2 − E3)·l with its E3 = −(
 x_p = a·T·p/l puts into the layer spring).  The ``mech`` port delivers F = F1 − R_NL·ẋ with
 ẋ the layer's extension rate.  T is the mechanical amplification of an APA (1 for a bare layer).
 """
+
 from __future__ import annotations
 
 import sympy as sp
 
-from bondgraph import C, CField, Component, J0, J1, Quantity, R, TF
+from bondgraph import J0, J1, TF, C, CField, Component, Quantity, R
 
 
 def model1_cfield(name: str, ports=("x", "Q"), *, K1, a1, C1) -> CField:
@@ -41,9 +42,9 @@ def model2_cfield(name: str, ports=("x", "Q"), *, K2, a2, C2) -> CField:
 
 def model2_from_model1(K1, a1, C1):
     """(K2, a2, C2) of the model-2 field storing the same energy as model 1 (equal stiffness matrices)."""
-    C2 = 1 / (K1 * a1 ** 2 + 1 / C1)
+    C2 = 1 / (K1 * a1**2 + 1 / C1)
     a2 = 1 / (K1 * a1 * C2)
-    K2 = K1 - 1 / (a2 ** 2 * C2)
+    K2 = K1 - 1 / (a2**2 * C2)
     return sp.simplify(K2) if isinstance(K2, sp.Basic) else K2, a2, C2
 
 
@@ -58,8 +59,9 @@ def bouc_wen_polarization(comp: Component, name: str, kx, kw, q, r, n) -> C:
     z = comp.state(f"{name}.z", 0, unit="", doc="Bouc–Wen hysteretic variable")
     cap = comp.add(C(name, law=lambda p: kx * p + kw * z))
     pdot = comp.flow(name)
-    comp.set_rate(f"{name}.z", q * (pdot - r * sp.Abs(pdot) * sp.Abs(z) ** (n - 1) * z
-                                    + (r - 1) * pdot * sp.Abs(z) ** n))
+    comp.set_rate(
+        f"{name}.z", q * (pdot - r * sp.Abs(pdot) * sp.Abs(z) ** (n - 1) * z + (r - 1) * pdot * sp.Abs(z) ** n)
+    )
     return cap
 
 

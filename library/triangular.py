@@ -65,6 +65,7 @@ stiffness ratio r): with free strokes U_i = d33·(l/h)·V_i,
 (see :func:`static_tip_displacement`).  The lumped stack neglects the wave propagation of the
 paper's eq. 17 (γ = ω·√(ρ·s33^E)); it is accurate while γ·l ≲ 0.5.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -72,7 +73,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from bondgraph import C, CField, Component, I, J0, J1, Model, ModelError, R, Se, TF
+from bondgraph import J0, J1, TF, C, CField, Component, I, Model, ModelError, R, Se
 
 from .piezo import layer_extension, linear_polarization, piezo_layer
 
@@ -89,7 +90,7 @@ def stack_constants(*, d33, s33E, eps33T, area, length, h) -> dict:
       of piezo_layer is the open-circuit (constant-charge) stiffness; at constant voltage the
       stack is softened by the coupling to exactly K_i, the paper's internal stiffness.
     """
-    k33sq = d33 ** 2 / (s33E * eps33T)
+    k33sq = d33**2 / (s33E * eps33T)
     K_i = area / (length * s33E)
     return {"l": h, "a": d33 * h / (eps33T * area), "K": K_i / (1 - k33sq), "kx": 1 / (eps33T * area * length)}
 
@@ -104,9 +105,15 @@ def piezo_stack(name: str, *, d33, s33E, eps33T, area, length, h, c_stack=None, 
     sheet quantities; see :func:`stack_constants`.  ``c_stack`` is the stack's internal
     viscous term R_NL (N·s/m) on its elongation rate."""
     k = stack_constants(d33=d33, s33E=s33E, eps33T=eps33T, area=area, length=length, h=h)
-    return piezo_layer(name, l=k["l"], a=k["a"], K=k["K"], R_NL=c_stack,
-                       polarization=lambda c, n: linear_polarization(c, n, k["kx"]),
-                       doc=doc or "lumped piezo stack of length/h layers (Hassani & Tjahjowidodo 2013, eqs. 3-5)")
+    return piezo_layer(
+        name,
+        l=k["l"],
+        a=k["a"],
+        K=k["K"],
+        R_NL=c_stack,
+        polarization=lambda c, n: linear_polarization(c, n, k["kx"]),
+        doc=doc or "lumped piezo stack of length/h layers (Hassani & Tjahjowidodo 2013, eqs. 3-5)",
+    )
 
 
 def _sin_cos(half_angle):
@@ -115,8 +122,20 @@ def _sin_cos(half_angle):
     return sp.sin(th), sp.cos(th)
 
 
-def triangular_body(name: str = "body", *, k_x, k_y, m_x, m_y, c_x, c_y, half_angle=45,
-                    stack_mass=0, springs: bool = True, doc: str = "") -> Component:
+def triangular_body(
+    name: str = "body",
+    *,
+    k_x,
+    k_y,
+    m_x,
+    m_y,
+    c_x,
+    c_y,
+    half_angle=45,
+    stack_mass=0,
+    springs: bool = True,
+    doc: str = "",
+) -> Component:
     """The compliant triangular body lumped at its tip, with ports ``head1``, ``head2`` (power
     in from the stack heads; flow δ̇_i = elongation rate of stack i along its axis, effort the
     stack force F_i).
@@ -130,12 +149,22 @@ def triangular_body(name: str = "body", *, k_x, k_y, m_x, m_y, c_x, c_y, half_an
     2·sin²θ·m_s and to m_y as 2·cos²θ·m_s (exact for the symmetric pair)."""
     s, c = _sin_cos(half_angle)
     b = Component(name, doc or "compliant triangular body lumped at its tip (x, y)")
-    b.add(J0("F1"), J0("F2"), J1("vx"), J1("vy"),
-          TF("x1", 1 / s), TF("y1", 1 / c), TF("x2", -1 / s), TF("y2", 1 / c),
-          I("m_x", m_x + 2 * s ** 2 * stack_mass), I("m_y", m_y + 2 * c ** 2 * stack_mass),
-          R("c_x", c_x), R("c_y", c_y))
+    b.add(
+        J0("F1"),
+        J0("F2"),
+        J1("vx"),
+        J1("vy"),
+        TF("x1", 1 / s),
+        TF("y1", 1 / c),
+        TF("x2", -1 / s),
+        TF("y2", 1 / c),
+        I("m_x", m_x + 2 * s**2 * stack_mass),
+        I("m_y", m_y + 2 * c**2 * stack_mass),
+        R("c_x", c_x),
+        R("c_y", c_y),
+    )
     if springs:
-        b.add(C("k_x", energy=lambda q: k_x * q ** 2 / 2), C("k_y", energy=lambda q: k_y * q ** 2 / 2))
+        b.add(C("k_x", energy=lambda q: k_x * q**2 / 2), C("k_y", energy=lambda q: k_y * q**2 / 2))
     for head, tx, ty in (("F1", "x1", "y1"), ("F2", "x2", "y2")):
         b.bond(head, f"{tx}.p1")
         b.bond(f"{tx}.p2", "vx")
@@ -171,7 +200,8 @@ def drive_field(name: str, *, K, a, C1, k_x, k_y, half_angle=45) -> CField:
         d1, d2 = q["d1"], q["d2"]
         x, y = (d1 - d2) / (2 * s), (d1 + d2) / (2 * c)
         stacks = sum(K * (d - a * q[Q]) ** 2 / 2 + q[Q] ** 2 / (2 * C1) for d, Q in ((d1, "Q1"), (d2, "Q2")))
-        return stacks + k_x * x ** 2 / 2 + k_y * y ** 2 / 2
+        return stacks + k_x * x**2 / 2 + k_y * y**2 / 2
+
     return CField(name, ("Q1", "d1", "Q2", "d2"), energy=energy)
 
 
@@ -191,9 +221,30 @@ class TriangularDrive:
 FORMULATIONS = ("layers", "field")
 
 
-def add_triangular_drive(m: Model, *, V1, V2, d33, s33E, eps33T, area, length, h, Re,
-                         k_x, k_y, m_x, m_y, c_x, c_y, c_stack=None, stack_mass=0, half_angle=45,
-                         formulation: str = "layers", outputs: bool = True) -> TriangularDrive:
+def add_triangular_drive(
+    m: Model,
+    *,
+    V1,
+    V2,
+    d33,
+    s33E,
+    eps33T,
+    area,
+    length,
+    h,
+    Re,
+    k_x,
+    k_y,
+    m_x,
+    m_y,
+    c_x,
+    c_y,
+    c_stack=None,
+    stack_mass=0,
+    half_angle=45,
+    formulation: str = "layers",
+    outputs: bool = True,
+) -> TriangularDrive:
     """Add the two-stack triangular drive to ``m``: amplifiers ``amp1``/``amp2`` (efforts
     ``V1``, ``V2``, expressions of the model's inputs) with series resistances ``Re1``/``Re2``
     (Ω), the stacks and the body ``body`` (:func:`triangular_body`).
@@ -210,16 +261,36 @@ def add_triangular_drive(m: Model, *, V1, V2, d33, s33E, eps33T, area, length, h
     elongations, m), ``V1``, ``V2`` (stack drive voltages, V) and ``i1``, ``i2`` (drive
     currents, A)."""
     if formulation not in FORMULATIONS:
-        raise ModelError(f"triangular drive: formulation must be one of {', '.join(FORMULATIONS)}, "
-                         f"got {formulation!r}")
+        raise ModelError(f"triangular drive: formulation must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
     st = {"d33": d33, "s33E": s33E, "eps33T": eps33T, "area": area, "length": length, "h": h}
     consts = stack_constants(**st)
     layers = formulation == "layers"
-    m.add(triangular_body("body", k_x=k_x, k_y=k_y, m_x=m_x, m_y=m_y, c_x=c_x, c_y=c_y,
-                          half_angle=half_angle, stack_mass=stack_mass, springs=layers))
+    m.add(
+        triangular_body(
+            "body",
+            k_x=k_x,
+            k_y=k_y,
+            m_x=m_x,
+            m_y=m_y,
+            c_x=c_x,
+            c_y=c_y,
+            half_angle=half_angle,
+            stack_mass=stack_mass,
+            springs=layers,
+        )
+    )
     if not layers:
-        m.add(drive_field("drive", K=consts["K"], a=consts["a"], C1=1 / (consts["kx"] * consts["l"] ** 2),
-                          k_x=k_x, k_y=k_y, half_angle=half_angle))
+        m.add(
+            drive_field(
+                "drive",
+                K=consts["K"],
+                a=consts["a"],
+                C1=1 / (consts["kx"] * consts["l"] ** 2),
+                k_x=k_x,
+                k_y=k_y,
+                half_angle=half_angle,
+            )
+        )
     deltas = []
     for j, V in ((1, V1), (2, V2)):
         m.add(Se(f"amp{j}", V), J1(f"i{j}"), R(f"Re{j}", Re))
@@ -299,17 +370,15 @@ def tip_displacement(U1, U2, *, omega, K_i, k_x, k_y, m_x, m_y, c_x, c_y, rho, s
     th = np.radians(half_angle)
     s, c = np.sin(th), np.cos(th)
     g = wave_factor(omega, rho=rho, s33E=s33E, length=length)
-    Kx = k_x - omega ** 2 * m_x + 1j * omega * c_x
-    Ky = k_y - omega ** 2 * m_y + 1j * omega * c_y
-    return ((U1 - U2) / (2 * s * (g + Kx / (2 * s * s * K_i))),
-            (U1 + U2) / (2 * c * (g + Ky / (2 * c * c * K_i))))
+    Kx = k_x - omega**2 * m_x + 1j * omega * c_x
+    Ky = k_y - omega**2 * m_y + 1j * omega * c_y
+    return ((U1 - U2) / (2 * s * (g + Kx / (2 * s * s * K_i))), (U1 + U2) / (2 * c * (g + Ky / (2 * c * c * K_i))))
 
 
 def ellipse_axes(X, Y) -> np.ndarray:
     """Semi-axes (major, minor) of the closed path (Re(X e^{i w t}), Re(Y e^{i w t})) traced by
     tip phasors X, Y: the singular values of [[Re X, Im X], [Re Y, Im Y]]."""
-    return np.linalg.svd(np.array([[np.real(X), np.imag(X)], [np.real(Y), np.imag(Y)]], float),
-                         compute_uv=False)
+    return np.linalg.svd(np.array([[np.real(X), np.imag(X)], [np.real(Y), np.imag(Y)]], float), compute_uv=False)
 
 
 @dataclass(frozen=True)
@@ -329,8 +398,7 @@ class MeasuredStroke:
     def __post_init__(self):
         f, a = np.asarray(self.frequencies, float), np.asarray(self.amplitudes, float)
         if f.ndim != 1 or f.size < 2 or f.size != a.size or np.any(np.diff(f) <= 0) or f[0] <= 0:
-            raise ModelError("measured stroke: give at least two ascending positive frequencies, "
-                             "one amplitude each")
+            raise ModelError("measured stroke: give at least two ascending positive frequencies, one amplitude each")
         if np.any(a <= 0) or not self.voltage > 0:
             raise ModelError("measured stroke: amplitudes and the drive voltage must be positive")
 
@@ -339,8 +407,10 @@ class MeasuredStroke:
         f = float(frequency)
         lo, hi = self.frequencies[0], self.frequencies[-1]
         if not lo <= f <= hi:
-            raise ModelError(f"measured stroke: drive frequency {f:g} Hz is outside the measured "
-                             f"{lo:g}-{hi:g} Hz; use the constitutive stroke there")
+            raise ModelError(
+                f"measured stroke: drive frequency {f:g} Hz is outside the measured "
+                f"{lo:g}-{hi:g} Hz; use the constitutive stroke there"
+            )
         return float(np.exp(np.interp(np.log(f), np.log(self.frequencies), np.log(self.amplitudes))))
 
     def per_volt(self, frequency: float) -> float:
@@ -352,6 +422,6 @@ def static_tip_displacement(U1, U2, *, K_i, k_x, k_y, half_angle=45):
     """Quasi-static tip (x, y) for free strokes U1, U2 (m) of stacks of stiffness K_i against
     a body of tip stiffness k_x, k_y (see the module docstring); sympy or numbers."""
     s, c = _sin_cos(half_angle)
-    r_x = k_x / (2 * s ** 2 * K_i)
-    r_y = k_y / (2 * c ** 2 * K_i)
+    r_x = k_x / (2 * s**2 * K_i)
+    r_y = k_y / (2 * c**2 * K_i)
     return (U1 - U2) / (2 * s * (1 + r_x)), (U1 + U2) / (2 * c * (1 + r_y))

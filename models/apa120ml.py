@@ -44,13 +44,19 @@ the measured loop noticeably better than Bouc-Wen; no reading of the extracted t
 Bouc-Wen's width and stroke together, so the table as printed does not carry the fitted model
 exactly: the reading is the one the text supports, not a recovered fit.
 """
+
 import numpy as np
 
-from bondgraph import Experiment, I, J1, Model, Parameter, R, Se, Sine
+from bondgraph import J1, Experiment, I, Model, Parameter, R, Se, Sine
 from library.hysteresis import ModifiedPI, RelativeModifiedPI
 from library.identification import bouc_wen_seed
-from library.piezo import (bouc_wen_polarization, layer_extension, linear_polarization,
-                           operator_polarization, piezo_layer)
+from library.piezo import (
+    bouc_wen_polarization,
+    layer_extension,
+    linear_polarization,
+    operator_polarization,
+    piezo_layer,
+)
 
 #: Table 3 as extracted, column by column: r_i (C m), w_i (V/m per C m), d_j (V/m), ws_j
 TABLE3_PRINTED = {
@@ -73,10 +79,21 @@ PARAMETERS = [
     Parameter("M", 0.160, "kg", "moving mass (Table 1)", bounds=(1e-9, 1e3)),
     Parameter("T", 1.0, "", "mechanical amplification (Table 1 values already include it)"),
     Parameter("kx", 5e12, "V/(C*m^2)", "linear polarization stiffness 1/C_NL (Table 2)", bounds=(0.0, 1e20)),
-    Parameter("hysteresis", "none", "", "polarization hysteresis model: none, bouc-wen (Table 2) or pi "
-              "(modified PI, Table 3 as re-read in the model file)", choices=("none", "bouc-wen", "pi")),
-    Parameter("table3", "relative-signed", "", "reading of the garbled Table 3 for hysteresis=pi (see the "
-              "model file)", choices=TABLE3_READINGS),
+    Parameter(
+        "hysteresis",
+        "none",
+        "",
+        "polarization hysteresis model: none, bouc-wen (Table 2) or pi "
+        "(modified PI, Table 3 as re-read in the model file)",
+        choices=("none", "bouc-wen", "pi"),
+    ),
+    Parameter(
+        "table3",
+        "relative-signed",
+        "",
+        "reading of the garbled Table 3 for hysteresis=pi (see the model file)",
+        choices=TABLE3_READINGS,
+    ),
     Parameter("kw", 1.98e5, "V/m", "Bouc-Wen hysteretic field weight (Table 2)"),
     Parameter("q_bw", 1.58e7, "1/(C*m)", "Bouc-Wen rate constant q (Table 2)"),
     Parameter("r_bw", 0.56, "", "Bouc-Wen shape parameter r (Table 2)"),
@@ -85,13 +102,14 @@ PARAMETERS = [
 
 EXPERIMENT = Experiment(t_end=0.4, dt=1e-4, inputs={"V": Sine(amplitude=60.0, frequency=5.0, phase=-90.0, offset=60.0)})
 
+
 def table3_operator(reading: str = "relative-signed"):
     """The modified-PI operator E = H[p] (input dipole p in C m, output field E in V/m) of
     Table 3 under one of :data:`TABLE3_READINGS`."""
     if reading not in TABLE3_READINGS:
         raise ValueError(f"Table 3 reading must be one of {TABLE3_READINGS}, got {reading!r}")
     r = np.array(TABLE3_PRINTED["r"], float)
-    r[1:] /= 10.0 ** (2 * np.floor(np.log10(r[1:])))    # restore the exponents' minus signs
+    r[1:] /= 10.0 ** (2 * np.floor(np.log10(r[1:])))  # restore the exponents' minus signs
     w = np.array(TABLE3_PRINTED["w"], float)
     if reading.endswith("signed"):
         w[1:10] = -w[1:10]
@@ -116,11 +134,18 @@ def build(p):
     V = g.input("V", "V", "drive voltage")
     F = g.input("F", "N", "external force on the output, positive along x")
     if p.hysteresis == "none":
-        def pol(c, n): return linear_polarization(c, n, p.kx)
+
+        def pol(c, n):
+            return linear_polarization(c, n, p.kx)
     elif p.hysteresis == "bouc-wen":
-        def pol(c, n): return bouc_wen_polarization(c, n, p.kx, p.kw, p.q_bw, p.r_bw, p.n_bw)
+
+        def pol(c, n):
+            return bouc_wen_polarization(c, n, p.kx, p.kw, p.q_bw, p.r_bw, p.n_bw)
     else:
-        def pol(c, n): return operator_polarization(c, n, table3_operator(p.table3))
+
+        def pol(c, n):
+            return operator_polarization(c, n, table3_operator(p.table3))
+
     g.add(piezo_layer("stack", l=p.l, a=p.a, K=p.K, T=p.T, R_NL=p.c, polarization=pol))
     g.add(Se("amp", V), J1("i"), Se("load", F), I("M", p.M), R("Re", p.Re))
     g.chain("amp", "i", "stack.elec")

@@ -62,21 +62,44 @@ displacement that is "a non-monotonically increasing function of the drive field
 numbers it rises monotonically (1.4 to 6.1 mm at resonance); a loss growing faster than the
 field, or the saturation of the drive, would bend it over, but the figure's numbers are lost.
 """
-import math
 
 from bondgraph import Chirp, Experiment, Model, Parameter, Se
 from library.beam import cantilever_mass_factor, cantilever_tip_compliance
-from library.bender import (bending_actuator, damping_coefficient, field_stiffness, load_enhancement,
-                            loss_factor, thermoelastic_relaxation, tip_deflection)
+from library.bender import (
+    bending_actuator,
+    damping_coefficient,
+    field_stiffness,
+    load_enhancement,
+    loss_factor,
+    thermoelastic_relaxation,
+    tip_deflection,
+)
 from library.hysteresis import MaxwellSlip
 
 PARAMETERS = [
-    Parameter("field", 1.0, "V/um", "peak bending field of the drive (Sec. V, Figs. 17-18: 0.39-2.36)",
-              symbolic=False, bounds=(0.0, 5.0)),
-    Parameter("load", 0.0, "N", "static tensile tip load (Sec. II-C, Fig. 6: 0, 0.05, 0.1 N)",
-              symbolic=False, bounds=(-1.0, 1.0)),
-    Parameter("saturation", False, "", "drive through the Maxwell-slip saturation and hysteresis "
-              "model (Sec. II-B) instead of the linear blocked force"),
+    Parameter(
+        "field",
+        1.0,
+        "V/um",
+        "peak bending field of the drive (Sec. V, Figs. 17-18: 0.39-2.36)",
+        symbolic=False,
+        bounds=(0.0, 5.0),
+    ),
+    Parameter(
+        "load",
+        0.0,
+        "N",
+        "static tensile tip load (Sec. II-C, Fig. 6: 0, 0.05, 0.1 N)",
+        symbolic=False,
+        bounds=(-1.0, 1.0),
+    ),
+    Parameter(
+        "saturation",
+        False,
+        "",
+        "drive through the Maxwell-slip saturation and hysteresis "
+        "model (Sec. II-B) instead of the linear blocked force",
+    ),
     Parameter("creep", True, "", "creep cells (generalized Kelvin-Voigt, Sec. II-A) in series with k_a"),
     Parameter("l", 10e-3, "m", "active length (15 mm in all with the extension, Sec. I-A)", symbolic=False),
     Parameter("l_r", 0.5, "1", "extension ratio l_ext/l (eq. 9)", symbolic=False, bounds=(0.0, 5.0)),
@@ -91,18 +114,31 @@ PARAMETERS = [
     Parameter("E_p", 60.6e9, "Pa", "PZT-5H Young's modulus 1/s11^E", symbolic=False),
     Parameter("E_c", 300e9, "Pa", "carbon-fibre layer modulus along the beam", symbolic=False),
     Parameter("d31", -274e-12, "m/V", "PZT-5H piezoelectric coefficient", symbolic=False),
-    Parameter("E_soft", 10.0, "V/um", "field at which k_a(E) would vanish (k_a = k_a0 (1 - E/E_soft))",
-              symbolic=False, bounds=(0.1, 1e3)),
+    Parameter(
+        "E_soft",
+        10.0,
+        "V/um",
+        "field at which k_a(E) would vanish (k_a = k_a0 (1 - E/E_soft))",
+        symbolic=False,
+        bounds=(0.1, 1e3),
+    ),
     Parameter("zeta_s", 0.01, "1", "structural damping ratio floor (eq. 13)", symbolic=False, bounds=(0.0, 1.0)),
-    Parameter("creep_fraction", 0.05, "1", "compliance of each creep cell relative to 1/k_a", symbolic=False,
-              bounds=(0.0, 10.0)),
+    Parameter(
+        "creep_fraction",
+        0.05,
+        "1",
+        "compliance of each creep cell relative to 1/k_a",
+        symbolic=False,
+        bounds=(0.0, 10.0),
+    ),
     Parameter("load_gain", 0.05, "1", "coupling enhancement at the peak load", symbolic=False, bounds=(-1.0, 1.0)),
-    Parameter("load_peak", 0.05, "N", "tensile load of the largest enhancement (Fig. 6)", symbolic=False,
-              bounds=(1e-6, 10.0)),
+    Parameter(
+        "load_peak", 0.05, "N", "tensile load of the largest enhancement (Fig. 6)", symbolic=False, bounds=(1e-6, 10.0)
+    ),
 ]
 
-CREEP_TAUS = (0.05, 2.0)                         # s, the two creep cells
-SLIP_FRACTIONS = (0.5,) + (0.0625,) * 8                          # Maxwell-slip branches, fractions of k_a0
+CREEP_TAUS = (0.05, 2.0)  # s, the two creep cells
+SLIP_FRACTIONS = (0.5,) + (0.0625,) * 8  # Maxwell-slip branches, fractions of k_a0
 SLIP_FIELDS = (1e3,) + tuple(0.1 * 2 ** (k / 1.5) for k in range(8))  # V/um of break-away (1e3: never)
 THERMAL = dict(alpha=4e-6, T=300.0, c_v=7500.0 * 420.0, kappa=1.5)
 
@@ -122,13 +158,17 @@ def laminate(p) -> dict:
     """Section numbers of the laminate at nominal width: EI (N m^2), mass per area (kg/m^2) of
     the beam and the extension, and the free curvature per field (1/m per V/m)."""
     h = p.t_c / 2 + p.t_p
-    I_p = 2 * p.w_nom * (h ** 3 - (p.t_c / 2) ** 3) / 3
-    I_c = p.w_nom * p.t_c ** 3 / 12
+    I_p = 2 * p.w_nom * (h**3 - (p.t_c / 2) ** 3) / 3
+    I_c = p.w_nom * p.t_c**3 / 12
     EI = p.E_p * I_p + p.E_c * I_c
     # opposite fields +-E in the two plates: moment |d31| E_p E w t_p (t_c + t_p)
     kappa = abs(p.d31) * p.E_p * p.w_nom * p.t_p * (p.t_c + p.t_p) / EI
-    return {"EI": EI, "rho_t": 2 * p.rho_p * p.t_p + p.rho_c * p.t_c, "rho_t_ext": p.rho_e * p.t_e,
-            "curvature_per_field": kappa}
+    return {
+        "EI": EI,
+        "rho_t": 2 * p.rho_p * p.t_p + p.rho_c * p.t_c,
+        "rho_t_ext": p.rho_e * p.t_e,
+        "curvature_per_field": kappa,
+    }
 
 
 def actuator_numbers(p) -> dict:
@@ -140,15 +180,24 @@ def actuator_numbers(p) -> dict:
     m_eff = cantilever_mass_factor(p.w_r, p.l_r, d_r) * m_beam
     k_a0 = 1 / cantilever_tip_compliance(lam["EI"], p.l, p.w_r, p.l_r)
     # uniform curvature (the width taper follows the stiffness): tip of the straight extension
-    free_per_field = lam["curvature_per_field"] * (p.l ** 2 / 2 + p.l ** 2 * p.l_r)
+    free_per_field = lam["curvature_per_field"] * (p.l**2 / 2 + p.l**2 * p.l_r)
     E = p.field * 1e6
     k_a = field_stiffness(E, k_a0, p.E_soft * 1e6)
     eta = loss_factor(maxwell_slip(k_a0, free_per_field), free_per_field * E) if E > 0 else 0.0
     delta, f_r = thermoelastic_relaxation(E_Y=p.E_p, thickness=2 * p.t_p + p.t_c, **THERMAL)
-    return {"m_beam": m_beam, "d_r": d_r, "m_eff": m_eff, "k_a0": k_a0, "k_a": k_a,
-            "free_per_field": free_per_field, "blocked_per_field": k_a0 * free_per_field,
-            "eta_h": eta, "b_a": damping_coefficient(p.zeta_s + eta / 2, m_eff, k_a),
-            "ted": (delta, f_r), "enhancement": load_enhancement(p.load, p.load_gain, p.load_peak)}
+    return {
+        "m_beam": m_beam,
+        "d_r": d_r,
+        "m_eff": m_eff,
+        "k_a0": k_a0,
+        "k_a": k_a,
+        "free_per_field": free_per_field,
+        "blocked_per_field": k_a0 * free_per_field,
+        "eta_h": eta,
+        "b_a": damping_coefficient(p.zeta_s + eta / 2, m_eff, k_a),
+        "ted": (delta, f_r),
+        "enhancement": load_enhancement(p.load, p.load_gain, p.load_peak),
+    }
 
 
 def maxwell_slip(k_a0: float, free_per_field: float) -> MaxwellSlip:
@@ -167,8 +216,12 @@ def build(p):
     m_eff = m.parameter("m_eff", n["m_eff"], "kg", "effective mass M(w_r, l_r, d_r) m_beam (eqs. 6-12)")
     k_a = m.parameter("k_a", n["k_a"], "N/m", "actuator stiffness k_a(E) at the drive field (Sec. III-B)")
     b_a = m.parameter("b_a", n["b_a"], "N*s/m", "actuator damping b_a(E) at the drive field (eq. 13, Sec. IV)")
-    B = m.parameter("B", n["blocked_per_field"] * n["enhancement"], "N*m/V",
-                    "blocked force per bending field, with the load enhancement (Sec. II-C)")
+    B = m.parameter(
+        "B",
+        n["blocked_per_field"] * n["enhancement"],
+        "N*m/V",
+        "blocked force per bending field, with the load enhancement (Sec. II-C)",
+    )
     field = 2 * V / p.t_p
     if p.saturation:
         delta_f = field * n["free_per_field"] * n["enhancement"]
@@ -176,8 +229,10 @@ def build(p):
     else:
         F_a = B * field
     cells = [(k_a / p.creep_fraction, k_a / p.creep_fraction * tau) for tau in CREEP_TAUS] if p.creep else []
-    m.add(bending_actuator("act", m_eff=m_eff, k_a=k_a, b_a=b_a, F_a=F_a, creep=cells, thermoelastic=n["ted"]),
-          Se("ext", F + p.load))
+    m.add(
+        bending_actuator("act", m_eff=m_eff, k_a=k_a, b_a=b_a, F_a=F_a, creep=cells, thermoelastic=n["ted"]),
+        Se("ext", F + p.load),
+    )
     m.bond("ext", "act.tip")
     m.output("x", tip_deflection(m, "act", len(cells)), "m", "tip deflection at the end of the extension")
     m.output("E", field, "V/m", "bending field")

@@ -18,8 +18,8 @@ Checks (tests/test_bimorph.py): Table 2 natural frequencies 2249, 14094.24, 3946
 (this model: 2247.4, 14084.2, 39436.2, 0.07 % low, as the uniform-beam formula); with two modes
 w(l_t)/V has a right-half-plane zero for l_t < 0.737 L (Sec. 3.1, Fig. 8).
 """
-from bondgraph import Chirp, Experiment, Model, Parameter
 
+from bondgraph import Chirp, Experiment, Model, Parameter
 from library.beam import Bimorph
 from library.bimorph import add_bimorph_modes, pi_operator
 
@@ -27,8 +27,9 @@ T1 = "Ghafarirad et al. 2015, Table 1"
 
 PARAMETERS = [
     Parameter("modes", 2, "", "number of bending modes kept (the paper uses two)", bounds=(1, 12)),
-    Parameter("target", 0.95, "1", "sensor position as a fraction of L (Sec. 4.1: 0.95)", symbolic=False,
-              bounds=(1e-3, 1.0)),
+    Parameter(
+        "target", 0.95, "1", "sensor position as a fraction of L (Sec. 4.1: 0.95)", symbolic=False, bounds=(1e-3, 1.0)
+    ),
     Parameter("L", 21.6e-3, "m", f"beam length ({T1})", symbolic=False),
     Parameter("b", 3.2e-3, "m", f"width of substrate and piezo layers ({T1})", symbolic=False),
     Parameter("t_p", 0.13e-3, "m", f"thickness of each PZT-5A layer ({T1})", symbolic=False),
@@ -38,11 +39,17 @@ PARAMETERS = [
     Parameter("c_p", 59e9, "Pa", f"PZT-5A elastic modulus c11^E ({T1})", symbolic=False),
     Parameter("c_b", 105e9, "Pa", f"brass elastic modulus ({T1})", symbolic=False),
     Parameter("e31", -12.54, "C/m^2", f"PZT-5A piezoelectric constant ({T1})", symbolic=False),
-    Parameter("alpha", 1e-3, "1/s", f"mass-proportional damping, 2 zeta omega = alpha + beta omega^2 ({T1})",
-              symbolic=False),
+    Parameter(
+        "alpha", 1e-3, "1/s", f"mass-proportional damping, 2 zeta omega = alpha + beta omega^2 ({T1})", symbolic=False
+    ),
     Parameter("beta", 1e-5, "s", f"stiffness-proportional damping ({T1})", symbolic=False),
-    Parameter("hysteresis", "none", "", "input hysteresis: none, or pi (Prandtl–Ishlinskii, Ghafarirad et al. 2015, eq. 25)",
-              choices=("none", "pi")),
+    Parameter(
+        "hysteresis",
+        "none",
+        "",
+        "input hysteresis: none, or pi (Prandtl–Ishlinskii, Ghafarirad et al. 2015, eq. 25)",
+        choices=("none", "pi"),
+    ),
 ]
 
 # Geometry, alpha and beta are numbers (symbolic=False): they feed the modal analysis at build time.
@@ -53,8 +60,8 @@ PARAMETERS = [
 # tabulate the thresholds and weights. These illustrative values make H[V] an equivalent voltage
 # (small-signal slope 1 from the virgin state, the play with r = 0) whose loading curve steepens by
 # up to 30 % over a 0-60 V range, with a loop of a few volts; fit them to data for real use.
-PI_THRESHOLDS = (0.0, 10.0, 20.0, 30.0, 40.0, 50.0)   # V
-PI_WEIGHTS = (1.0, 0.08, 0.07, 0.06, 0.05, 0.04)       # 1
+PI_THRESHOLDS = (0.0, 10.0, 20.0, 30.0, 40.0, 50.0)  # V
+PI_WEIGHTS = (1.0, 0.08, 0.07, 0.06, 0.05, 0.04)  # 1
 
 # The paper's linear identification (Sec. 4.1): a 0.3 V chirp over the first two modes
 # (Fig. 12 spans 0-18000 rad/s), sampled at 20 kHz.
@@ -71,8 +78,7 @@ TOLERANCE = {"zeta_*": 15.0, "omega_*": 1.3, "phi_*": 1.1}
 
 
 def build(p):
-    beam = Bimorph(L=p.L, b=p.b, t_p=p.t_p, t_b=p.t_b, rho_p=p.rho_p, rho_b=p.rho_b, c_p=p.c_p, c_b=p.c_b,
-                   e31=p.e31)
+    beam = Bimorph(L=p.L, b=p.b, t_p=p.t_p, t_b=p.t_b, rho_p=p.rho_p, rho_b=p.rho_b, c_p=p.c_p, c_b=p.c_b, e31=p.e31)
     m = Model("bimorph_t215", "T215-A4-103X bimorph, modal model (Ghafarirad et al. 2015)")
     hyst = pi_operator(PI_THRESHOLDS, PI_WEIGHTS) if p.hysteresis == "pi" else None
     add_bimorph_modes(m, beam, p.modes, p.target, alpha=p.alpha, beta=p.beta, hysteresis=hyst, source=T1)

@@ -49,8 +49,8 @@ Decisions (see also library/bimorph.py):
   shape and m_p do not depend on the stiffness (uniform beam), so they are the same either way.
 * Sensor at x_t = 23.46 mm ("close to the tip", Sec. 4.2), target = 0.9564.
 """
-from bondgraph import Experiment, Model, Parameter, Sine
 
+from bondgraph import Experiment, Model, Parameter, Sine
 from library.beam import Bimorph
 from library.bimorph import UNITS, ModeNonlinearity, add_bimorph_modes
 
@@ -59,12 +59,29 @@ READINGS = ("charge", "modal")
 
 PARAMETERS = [
     Parameter("nonlinear", False, "", "add the identified k1, k2, mu1 (eq. 34, Sec. 4.3)"),
-    Parameter("coefficients", "charge", "", "coordinate the identified k1, k2, mu1 act on: charge "
-              "y = m_p q (default, see the model file) or the modal q itself", choices=READINGS),
-    Parameter("frequency", "measured", "", "omega_n: measured 2637 rad/s (Sec. 4.2) or computed "
-              "from Table 1 (exact modes, 2915.5 rad/s)", choices=("measured", "computed")),
-    Parameter("target", 23.46 / 24.53, "1", "sensor position as a fraction of L (x_t = 23.46 mm, Sec. 4.2)",
-              symbolic=False, bounds=(1e-3, 1.0)),
+    Parameter(
+        "coefficients",
+        "charge",
+        "",
+        "coordinate the identified k1, k2, mu1 act on: charge "
+        "y = m_p q (default, see the model file) or the modal q itself",
+        choices=READINGS,
+    ),
+    Parameter(
+        "frequency",
+        "measured",
+        "",
+        "omega_n: measured 2637 rad/s (Sec. 4.2) or computed from Table 1 (exact modes, 2915.5 rad/s)",
+        choices=("measured", "computed"),
+    ),
+    Parameter(
+        "target",
+        23.46 / 24.53,
+        "1",
+        "sensor position as a fraction of L (x_t = 23.46 mm, Sec. 4.2)",
+        symbolic=False,
+        bounds=(1e-3, 1.0),
+    ),
     Parameter("L", 24.53e-3, "m", f"beam length ({T1})", symbolic=False),
     Parameter("b", 6.4e-3, "m", f"width Y ({T1})", symbolic=False),
     Parameter("t_p", 0.265e-3, "m", f"thickness of each PZT-5H layer ({T1})", symbolic=False),
@@ -76,9 +93,9 @@ PARAMETERS = [
     Parameter("e31", -13.11, "C/m^2", f"PZT-5H piezoelectric constant ({T1})", symbolic=False),
 ]
 
-OMEGA_MEASURED = 2637.0   # rad/s, Sec. 4.2 (FFT of a 0.5 V chirp response)
-XI_MEASURED = 0.0085      # Sec. 4.2
-K1, K2, MU1 = -6.94e17, 1.443e28, 6.28e13   # Sec. 4.3, identified on 0.5-4.5 V
+OMEGA_MEASURED = 2637.0  # rad/s, Sec. 4.2 (FFT of a 0.5 V chirp response)
+XI_MEASURED = 0.0085  # Sec. 4.2
+K1, K2, MU1 = -6.94e17, 1.443e28, 6.28e13  # Sec. 4.3, identified on 0.5-4.5 V
 #: units of the identified coefficients under each reading
 COEFFICIENT_UNITS = {
     "charge": {"k1": "1/(C^2 s^2)", "k2": "1/(C^4 s^2)", "mu1": "1/(C^2 s)"},
@@ -108,23 +125,29 @@ def modal_scale(reading: str, mp: float) -> float:
 
 
 def build(p):
-    beam = Bimorph(L=p.L, b=p.b, t_p=p.t_p, t_b=p.t_b, rho_p=p.rho_p, rho_b=p.rho_b, c_p=p.c_p, c_b=p.c_b,
-                   e31=p.e31)
+    beam = Bimorph(L=p.L, b=p.b, t_p=p.t_p, t_b=p.t_b, rho_p=p.rho_p, rho_b=p.rho_b, c_p=p.c_p, c_b=p.c_b, e31=p.e31)
     m = Model("bimorph_t226", "T226-H4-203X bimorph, first mode near resonance (Shahabi et al. 2019)")
     nonlin = None
     if p.nonlinear:
         s = modal_scale(p.coefficients, beam.modes(1).input_gains[0])
         u = COEFFICIENT_UNITS[p.coefficients]
         where = f"Sec. 4.3, read on the {p.coefficients} coordinate"
-        nonlin = {1: ModeNonlinearity(
-            k1=s ** 2 * m.parameter("k1", K1, u["k1"], f"cubic stiffness ({where})"),
-            k2=s ** 4 * m.parameter("k2", K2, u["k2"], f"quintic stiffness ({where})"),
-            mu1=s ** 2 * m.parameter("mu1", MU1, u["mu1"], f"nonlinear damping, (mu + mu1 y^2) y' ({where})"))}
+        nonlin = {
+            1: ModeNonlinearity(
+                k1=s**2 * m.parameter("k1", K1, u["k1"], f"cubic stiffness ({where})"),
+                k2=s**4 * m.parameter("k2", K2, u["k2"], f"quintic stiffness ({where})"),
+                mu1=s**2 * m.parameter("mu1", MU1, u["mu1"], f"nonlinear damping, (mu + mu1 y^2) y' ({where})"),
+            )
+        }
     if p.frequency == "measured":
-        omega = m.parameter("omega_1", OMEGA_MEASURED, UNITS["omega"],
-                            "natural frequency, measured (Sec. 4.2); Table 1 gives 2915.5 rad/s")
+        omega = m.parameter(
+            "omega_1",
+            OMEGA_MEASURED,
+            UNITS["omega"],
+            "natural frequency, measured (Sec. 4.2); Table 1 gives 2915.5 rad/s",
+        )
     else:
-        omega = None   # exact Euler-Bernoulli first mode of Table 1's beam
+        omega = None  # exact Euler-Bernoulli first mode of Table 1's beam
     xi = m.parameter("zeta_1", XI_MEASURED, UNITS["zeta"], "damping ratio, measured (Sec. 4.2)")
     add_bimorph_modes(m, beam, 1, p.target, omegas=[omega], zetas=[xi], nonlinear=nonlin, source=T1)
     return m

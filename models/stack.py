@@ -13,7 +13,8 @@ M_layer = 1.95e-5 kg is a 5 × 5 mm² PZT layer (ρ = 7800 kg/m³) of thickness 
 Re_layer = 1 Ω keeps the layer's electrical time constant near 1 µs: the paper gives neither,
 so both are our choices (they do not affect the quasi-static response).
 """
-from bondgraph import Experiment, I, J0, J1, Model, Parameter, R, Se, Step
+
+from bondgraph import J0, J1, Experiment, I, Model, Parameter, R, Se, Step
 from library.piezo import layer_extension, linear_polarization, piezo_layer
 
 PARAMETERS = [
@@ -40,6 +41,7 @@ CALIBRATE = ["a", "K", "c"]
 #: at best, the layer thickness (the capacitance goes with its square) to 30 %
 TOLERANCE = {"c": 15.0, "l": 1.3}
 
+
 def build(p):
     n = p.layers
     g = Model(f"stack of {n} layers" + (" (lumped)" if p.lumped else ""), __doc__.splitlines()[0])
@@ -49,8 +51,11 @@ def build(p):
     g.chain("amp", "i")
     g.bond("i", "Re")
     if p.lumped:
-        g.add(piezo_layer("stack", l=p.l, a=p.a, K=p.K, R_NL=p.c,
-                          polarization=lambda c, name: linear_polarization(c, name, p.kx)))
+        g.add(
+            piezo_layer(
+                "stack", l=p.l, a=p.a, K=p.K, R_NL=p.c, polarization=lambda c, name: linear_polarization(c, name, p.kx)
+            )
+        )
         g.add(I("M", (n + 1) / 2 * p.M_layer))
         g.bond("i", "stack.elec")
         g.bond("stack.mech", "M")
@@ -62,8 +67,17 @@ def build(p):
     g.bond("i", "V")
     extension = 0
     for j in range(1, n + 1):
-        g.add(piezo_layer(f"L{j}", l=p.l, a=p.a, K=n * p.K, R_NL=n * p.c, Re=p.Re_layer,
-                          polarization=lambda c, name: linear_polarization(c, name, n * p.kx)))
+        g.add(
+            piezo_layer(
+                f"L{j}",
+                l=p.l,
+                a=p.a,
+                K=n * p.K,
+                R_NL=n * p.c,
+                Re=p.Re_layer,
+                polarization=lambda c, name: linear_polarization(c, name, n * p.kx),
+            )
+        )
         g.add(I(f"M{j}", p.M_layer), J1(f"v{j}"))
         g.bond("V", f"L{j}.elec")
         g.bond(f"v{j}", f"M{j}")

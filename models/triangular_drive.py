@@ -93,6 +93,7 @@ The lumped stack neglects the axial wave of eq. 17 (γ = ω·√(ρ·s33^E)), ke
 as the stack's Rayleigh mass; at 100 Hz γl ≈ 0.01 (library.triangular.tip_displacement gives
 eq. 17 for the pair; the tests compare both).
 """
+
 import sympy as sp
 
 from bondgraph import Experiment, Model, Parameter, Sine
@@ -104,9 +105,9 @@ AMPLITUDE, FREQUENCY = 50.0, 100.0  # V, Hz: the default EXPERIMENT (Sec. 5)
 STROKES = ("constitutive", "measured", "hysteretic")
 
 #: measured free-stroke amplitude at 50 V of drive amplitude (see the module docstring)
-MEASURED_STROKE = MeasuredStroke(frequencies=(5.0, 100.0),
-                                 amplitudes=(36.7e-6 * 50.0 / 120.0, 36.7e-6 * 50.0 / 120.0 * 5.5 / 13.4),
-                                 voltage=50.0)
+MEASURED_STROKE = MeasuredStroke(
+    frequencies=(5.0, 100.0), amplitudes=(36.7e-6 * 50.0 / 120.0, 36.7e-6 * 50.0 / 120.0 * 5.5 / 13.4), voltage=50.0
+)
 #: hysteretic stroke: PI thresholds (V, for a 0-100 V swing) and weights (1), from the P-885 record
 HYSTERESIS_THRESHOLDS = tuple(100.0 * k / 12 for k in range(6))
 HYSTERESIS_WEIGHTS = (0.4267, 0.5011, 0.02347, 0.1873, 0.1394, 0.0)
@@ -115,56 +116,103 @@ PARAMETERS = [
     Parameter("phase", 90.0, "deg", "phase of the stack-2 drive relative to stack 1 (Sec. 5: 90)"),
     Parameter("offset", 50.0, "V", "bias voltage on both stacks (Sec. 5: 50 V)"),
     Parameter("d33", 400e-12, "m/V", "piezoelectric coefficient (Table 4; PIC255 value)", bounds=(0.0, 1e-8)),
-    Parameter("s33E", 20.7e-12, "m^2/N", "elastic compliance at constant field (Table 4; PIC255 value)",
-              bounds=(1e-13, 1e-9)),
-    Parameter("eps33T", 1750 * EPS0, "F/m", "permittivity at constant stress, 1750 eps0 (Table 4)",
-              bounds=(1e-11, 1e-6)),
+    Parameter(
+        "s33E", 20.7e-12, "m^2/N", "elastic compliance at constant field (Table 4; PIC255 value)", bounds=(1e-13, 1e-9)
+    ),
+    Parameter(
+        "eps33T", 1750 * EPS0, "F/m", "permittivity at constant stress, 1750 eps0 (Table 4)", bounds=(1e-11, 1e-6)
+    ),
     Parameter("rho", 7800.0, "kg/m^3", "stack density (Table 4)", bounds=(0.0, 1e5)),
     Parameter("area", 1e-4, "m^2", "stack cross-section, 10 x 10 mm (P-887.91)", bounds=(1e-8, 1.0)),
     Parameter("length", 36e-3, "m", "stack length (P-887.91)", bounds=(1e-4, 1.0)),
     Parameter("h", 60e-6, "m", "layer thickness (E = V/h)", bounds=(1e-6, 1e-2)),
     Parameter("Re", 0.1, "ohm", "amplifier output resistance per channel (our choice)", bounds=(1e-6, 1e6)),
     Parameter("c_stack", 5.0, "N*s/m", "stack internal viscous damping R_NL", bounds=(0.0, 1e6)),
-    Parameter("k_x", 3e7, "N/m", "body tip stiffness, horizontal ((k_x + k_y)/2 = K_e of Table 2)",
-              bounds=(0.0, 1e12)),
+    Parameter("k_x", 3e7, "N/m", "body tip stiffness, horizontal ((k_x + k_y)/2 = K_e of Table 2)", bounds=(0.0, 1e12)),
     Parameter("k_y", 7e7, "N/m", "body tip stiffness, vertical (stiffer than x, Sec. 4.1)", bounds=(0.0, 1e12)),
     Parameter("m_x", 0.05, "kg", "body tip mass, horizontal (our choice)", bounds=(1e-6, 100.0)),
     Parameter("m_y", 0.05, "kg", "body tip mass, vertical (our choice)", bounds=(1e-6, 100.0)),
     Parameter("c_x", 100.0, "N*s/m", "body damping, horizontal (~1.5 % of critical)", bounds=(0.0, 1e8)),
     Parameter("c_y", 100.0, "N*s/m", "body damping, vertical (~1.5 % of critical)", bounds=(0.0, 1e8)),
-    Parameter("stroke", "constitutive", "", "free stroke fed to the stacks: constitutive d33*E*l, the "
-              "measured stroke at drive_frequency, or measured and hysteretic (eqs. 17-19)", choices=STROKES),
-    Parameter("drive_frequency", FREQUENCY, "Hz", "frequency of the sine drive, for the measured stroke "
-              "(the paper's 5-100 Hz)", symbolic=False, bounds=(5.0, 100.0)),
-    Parameter("half_angle", 45.0, "deg", "angle of each stack from the vertical (45: stacks 90 deg apart)",
-              symbolic=False, bounds=(5.0, 85.0)),
-    Parameter("formulation", "field", "", "stacks and body as one C-field (6 states) or as three-domain piezo "
-              "layers plus body springs (8 states, two conserved)", choices=FORMULATIONS),
+    Parameter(
+        "stroke",
+        "constitutive",
+        "",
+        "free stroke fed to the stacks: constitutive d33*E*l, the "
+        "measured stroke at drive_frequency, or measured and hysteretic (eqs. 17-19)",
+        choices=STROKES,
+    ),
+    Parameter(
+        "drive_frequency",
+        FREQUENCY,
+        "Hz",
+        "frequency of the sine drive, for the measured stroke (the paper's 5-100 Hz)",
+        symbolic=False,
+        bounds=(5.0, 100.0),
+    ),
+    Parameter(
+        "half_angle",
+        45.0,
+        "deg",
+        "angle of each stack from the vertical (45: stacks 90 deg apart)",
+        symbolic=False,
+        bounds=(5.0, 85.0),
+    ),
+    Parameter(
+        "formulation",
+        "field",
+        "",
+        "stacks and body as one C-field (6 states) or as three-domain piezo "
+        "layers plus body springs (8 states, two conserved)",
+        choices=FORMULATIONS,
+    ),
 ]
 
 # Three periods of the paper's 100 Hz drive; V and Vq are the in-phase and quadrature references.
-EXPERIMENT = Experiment(t_end=0.03, dt=1e-5, inputs={
-    "V": Sine(AMPLITUDE, FREQUENCY),
-    "Vq": Sine(AMPLITUDE, FREQUENCY, phase=90.0),
-})
+EXPERIMENT = Experiment(
+    t_end=0.03,
+    dt=1e-5,
+    inputs={
+        "V": Sine(AMPLITUDE, FREQUENCY),
+        "Vq": Sine(AMPLITUDE, FREQUENCY, phase=90.0),
+    },
+)
 
 
 def build(p):
-    m = Model("triangular_drive", "two stacks at 90 deg under a compliant triangular body (Hassani & Tjahjowidodo 2013)")
+    m = Model(
+        "triangular_drive", "two stacks at 90 deg under a compliant triangular body (Hassani & Tjahjowidodo 2013)"
+    )
     V = m.input("V", "V", "drive of stack 1 (added to the bias offset)")
     Vq = m.input("Vq", "V", "quadrature reference: the stack-1 drive advanced by 90 deg")
     phi = sp.pi * p.phase / 180
     V1, V2 = p.offset + V, p.offset + sp.cos(phi) * V + sp.sin(phi) * Vq
     d33 = p.d33
-    if p.stroke != "constitutive":   # eqs. 18-19: the measured stroke instead of d33*E*l
+    if p.stroke != "constitutive":  # eqs. 18-19: the measured stroke instead of d33*E*l
         d33 = MEASURED_STROKE.per_volt(p.drive_frequency) * p.h / p.length
     if p.stroke == "hysteretic":
         V1 = m.operator("H1", PrandtlIshlinskii(HYSTERESIS_THRESHOLDS, HYSTERESIS_WEIGHTS), V1)
         V2 = m.operator("H2", PrandtlIshlinskii(HYSTERESIS_THRESHOLDS, HYSTERESIS_WEIGHTS), V2)
     add_triangular_drive(
-        m, V1=V1, V2=V2,
-        d33=d33, s33E=p.s33E, eps33T=p.eps33T, area=p.area, length=p.length, h=p.h, Re=p.Re,
-        k_x=p.k_x, k_y=p.k_y, m_x=p.m_x, m_y=p.m_y, c_x=p.c_x, c_y=p.c_y, c_stack=p.c_stack,
-        stack_mass=p.rho * p.area * p.length / 3, half_angle=p.half_angle, formulation=p.formulation)
+        m,
+        V1=V1,
+        V2=V2,
+        d33=d33,
+        s33E=p.s33E,
+        eps33T=p.eps33T,
+        area=p.area,
+        length=p.length,
+        h=p.h,
+        Re=p.Re,
+        k_x=p.k_x,
+        k_y=p.k_y,
+        m_x=p.m_x,
+        m_y=p.m_y,
+        c_x=p.c_x,
+        c_y=p.c_y,
+        c_stack=p.c_stack,
+        stack_mass=p.rho * p.area * p.length / 3,
+        half_angle=p.half_angle,
+        formulation=p.formulation,
+    )
     return m
-

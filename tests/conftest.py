@@ -1,4 +1,5 @@
 """Shared test fixtures: repository paths and small reference models."""
+
 from __future__ import annotations
 
 import ast
@@ -17,8 +18,9 @@ def _shares_a_module_fixture(path: Path) -> bool:
     """Whether the test module at ``path`` defines a fixture of module scope."""
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
         for dec in getattr(node, "decorator_list", ()):
-            if isinstance(dec, ast.Call) and any(k.arg == "scope" and getattr(k.value, "value", None) == "module"
-                                                 for k in dec.keywords):
+            if isinstance(dec, ast.Call) and any(
+                k.arg == "scope" and getattr(k.value, "value", None) == "module" for k in dec.keywords
+            ):
                 return True
     return False
 
@@ -54,4 +56,4 @@ def two_level_chirp(t: np.ndarray, duration: float, f0: float, f1: float, low: f
     half = duration / 2
     tau = np.mod(t, half)
     level = np.where(t < half, low, high)
-    return level * (1 - np.cos(2 * np.pi * (f0 * tau + (f1 - f0) / (2 * half) * tau ** 2)))
+    return level * (1 - np.cos(2 * np.pi * (f0 * tau + (f1 - f0) / (2 * half) * tau**2)))

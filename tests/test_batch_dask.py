@@ -7,6 +7,7 @@ without, and one broken file.  Each batch row must equal the diagnosis of the sa
 called directly, and a broken record must fail its own row only.  A 200-draw Monte Carlo
 must give exactly the draws and statistics of a serial loop over the same draws.
 """
+
 import contextlib
 import csv
 import glob
@@ -28,6 +29,8 @@ from scipy import stats
 
 distributed = pytest.importorskip("distributed")
 
+from conftest import MODELS, ROOT  # noqa: E402
+
 from bondgraph import batch  # noqa: E402
 from bondgraph.batch.jobs import memo_info  # noqa: E402
 from bondgraph.batch.table import Table  # noqa: E402
@@ -39,7 +42,6 @@ from bondgraph.linear.linearize import linearize  # noqa: E402
 from bondgraph.model.modelfile import load_model  # noqa: E402
 from bondgraph.model.signals import Sine  # noqa: E402
 from bondgraph.numerics.simulate import Simulator  # noqa: E402
-from conftest import MODELS, ROOT  # noqa: E402
 
 APA = str(MODELS / "apa120ml.py")
 RESULTS = ("cause", "causes", "gain", "baseline_rms", "extended_rms")
@@ -50,8 +52,9 @@ def record(path, hysteresis: str, changes: dict, seed: int):
     truth = load_model(APA, {"hysteresis": hysteresis})
     t = np.arange(301) / 1000.0
     nominal = truth.model.values
-    res = Simulator(truth.model).run(t, {"V": Sine(50.0, 5.0, phase=-90.0, offset=60.0)},
-                                     params={k: f * nominal[k] for k, f in changes.items()})
+    res = Simulator(truth.model).run(
+        t, {"V": Sine(50.0, 5.0, phase=-90.0, offset=60.0)}, params={k: f * nominal[k] for k, f in changes.items()}
+    )
     x = res["x"] + 0.01 * np.std(res["x"]) * np.random.default_rng(seed).standard_normal(t.size)
     write_csv(path, t, {"V": res["V"], "x": x}, {"truth": f"APA-120ML, hysteresis={hysteresis}, {changes}"})
     return str(path)
@@ -118,7 +121,7 @@ def serial_monte_carlo(draws: int, seed: int) -> dict:
         p = {"K": K[i], "c": c[i], "M": M[i]}
         x = sim.run(t, MC_RUN["inputs"], params=p)["x"]
         out["peak(x)"].append(np.max(np.abs(x)))
-        out["rms(x)"].append(np.sqrt(np.mean(x ** 2)))
+        out["rms(x)"].append(np.sqrt(np.mean(x**2)))
         out["steady(x)"].append(np.mean(x[t >= 0.018]))
         poles = linearize(sim.eqs, "V", "x", params=p).poles
         out["resonance"].append(np.min(np.abs(poles[poles.imag > 0])) / (2 * np.pi))
@@ -138,8 +141,16 @@ def check_monte_carlo(res, serial):
     for s in res.summary():
         y = serial[s["metric"]]
         p5, p50, p95 = np.percentile(y, [5, 50, 95])
-        assert (s["n"], s["mean"], s["std"], s["min"], s["p5"], s["median"], s["p95"], s["max"]) == \
-            (200, np.mean(y), np.std(y, ddof=1), np.min(y), p5, p50, p95, np.max(y))
+        assert (s["n"], s["mean"], s["std"], s["min"], s["p5"], s["median"], s["p95"], s["max"]) == (
+            200,
+            np.mean(y),
+            np.std(y, ddof=1),
+            np.min(y),
+            p5,
+            p50,
+            p95,
+            np.max(y),
+        )
     # the resonance √(K_eff/M)/2π falls with the mass: M ranks first with a negative rank correlation
     sens = {s["metric"]: s for s in res.sensitivity()}["resonance"]
     assert sens["ranking"][0]["parameter"] == "M" and sens["ranking"][0]["spearman"] < -0.5
@@ -169,14 +180,46 @@ def scheduler(tmp_path_factory):
     d = tmp_path_factory.mktemp("dask")
     info = d / "scheduler.json"
     quiet = dict(stdout=subprocess.DEVNULL, stderr=open(d / "log.txt", "w"), cwd=d)
-    procs = [subprocess.Popen([sys.executable, "-m", "dask", "scheduler", "--host", "127.0.0.1", "--port", "0",
-                               "--no-dashboard", "--scheduler-file", str(info)], **quiet)]
+    procs = [
+        subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "dask",
+                "scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                str(info),
+            ],
+            **quiet,
+        )
+    ]
     try:
         deadline = time.time() + 60
         while not info.exists() and time.time() < deadline:
             time.sleep(0.1)
-        procs.append(subprocess.Popen([sys.executable, "-m", "dask", "worker", "--scheduler-file", str(info),
-                                       "--nworkers", "2", "--nthreads", "1", "--no-dashboard"], **quiet))
+        procs.append(
+            subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "dask",
+                    "worker",
+                    "--scheduler-file",
+                    str(info),
+                    "--nworkers",
+                    "2",
+                    "--nthreads",
+                    "1",
+                    "--no-dashboard",
+                ],
+                **quiet,
+            )
+        )
         address = json.loads(info.read_text())["address"]
         with distributed.Client(address, timeout="30s") as client:
             client.wait_for_workers(2, timeout=60)
@@ -198,20 +241,23 @@ def readme_cluster_command() -> str:
     return next(ln.split("  #")[0].strip() for b in blocks for ln in b.splitlines() if ln.startswith("bondgraph batch"))
 
 
-def test_readme_cluster_example_on_a_scheduler_and_workers_started_here(scheduler, records, direct, tmp_path,
-                                                                        monkeypatch, capsys):
+def test_readme_cluster_example_on_a_scheduler_and_workers_started_here(
+    scheduler, records, direct, tmp_path, monkeypatch, capsys
+):
     """The README's cluster command, with this scheduler's address and the lot expanded as a
     shell would: the broken and the effect-free record."""
     (tmp_path / "lot").mkdir()
     for r in records[1:]:
         shutil.copy(r, tmp_path / "lot")
     monkeypatch.chdir(tmp_path)
-    argv = [str(ROOT / a) if a.startswith("models/") else a
-            for a in shlex.split(readme_cluster_command().replace("tcp://HEAD:8786", scheduler))[1:]]
+    argv = [
+        str(ROOT / a) if a.startswith("models/") else a
+        for a in shlex.split(readme_cluster_command().replace("tcp://HEAD:8786", scheduler))[1:]
+    ]
     pattern = next(a for a in argv if "*" in a)
     files = sorted(glob.glob(pattern))
     i = argv.index(pattern)
-    argv[i:i + 1] = files
+    argv[i : i + 1] = files
     assert main(argv) == 0
     assert f"running on the Dask cluster at {scheduler} (2 workers" in capsys.readouterr().err
     out = next(argv[k + 1] for k, a in enumerate(argv) if a == "--out")
@@ -241,8 +287,25 @@ def test_external_cluster_monte_carlo_builds_the_model_once_per_worker(scheduler
 
 def test_cli_fit_and_simulate_with_parameter_sets_on_the_external_cluster(scheduler, records, tmp_path):
     fits = tmp_path / "fits.csv"
-    assert main(["batch", "fit", APA, records[2], records[1], "--params", "a,K", "--scheduler", scheduler,
-                 "--out", str(fits), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "batch",
+                "fit",
+                APA,
+                records[2],
+                records[1],
+                "--params",
+                "a,K",
+                "--scheduler",
+                scheduler,
+                "--out",
+                str(fits),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     with open(fits, newline="") as fh:
         rows = list(csv.DictReader(fh))
     direct = fit_parameters(load_model(APA), read_csv(records[2]), ["a", "K"]).result
@@ -253,8 +316,26 @@ def test_cli_fit_and_simulate_with_parameter_sets_on_the_external_cluster(schedu
     sets = tmp_path / "sets.csv"
     sets.write_text("K,c,a\n11.847e6,2400,0.0474\n11.847e6,2400,0.05688\n")
     out = tmp_path / "sim.parquet"
-    assert main(["batch", "simulate", APA, records[2], "--sets", str(sets), "--metric", "p2p(x)",
-                 "--scheduler", scheduler, "--out", str(out), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "batch",
+                "simulate",
+                APA,
+                records[2],
+                "--sets",
+                str(sets),
+                "--metric",
+                "p2p(x)",
+                "--scheduler",
+                scheduler,
+                "--out",
+                str(out),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     table = pytest.importorskip("pyarrow.parquet").read_table(out).to_pydict()
     x = read_csv(records[2]).columns["x"]
     assert table["a"] == ["0.0474", "0.05688"] and table["error"] == ["", ""]
@@ -266,17 +347,39 @@ def test_cli_grid_sweep_over_a_structural_parameter(scheduler, tmp_path, capsys)
     out = tmp_path / "grid.csv"
     with distributed.Client(scheduler) as client:
         before = client.run(memo_info)
-        assert main(["batch", "sweep", APA, "--vary", "K=linspace(9e6, 12e6, 3)", "--vary",
-                     "hysteresis=values(none, bouc-wen)", "--metric", "p2p(x)", "--t-end", "0.1",
-                     "--scheduler", scheduler, "--json", "--out", str(out), "--quiet"]) == 0
+        assert (
+            main(
+                [
+                    "batch",
+                    "sweep",
+                    APA,
+                    "--vary",
+                    "K=linspace(9e6, 12e6, 3)",
+                    "--vary",
+                    "hysteresis=values(none, bouc-wen)",
+                    "--metric",
+                    "p2p(x)",
+                    "--t-end",
+                    "0.1",
+                    "--scheduler",
+                    scheduler,
+                    "--json",
+                    "--out",
+                    str(out),
+                    "--quiet",
+                ]
+            )
+            == 0
+        )
         after = client.run(memo_info)
     res = json.loads(capsys.readouterr().out)
     assert res["design"] == "grid" and res["runs"] == 6 and res["failed"] == 0
     assert {r["parameter"] for r in res["sensitivity"][0]["ranking"]} == {"K", "hysteresis"}
     with open(out, newline="") as fh:
         rows = list(csv.DictReader(fh))
-    assert [(r["K"], r["hysteresis"]) for r in rows] == [(k, h) for k in ("9000000.0", "10500000.0", "12000000.0")
-                                                         for h in ("none", "bouc-wen")]
+    assert [(r["K"], r["hysteresis"]) for r in rows] == [
+        (k, h) for k in ("9000000.0", "10500000.0", "12000000.0") for h in ("none", "bouc-wen")
+    ]
     # hysteresis lowers the stroke; one build per structure and worker at most
     assert float(rows[1]["p2p(x)"]) < float(rows[0]["p2p(x)"])
     assert 2 <= sum(after[w]["misses"] - before[w]["misses"] for w in after) <= 4
@@ -287,10 +390,32 @@ def test_ctrl_c_cancels_the_jobs_and_shuts_the_local_cluster_down(tmp_path):
     no table written, no worker process left."""
     psutil = pytest.importorskip("psutil")
     out = tmp_path / "mc.csv"
-    proc = subprocess.Popen([sys.executable, "-m", "bondgraph", "batch", "sweep", APA, "--vary", "K=uniform(9e6, 12e6)",
-                             "--draws", "20000", "--seed", "1", "--metric", "peak(x)", "--workers", "2",
-                             "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "bondgraph",
+            "batch",
+            "sweep",
+            APA,
+            "--vary",
+            "K=uniform(9e6, 12e6)",
+            "--draws",
+            "20000",
+            "--seed",
+            "1",
+            "--metric",
+            "peak(x)",
+            "--workers",
+            "2",
+            "--out",
+            str(out),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     first = proc.stderr.readline()
     assert "running on a local Dask cluster of 2 worker processes" in first, first + proc.stderr.read()
     time.sleep(2.0)  # the workers are simulating

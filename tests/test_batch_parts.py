@@ -1,5 +1,6 @@
 """Batch runs without a cluster: sampling designs, scalar outputs, the per-worker memo,
 sensitivities on functions whose answer is known, the table writers and the CLI's checks."""
+
 import csv
 import json
 import math
@@ -7,6 +8,7 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import MODELS
 from scipy import stats
 
 from bondgraph import config
@@ -14,13 +16,11 @@ from bondgraph.batch import analysis, jobs, sampling
 from bondgraph.batch.runs import simulation_options
 from bondgraph.batch.table import Table
 from bondgraph.cli import main
-from bondgraph.support.errors import UsageError
 from bondgraph.model.modelfile import load_model
 from bondgraph.numerics.simulate import Simulator
-from bondgraph.model.signals import Sine
-from conftest import MODELS
+from bondgraph.support.errors import UsageError
 
-MSD = '''
+MSD = """
 from bondgraph import C, Experiment, I, J1, Model, Parameter, R, Se, Step
 
 PARAMETERS = [Parameter("m", 2.0, "kg", "mass"), Parameter("k", 800.0, "N/m", "stiffness"),
@@ -38,7 +38,7 @@ def build(p):
         g.bond("v", f"spring{j}")
     g.output("x", g.displacement("spring0"), "m")
     return g
-'''
+"""
 
 
 @pytest.fixture
@@ -85,15 +85,29 @@ def test_grid_is_the_full_factorial_and_oat_moves_one_parameter_at_a_time():
     space = sampling.parse_space(["a=linspace(1, 3, 3)", "b=values(none, bouc-wen)"])
     grid = sampling.design_points(space, "grid")
     assert grid == [{"a": a, "b": b} for a in (1.0, 2.0, 3.0) for b in ("none", "bouc-wen")]
-    oat = sampling.design_points({"a": sampling.uniform(1, 3), "b": sampling.normal(10, 1)}, "oat",
-                                 nominal={"a": 2.0, "b": 10.0})
-    assert oat == [{"a": 2.0, "b": 10.0}, {"a": 1.0, "b": 10.0}, {"a": 3.0, "b": 10.0},
-                   {"a": 2.0, "b": 8.0}, {"a": 2.0, "b": 12.0}]
+    oat = sampling.design_points(
+        {"a": sampling.uniform(1, 3), "b": sampling.normal(10, 1)}, "oat", nominal={"a": 2.0, "b": 10.0}
+    )
+    assert oat == [
+        {"a": 2.0, "b": 10.0},
+        {"a": 1.0, "b": 10.0},
+        {"a": 3.0, "b": 10.0},
+        {"a": 2.0, "b": 8.0},
+        {"a": 2.0, "b": 12.0},
+    ]
 
 
-@pytest.mark.parametrize("spec,words", [("uniform(3, 1)", "lower bound"), ("gauss(1, 2)", "unknown spec"),
-                                        ("normal(1, -2)", "positive"), ("linspace(0, 1, 1)", "at least 2"),
-                                        ("uniform(1)", "takes 2"), ("loguniform(0, 1)", "positive")])
+@pytest.mark.parametrize(
+    "spec,words",
+    [
+        ("uniform(3, 1)", "lower bound"),
+        ("gauss(1, 2)", "unknown spec"),
+        ("normal(1, -2)", "positive"),
+        ("linspace(0, 1, 1)", "at least 2"),
+        ("uniform(1)", "takes 2"),
+        ("loguniform(0, 1)", "positive"),
+    ],
+)
 def test_bad_specs_are_named(spec, words):
     with pytest.raises(UsageError, match=words):
         sampling.parse_spec(spec)
@@ -120,14 +134,14 @@ def test_metrics_of_a_mass_spring_damper_match_the_analytic_values(msd):
     assert row["error"] == "", row
     k, m, c = 500.0, 2.0, 4.0
     wn, zeta = math.sqrt(k / m), c / (2 * math.sqrt(k * m))
-    wd = wn * math.sqrt(1 - zeta ** 2)
+    wd = wn * math.sqrt(1 - zeta**2)
     t = np.linspace(0, 3.0, 3001)
-    x = (1 - np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta / math.sqrt(1 - zeta ** 2) * np.sin(wd * t))) / k
+    x = (1 - np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta / math.sqrt(1 - zeta**2) * np.sin(wd * t))) / k
     assert row["resonance"] == pytest.approx(wn / (2 * math.pi), rel=1e-12)
     assert row["damping"] == pytest.approx(zeta, rel=1e-12)
     assert row["steady(x)"] == pytest.approx(np.mean(x[t >= 2.7]), rel=1e-5)
-    assert row["rms(x)"] == pytest.approx(np.sqrt(np.mean(x ** 2)), rel=1e-5)
-    assert row["peak(x)"] == pytest.approx((1 + math.exp(-zeta * math.pi / math.sqrt(1 - zeta ** 2))) / k, rel=1e-5)
+    assert row["rms(x)"] == pytest.approx(np.sqrt(np.mean(x**2)), rel=1e-5)
+    assert row["peak(x)"] == pytest.approx((1 + math.exp(-zeta * math.pi / math.sqrt(1 - zeta**2))) / k, rel=1e-5)
     assert row["final(F)"] == 1.0 and row["min(x)"] == 0.0
 
 
@@ -152,7 +166,8 @@ def test_memo_builds_each_structure_once_per_process(msd):
     assert jobs.memo_info()["misses"] == 2
     # the memoised simulator gives what a fresh build with the same values gives
     direct = Simulator(load_model(msd, {"k": 602.0, "c": 3.0}).model).run(
-        np.linspace(0, 3.0, 3001), {"F": load_model(msd).experiment.inputs["F"]})
+        np.linspace(0, 3.0, 3001), {"F": load_model(msd).experiment.inputs["F"]}
+    )
     assert rows[2]["peak(x)"] == float(np.max(np.abs(direct["x"])))
 
 
@@ -188,21 +203,24 @@ def test_regression_sensitivity_recovers_a_linear_law():
 
 
 def test_grid_and_oat_sensitivities():
-    rows = [{"job": i, "a": a, "b": b, "y": a * a + 10 * b} for i, (a, b) in
-            enumerate((a, b) for a in (1.0, 2.0, 3.0) for b in (0.0, 1.0))]
+    rows = [
+        {"job": i, "a": a, "b": b, "y": a * a + 10 * b}
+        for i, (a, b) in enumerate((a, b) for a in (1.0, 2.0, 3.0) for b in (0.0, 1.0))
+    ]
     s = analysis.sensitivity(Table(rows, ["a", "b"]), ["a", "b"], "y", "grid")
     assert [r["parameter"] for r in s["ranking"]] == ["b", "a"]
     assert s["ranking"][1] == {"parameter": "a", "low": 6.0, "high": 14.0, "swing": 8.0}
-    oat = [{"job": 0, "y": 5.0}, {"job": 1, "y": 4.0}, {"job": 2, "y": 7.0}, {"job": 3, "y": 5.5},
-           {"job": 4, "y": 4.9}]
+    oat = [{"job": 0, "y": 5.0}, {"job": 1, "y": 4.0}, {"job": 2, "y": 7.0}, {"job": 3, "y": 5.5}, {"job": 4, "y": 4.9}]
     s = analysis.sensitivity(Table(oat), ["a", "b"], "y", "oat")
     assert s["baseline"] == 5.0 and s["ranking"][0] == {"parameter": "a", "low": 4.0, "high": 7.0, "swing": 3.0}
 
 
 # ---- the table -----------------------------------------------------------------------------------
-ROWS = [{"job": 0, "data": "a.csv", "K": 1e7, "cause": "creep", "gain": 2.5, "seconds": 1.0, "error": ""},
-        {"job": 1, "data": "b, broken.csv", "K": 1.1e7, "seconds": 0.1, "error": 'b.csv:3: bad cell "x", fix it'},
-        {"job": 2, "data": "c.csv", "K": 0.1 + 0.2, "cause": "none", "gain": 1.0, "seconds": 2.0, "error": ""}]
+ROWS = [
+    {"job": 0, "data": "a.csv", "K": 1e7, "cause": "creep", "gain": 2.5, "seconds": 1.0, "error": ""},
+    {"job": 1, "data": "b, broken.csv", "K": 1.1e7, "seconds": 0.1, "error": 'b.csv:3: bad cell "x", fix it'},
+    {"job": 2, "data": "c.csv", "K": 0.1 + 0.2, "cause": "none", "gain": 1.0, "seconds": 2.0, "error": ""},
+]
 
 
 def test_csv_has_the_header_first_and_exact_numbers(tmp_path):
@@ -241,23 +259,70 @@ def test_unknown_table_format_writes_nothing(tmp_path):
 APA = str(MODELS / "apa120ml.py")
 
 
-@pytest.mark.parametrize("argv,words", [
-    (["batch", "diagnose", APA, "a.csv", "--vary", "K=uniform(1,2)"], "--vary applies to batch sweep only"),
-    (["batch", "fit", APA], "give the data files"),
-    (["batch", "fit", APA, "a.csv", "--params", "K", "--out", "fits.json"], "written as .csv or .parquet"),
-    (["batch", "simulate", APA, "a.csv", "b.csv", "--out", "b.csv"], "would overwrite the input file b.csv"),
-    (["batch", "sweep", APA, "--vary", "Kx=uniform(1,2)", "--draws", "5", "--metric", "peak(x)"], "did you mean"),
-    (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5", "--metric", "peak(y)"], "signal 'y'"),
-    (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--metric", "peak(x)"], "number of draws"),
-    (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5"], "at least one metric"),
-    (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5", "--metric", "peak(x)",
-      "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--workers sizes the local cluster"),
-    (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5", "--metric", "peak(x)",
-      "--input", "Vin"], "no data files are given"),
-    (["batch", "fit", APA, "a.csv", "--params", "K", "--input", "V=step(1)"], "for batch simulate and sweep"),
-    (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5", "--metric", "peak(x)",
-      "--scheduler", "tcp://127.0.0.1:1"], "cannot reach the Dask scheduler at tcp://127.0.0.1:1"),
-])
+@pytest.mark.parametrize(
+    "argv,words",
+    [
+        (["batch", "diagnose", APA, "a.csv", "--vary", "K=uniform(1,2)"], "--vary applies to batch sweep only"),
+        (["batch", "fit", APA], "give the data files"),
+        (["batch", "fit", APA, "a.csv", "--params", "K", "--out", "fits.json"], "written as .csv or .parquet"),
+        (["batch", "simulate", APA, "a.csv", "b.csv", "--out", "b.csv"], "would overwrite the input file b.csv"),
+        (["batch", "sweep", APA, "--vary", "Kx=uniform(1,2)", "--draws", "5", "--metric", "peak(x)"], "did you mean"),
+        (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5", "--metric", "peak(y)"], "signal 'y'"),
+        (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--metric", "peak(x)"], "number of draws"),
+        (["batch", "sweep", APA, "--vary", "K=uniform(1e7,2e7)", "--draws", "5"], "at least one metric"),
+        (
+            [
+                "batch",
+                "sweep",
+                APA,
+                "--vary",
+                "K=uniform(1e7,2e7)",
+                "--draws",
+                "5",
+                "--metric",
+                "peak(x)",
+                "--workers",
+                "2",
+                "--scheduler",
+                "tcp://127.0.0.1:1",
+            ],
+            "--workers sizes the local cluster",
+        ),
+        (
+            [
+                "batch",
+                "sweep",
+                APA,
+                "--vary",
+                "K=uniform(1e7,2e7)",
+                "--draws",
+                "5",
+                "--metric",
+                "peak(x)",
+                "--input",
+                "Vin",
+            ],
+            "no data files are given",
+        ),
+        (["batch", "fit", APA, "a.csv", "--params", "K", "--input", "V=step(1)"], "for batch simulate and sweep"),
+        (
+            [
+                "batch",
+                "sweep",
+                APA,
+                "--vary",
+                "K=uniform(1e7,2e7)",
+                "--draws",
+                "5",
+                "--metric",
+                "peak(x)",
+                "--scheduler",
+                "tcp://127.0.0.1:1",
+            ],
+            "cannot reach the Dask scheduler at tcp://127.0.0.1:1",
+        ),
+    ],
+)
 def test_cli_refuses_bad_batches_in_one_line(argv, words, capsys):
     with config.override({"batch.connect_timeout": 1.0}):
         assert main(argv) == 2
@@ -280,12 +345,16 @@ def test_cli_help_lists_batch(capsys):
 
 def test_sweep_report_json_and_plot(tmp_path):
     from bondgraph.batch import SweepResult
+
     rng = np.random.default_rng(4)
     a, b = rng.uniform(1, 2, 60), rng.normal(0, 1, 60)
-    rows = [{"job": i, "a": a[i], "b": b[i], "y": 2 * a[i] + 0.1 * b[i], "z": None if i == 3 else b[i] ** 2}
-            for i in range(60)]
-    res = SweepResult(Table(rows, ["a", "b"]), {"a": sampling.uniform(1, 2), "b": sampling.normal(0, 1)},
-                      "random", ["y", "z"], seed=4)
+    rows = [
+        {"job": i, "a": a[i], "b": b[i], "y": 2 * a[i] + 0.1 * b[i], "z": None if i == 3 else b[i] ** 2}
+        for i in range(60)
+    ]
+    res = SweepResult(
+        Table(rows, ["a", "b"]), {"a": sampling.uniform(1, 2), "b": sampling.normal(0, 1)}, "random", ["y", "z"], seed=4
+    )
     text = res.text()
     assert "random sweep: 60 runs, 0 failed, seed 4" in text and "sensitivity of y" in text
     doc = json.loads(json.dumps(res.as_json(), allow_nan=False))  # strict JSON

@@ -1,12 +1,19 @@
 """Tests of library.beam: exact bimorph cantilever modes against Ghafarirad et al. 2015, closed forms and FEM."""
+
 from dataclasses import replace
 
 import numpy as np
 import pytest
 from scipy.linalg import eigh
 
-from library.beam import (T215_A4_103X, T226_H4_203X, Bimorph, cantilever_beta_L, effective_mass,
-                          uniform_cantilever_omegas)
+from library.beam import (
+    T215_A4_103X,
+    T226_H4_203X,
+    Bimorph,
+    cantilever_beta_L,
+    effective_mass,
+    uniform_cantilever_omegas,
+)
 
 B = T215_A4_103X
 COVERAGES = [(0.1, 0.7), (0.2, 1.0), (0.0, 0.5), (0.5, 1.0)]
@@ -28,7 +35,7 @@ def fem_matrices(beam, n_el=200):
     b, tb, tp = beam.b, beam.t_b, beam.t_p
     EI = beam.c_b * b * tb**3 / 12 + cov * beam.c_p * 2 * b * ((tb / 2 + tp) ** 3 - (tb / 2) ** 3) / 3
     rhoA = beam.rho_b * b * tb + cov * 2 * beam.rho_p * b * tp
-    h = beam.L / n_el   # DOFs w and h*w' keep the element matrices well scaled
+    h = beam.L / n_el  # DOFs w and h*w' keep the element matrices well scaled
     k0 = np.array([[12, 6, -12, 6], [6, 4, -6, 2], [-12, -6, 12, -6], [6, 2, -6, 4]]) / h**3
     m0 = np.array([[156, 22, 54, -13], [22, 4, 13, -3], [54, 13, 156, -22], [-13, -3, -22, 4]]) * h / 420
     n = 2 * (n_el + 1)
@@ -48,7 +55,7 @@ def fem(beam, n_el=200, n_modes=8):
     """
     K, M = fem_matrices(beam, n_el)
     mu, vec = eigh(M, K, subset_by_index=[len(K) - n_modes, len(K) - 1])
-    vec = vec[:, ::-1] / np.sqrt(mu[::-1])   # now vec.T M vec = I
+    vec = vec[:, ::-1] / np.sqrt(mu[::-1])  # now vec.T M vec = I
     return 1 / np.sqrt(mu[::-1]), vec[0::2].T
 
 
@@ -81,8 +88,9 @@ def test_fully_covered_equals_closed_form():
     assert T226_H4_203X.modes(1).omegas[0] == pytest.approx(2915.5, abs=0.5)
     # bare substrate (no piezo) is uniform too
     bare = covered(0.3, 0.3)
-    np.testing.assert_allclose(bare.modes(5).omegas,
-                               uniform_cantilever_omegas(B.EI_bare, B.rhoA_bare, B.L, 5), rtol=1e-6)
+    np.testing.assert_allclose(
+        bare.modes(5).omegas, uniform_cantilever_omegas(B.EI_bare, B.rhoA_bare, B.L, 5), rtol=1e-6
+    )
 
 
 @pytest.mark.parametrize("l1,l2", COVERAGES)
@@ -103,7 +111,7 @@ def test_partial_differs_from_full_and_converges():
     """Partial coverage changes omega_1 a lot; shrinking bare ends converge to the fully covered beam."""
     full = B.modes(4).omegas
     assert covered(0.1, 0.7).modes(1).omegas[0] == pytest.approx(1136.47, abs=0.05)
-    eps = (1e-2, 1e-3, 1e-4, 1e-6, 1e-9)   # bare end pieces of eps*L at both ends (1e-9: 22 pm)
+    eps = (1e-2, 1e-3, 1e-4, 1e-6, 1e-9)  # bare end pieces of eps*L at both ends (1e-9: 22 pm)
     errs = [np.max(np.abs(covered(e, 1 - e).modes(4).omegas / full - 1)) for e in eps]
     assert all(a > 5 * b for a, b in zip(errs, errs[1:]))
     assert errs[0] > 0.2 and errs[-1] < 1e-7
@@ -151,7 +159,7 @@ def test_input_gains_static_deflection(l1, l2):
     w(L)/V = M_p [(L - l1)^2 - (L - l2)^2] / (2 EI_covered). Negative for e31 < 0 (M_p < 0).
     """
     beam = covered(l1, l2)
-    modes = beam.modes(20)   # the modal sum converges like 1/n^2
+    modes = beam.modes(20)  # the modal sum converges like 1/n^2
     assert beam.M_p == pytest.approx(3.2e-3 * -12.54 * 0.25e-3)
     exact = beam.M_p * ((beam.L - beam.l1) ** 2 - (beam.L - beam.l2) ** 2) / (2 * beam.EI_covered)
     series = sum(modes.shape(i, beam.L) * g / w**2 for i, (g, w) in enumerate(zip(modes.input_gains, modes.omegas)))

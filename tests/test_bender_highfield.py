@@ -5,25 +5,34 @@ limits for high energy density piezoelectric bending actuators", Proc. IEEE ICRA
 The paper's numbers that survive in the text are checked exactly (33/140, eq. 11, the legible
 terms of eq. 25, eqs. 1 and 13-15); its figures' numbers are lost, so for them the tests check
 the trends the text states, on the model file's (documented, our own) parameter values."""
+
 from __future__ import annotations
 
 import math
 
 import numpy as np
 import pytest
+from conftest import MODELS
 
 import bondgraph as bg
-from bondgraph import C, I, J1, Model, R, Se
+from bondgraph import J1, C, I, Model, Se
 from bondgraph.linear.linearize import linearize
 from bondgraph.model.modelfile import load_model
-from conftest import MODELS
 from library.beam import cantilever_mass_factor, cantilever_tip_compliance, extension_mass_factor
-from library.bender import (creep_step_response, damping_coefficient, kelvin_voigt_chain, load_enhancement,
-                            loss_factor, thermoelastic_arm, thermoelastic_loss, thermoelastic_relaxation)
+from library.bender import (
+    creep_step_response,
+    damping_coefficient,
+    kelvin_voigt_chain,
+    load_enhancement,
+    loss_factor,
+    thermoelastic_arm,
+    thermoelastic_loss,
+    thermoelastic_relaxation,
+)
 from library.hysteresis import MaxwellSlip
 
 BENDER = MODELS / "bender_highfield.py"
-FIELDS = (0.39, 1.0, 1.5, 2.0, 2.36)     # V/um: Fig. 17's V_b = 50-300 V over 127 um plates
+FIELDS = (0.39, 1.0, 1.5, 2.0, 2.36)  # V/um: Fig. 17's V_b = 50-300 V over 127 um plates
 
 
 # ---- effective mass (Sec. III-A) -----------------------------------------------------------------
@@ -52,9 +61,9 @@ def tapered_eq25(w_r: float) -> float:
     g1, g2 = w_r - 1, w_r - 2
     g3 = math.log(w_r / (2 - w_r))
     g4 = 2 * g1 * (-39624 + w_r * (135808 + w_r * (-182782 + w_r * (120878 + w_r * (-39257 + 4992 * w_r)))))
-    g5 = 450 * g2 ** 6 * g3 ** 2
-    g67 = 15 * g2 ** 4 * (396 + (-676 + 279 * w_r) * w_r) * g3
-    g8 = 3600 * g1 * (g2 ** 2 * g3 + 2 * g1 * (2 * w_r - 3)) ** 2
+    g5 = 450 * g2**6 * g3**2
+    g67 = 15 * g2**4 * (396 + (-676 + 279 * w_r) * w_r) * g3
+    g8 = 3600 * g1 * (g2**2 * g3 + 2 * g1 * (2 * w_r - 3)) ** 2
     return -(g4 + g5 + g67) / g8
 
 
@@ -73,8 +82,8 @@ def test_tapered_beam_eq25_and_fig9_trend():
 
 def test_tip_compliance_castigliano():
     """Uniform beam l^3/(3 EI); with a rigid extension (l^3/(3EI))(1 + 3 l_r + 3 l_r^2)."""
-    assert cantilever_tip_compliance(2.0, 0.1) == pytest.approx(0.1 ** 3 / 6.0, rel=1e-12)
-    assert cantilever_tip_compliance(2.0, 0.1, 1.0, 0.5) == pytest.approx(0.1 ** 3 / 6.0 * 3.25, rel=1e-12)
+    assert cantilever_tip_compliance(2.0, 0.1) == pytest.approx(0.1**3 / 6.0, rel=1e-12)
+    assert cantilever_tip_compliance(2.0, 0.1, 1.0, 0.5) == pytest.approx(0.1**3 / 6.0 * 3.25, rel=1e-12)
 
 
 # ---- creep (Sec. II-A, eq. 1) ------------------------------------------------------------------------
@@ -104,14 +113,16 @@ def test_creep_after_a_field_step():
     k_a = p["k_a"]
     cells = [(k_a / 0.05, k_a / 0.05 * tau) for tau in lm.module.CREEP_TAUS]
     F0 = p["B"] * field
-    s = np.linspace(0.0, 1e-3, 201)                  # ramp = average of delayed steps
+    s = np.linspace(0.0, 1e-3, 201)  # ramp = average of delayed steps
     expect = np.mean([creep_step_response(t - si, F0, k_a, cells) for si in s], axis=0)
-    late = t > 0.1                                   # Q ~ 50 at this field: rung out by 0.1 s
+    late = t > 0.1  # Q ~ 50 at this field: rung out by 0.1 s
     np.testing.assert_allclose(r["x"][late], expect[late], rtol=2e-5)
     elastic = F0 / k_a
     creep = r["x"][-1] / elastic - 1
-    print(f"\ncreep after a 0.1 V/um step: elastic {1e6 * elastic:.2f} um, {1e6 * r['x'][t >= 0.1][0]:.2f} um "
-          f"at 0.1 s, {1e6 * r['x'][-1]:.2f} um at 4 s (+{100 * creep:.1f} %)")
+    print(
+        f"\ncreep after a 0.1 V/um step: elastic {1e6 * elastic:.2f} um, {1e6 * r['x'][t >= 0.1][0]:.2f} um "
+        f"at 0.1 s, {1e6 * r['x'][-1]:.2f} um at 4 s (+{100 * creep:.1f} %)"
+    )
     assert creep == pytest.approx(0.05 * (1 - math.exp(-80)) + 0.05 * (1 - math.exp(-2)), rel=1e-3)
 
 
@@ -125,8 +136,12 @@ def by_field():
         n = lm.module.actuator_numbers(lm.params)
         w = np.linspace(0.8, 1.2, 4001) * lin.natural_frequencies[-1]
         peak = float(np.max(np.abs(lin.frequency_response(w)))) * E * 1e6 * lm.params.t_p / 2
-        out[E] = {"n": n, "f_n": lin.natural_frequencies[-1] / (2 * math.pi),
-                  "Q": 1 / (2 * lin.damping_ratios()[-1]), "peak": peak}
+        out[E] = {
+            "n": n,
+            "f_n": lin.natural_frequencies[-1] / (2 * math.pi),
+            "Q": 1 / (2 * lin.damping_ratios()[-1]),
+            "peak": peak,
+        }
     return out
 
 
@@ -138,7 +153,7 @@ def test_stiffness_and_damping_vs_field(by_field):
     assert all(a > b for a, b in zip(k, k[1:])) and k[-1] / k[0] == pytest.approx(0.795, abs=0.002)
     assert all(a < b for a, b in zip(eta, eta[1:]))
     assert eta[0] == pytest.approx(0.059, abs=0.001) and eta[-1] == pytest.approx(0.118, abs=0.001)
-    n = by_field[1.0]["n"]   # eq. 13 with zeta = zeta_s + eta/2
+    n = by_field[1.0]["n"]  # eq. 13 with zeta = zeta_s + eta/2
     assert n["b_a"] == pytest.approx(damping_coefficient(0.01 + n["eta_h"] / 2, n["m_eff"], n["k_a"]), rel=1e-12)
 
 
@@ -151,8 +166,13 @@ def test_resonance_falls_and_q_degrades_with_field(by_field):
         n = by_field[E]["n"]
         assert by_field[E]["f_n"] == pytest.approx(math.sqrt(n["k_a"] / n["m_eff"]) / (2 * math.pi), rel=2e-4)
     assert all(a > b for a, b in zip(f, f[1:])) and all(a > b for a, b in zip(Q, Q[1:]))
-    print("\n" + ", ".join(f"{E} V/um: {by_field[E]['f_n']:.0f} Hz, Q {by_field[E]['Q']:.1f}, "
-                           f"peak {1e6 * by_field[E]['peak']:.0f} um" for E in FIELDS))
+    print(
+        "\n"
+        + ", ".join(
+            f"{E} V/um: {by_field[E]['f_n']:.0f} Hz, Q {by_field[E]['Q']:.1f}, peak {1e6 * by_field[E]['peak']:.0f} um"
+            for E in FIELDS
+        )
+    )
     assert f[0] == pytest.approx(1597, abs=2) and f[-1] == pytest.approx(1424, abs=2)
     assert Q[0] == pytest.approx(12.7, abs=0.1) and Q[-1] == pytest.approx(7.2, abs=0.1)
 
@@ -162,22 +182,26 @@ def test_thermoelastic_damping_eqs_13_to_15():
     f_r = pi kappa / (2 c_v t^2); and the time-domain relaxation arm reproduces eq. 14's loss
     factor: a mass on a spring k with the arm, linearised, has damping ratio eta(f_n)/2 (eq. 13,
     zeta = eta/2) to O(Delta), at, below and above the relaxation frequency (Fig. 14's curve)."""
-    delta, f_r = thermoelastic_relaxation(alpha=4e-6, E_Y=60.6e9, T=300.0, c_v=3.15e6, kappa=1.5,
-                                          thickness=294e-6)
+    delta, f_r = thermoelastic_relaxation(alpha=4e-6, E_Y=60.6e9, T=300.0, c_v=3.15e6, kappa=1.5, thickness=294e-6)
     assert delta == pytest.approx(9.234e-5, rel=1e-3) and f_r == pytest.approx(8.654, rel=1e-3)
     assert thermoelastic_loss(f_r, delta, f_r) == pytest.approx(delta / 2)
     k, mass, D = 1e4, 1e-2, 0.01
     fn = math.sqrt(k / mass) / (2 * math.pi)
     for ratio in (0.3, 1.0, 3.0):
         m = Model("zener")
-        m.add(Se("F", m.input("F", "N")), J1("tip"), I("m", mass), C("k", 1 / k),
-              thermoelastic_arm("ted", k, D, fn / ratio))
+        m.add(
+            Se("F", m.input("F", "N")),
+            J1("tip"),
+            I("m", mass),
+            C("k", 1 / k),
+            thermoelastic_arm("ted", k, D, fn / ratio),
+        )
         for e in ("m", "k", "ted.port"):
             m.bond("tip", e)
         m.bond("F", "tip")
         m.output("x", m.displacement("k"), "m")
         lin = linearize(bg.derive(m), "F", "x")
-        pole = lin.poles[lin.poles.imag > 0][0]        # the oscillating pair (the arm adds a real pole)
+        pole = lin.poles[lin.poles.imag > 0][0]  # the oscillating pair (the arm adds a real pole)
         zeta = -pole.real / abs(pole)
         assert zeta == pytest.approx(thermoelastic_loss(fn, D, fn / ratio) / 2, rel=3 * D)
 
@@ -213,6 +237,6 @@ def test_saturation_loop_and_its_loss(tmp_path):
     n = lm.module.actuator_numbers(p)
     assert eta == pytest.approx(n["eta_h"], rel=0.02)
     linear = n["free_per_field"] * E * 1e6 * n["k_a0"] / n["k_a"]
-    assert np.ptp(x) / 2 < 0.8 * linear           # saturation: less than the linear free stroke
+    assert np.ptp(x) / 2 < 0.8 * linear  # saturation: less than the linear free stroke
     ms = MaxwellSlip([1.0, 1.0], [0.5, 1e6])
-    assert loss_factor(ms, 0.4) < 1e-12 and loss_factor(ms, 2.0) > 0.05    # no slip: no loss
+    assert loss_factor(ms, 0.4) < 1e-12 and loss_factor(ms, 2.0) > 0.05  # no slip: no loss

@@ -14,6 +14,7 @@
     the identified coefficients' units;
 (c) every CLI command on both model files.
 """
+
 from __future__ import annotations
 
 import json
@@ -22,17 +23,23 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import MODELS, ROOT
 
 import bondgraph as bg
 from bondgraph.cli import main
 from bondgraph.data import read_csv
 from bondgraph.linear.linearize import linearize
 from bondgraph.model.modelfile import load_model, read_model_module
-from conftest import MODELS, ROOT
 from library.beam import T215_A4_103X, T226_H4_203X
-from library.bimorph import (ModeNonlinearity, add_bimorph_modes, amplitude_equation_peak,
-                             amplitude_equation_phase, amplitude_equation_roots, effective_tip_mass,
-                             pi_operator)
+from library.bimorph import (
+    ModeNonlinearity,
+    add_bimorph_modes,
+    amplitude_equation_peak,
+    amplitude_equation_phase,
+    amplitude_equation_roots,
+    effective_tip_mass,
+    pi_operator,
+)
 
 T215 = str(MODELS / "bimorph_t215.py")
 T226 = str(MODELS / "bimorph_t226.py")
@@ -53,12 +60,17 @@ def cli_json(capsys, *argv: str) -> dict:
 # ---- (a) Ghafarirad et al. 2015: Table 2 and the non-minimum-phase boundary ------------------------------------
 def test_table2_natural_frequencies_from_the_console_script():
     """`bondgraph linearize models/bimorph_t215.py --set modes=3 --json`: Table 2 within 0.5 %."""
-    run = subprocess.run([sys.executable, "-m", "bondgraph", "linearize", "models/bimorph_t215.py",
-                          "--set", "modes=3", "--json"], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    run = subprocess.run(
+        [sys.executable, "-m", "bondgraph", "linearize", "models/bimorph_t215.py", "--set", "modes=3", "--json"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.returncode == 0, run.stderr
     res = json.loads(run.stdout)
     np.testing.assert_allclose(res["natural_frequencies_rad_s"], [2249.0, 14094.24, 39464.29], rtol=5e-3)
-    assert res["rhp_zeros"] == 0   # at 0.95 L the three-mode model is minimum phase too
+    assert res["rhp_zeros"] == 0  # at 0.95 L the three-mode model is minimum phase too
     assert len(res["poles"]) == 6
 
 
@@ -71,11 +83,12 @@ def test_rhp_zeros_depend_on_the_target_point(capsys, target, nmp):
         assert res["rhp_zeros"] >= 1
     else:
         assert res["rhp_zeros"] == 0
-        assert len(res["zeros"]) == 2   # the LHP pair that the paper's Fig. 13 shows
+        assert len(res["zeros"]) == 2  # the LHP pair that the paper's Fig. 13 shows
 
 
 def test_minimum_phase_boundary_by_bisection(capsys):
     """The RHP zero disappears at l_t = 0.737 L (Ghafarirad et al. 2015, Fig. 8); 8 bisection steps on target."""
+
     def nmp(target):
         return cli_json(capsys, "linearize", T215, "--set", f"target={target!r}", "--json")["rhp_zeros"] > 0
 
@@ -99,15 +112,14 @@ def test_modal_bond_graph_matches_the_beam_transfer_function():
     modes = T215_A4_103X.modes(3)
     num, den = modes.transfer_function(0.8 * T215_A4_103X.L, modes.damping_ratios(1e-3, 1e-5))
     w = np.array([100.0, 2247.4, 5000.0, 14084.2, 39436.2, 1e5])
-    np.testing.assert_allclose(lin.frequency_response(w), np.polyval(num, 1j * w) / np.polyval(den, 1j * w),
-                               rtol=1e-9)
+    np.testing.assert_allclose(lin.frequency_response(w), np.polyval(num, 1j * w) / np.polyval(den, 1j * w), rtol=1e-9)
 
 
 # ---- (b) Shahabi et al. 2019: multiple scales versus time-domain steady state ------------------------------------
-LEVELS = (0.5, 2.0, 4.5)          # V, the paper's identification range 0.5-4.5 V
-ABOVE = (0.0, 0.01, 0.02, 0.04)   # drive frequencies omega_peak (1 + d) on the resonant branch
-CYCLES = 80                       # from the multiple-scales state the transient is gone by ~40
-PPC = 64                          # samples per cycle for the Fourier projection
+LEVELS = (0.5, 2.0, 4.5)  # V, the paper's identification range 0.5-4.5 V
+ABOVE = (0.0, 0.01, 0.02, 0.04)  # drive frequencies omega_peak (1 + d) on the resonant branch
+CYCLES = 80  # from the multiple-scales state the transient is gone by ~40
+PPC = 64  # samples per cycle for the Fourier projection
 
 
 @pytest.fixture(scope="module")
@@ -117,8 +129,8 @@ def shahabi():
     sim = bg.Simulator(lm.model)
     tab = {str(k): v for k, v in lm.model.parameter_table().items()}
     wn, z, k1, k2, mu1, mp, phi = (tab[n] for n in ("omega_1", "zeta_1", "k1", "k2", "mu1", "mp_1", "phi_1"))
-    s = read_model_module(T226)[0].modal_scale("charge", mp)     # the model's default reading
-    k1, k2, mu1 = k1 * s ** 2, k2 * s ** 4, mu1 * s ** 2
+    s = read_model_module(T226)[0].modal_scale("charge", mp)  # the model's default reading
+    k1, k2, mu1 = k1 * s**2, k2 * s**4, mu1 * s**2
     iq, ip = sim.state_names.index("q_spring_1"), sim.state_names.index("p_mass_1")
 
     def ms_state(V, w, a):
@@ -134,7 +146,7 @@ def shahabi():
         over the last 10 cycles (m) and the final state (at drive phase 0 again)."""
         t = np.linspace(0.0, cycles * 2 * np.pi / w, cycles * PPC + 1)
         res = sim.run(t, {"V": bg.Sine(V, w / (2 * np.pi), phase=90.0)}, x0=x0, rtol=1e-9)
-        tt, x = t[-10 * PPC - 1:-1], res["x"][-10 * PPC - 1:-1]
+        tt, x = t[-10 * PPC - 1 : -1], res["x"][-10 * PPC - 1 : -1]
         amp = float(np.hypot(2 * np.mean(x * np.cos(w * tt)), 2 * np.mean(x * np.sin(w * tt))))
         return amp, np.array([res.states[n][-1] for n in sim.state_names])
 
@@ -143,7 +155,7 @@ def shahabi():
         F = abs(mp * V)
         w_pk, a_pk = amplitude_equation_peak(wn, z, F, k1, k2, mu1)
         rows = []
-        for d in ABOVE:   # independent runs, each started on the multiple-scales resonant branch
+        for d in ABOVE:  # independent runs, each started on the multiple-scales resonant branch
             w = w_pk * (1 + d)
             a = amplitude_equation_roots(w, wn, z, F, k1, k2, mu1).max()
             rows.append((w, abs(phi) * a, run(V, w, ms_state(V, w, a))[0]))
@@ -158,8 +170,13 @@ def shahabi():
             sweep.append((w, amp))
             if amp < 0.5 * max(a for _, a in sweep):
                 break
-        out["levels"][V] = {"w_peak": w_pk, "a_peak": a_pk, "rows": rows, "sweep": sweep,
-                            "w_sim": max(sweep, key=lambda r: r[1])[0]}
+        out["levels"][V] = {
+            "w_peak": w_pk,
+            "a_peak": a_pk,
+            "rows": rows,
+            "sweep": sweep,
+            "w_sim": max(sweep, key=lambda r: r[1])[0],
+        }
     return out
 
 
@@ -183,7 +200,7 @@ def test_shahabi_peak_drifts_down_with_drive(shahabi):
     assert w_ms[0] < shahabi["wn"] and all(a > b for a, b in zip(w_ms, w_ms[1:]))
     assert w_sim[0] < shahabi["wn"] and all(a > b for a, b in zip(w_sim, w_sim[1:])), w_sim
     assert abs(w_sim[0] / w_ms[0] - 1) <= 0.0051
-    for V in LEVELS:   # the sweep passed the peak: the response dropped (a jump above 0.5 V)
+    for V in LEVELS:  # the sweep passed the peak: the response dropped (a jump above 0.5 V)
         amps = [a for _, a in lev[V]["sweep"]]
         assert amps[-1] < 0.5 * max(amps)
 
@@ -207,16 +224,17 @@ def _t226_peaks(reading, volts):
     lm = load_model(T226, {"nonlinear": True, "coefficients": reading})
     tab = {str(k): v for k, v in lm.model.parameter_table().items()}
     s = lm.module.modal_scale(reading, tab["mp_1"])
-    k = dict(k1=tab["k1"] * s ** 2, k2=tab["k2"] * s ** 4, mu1=tab["mu1"] * s ** 2)
+    k = dict(k1=tab["k1"] * s**2, k2=tab["k2"] * s**4, mu1=tab["mu1"] * s**2)
     wn, z, mp = tab["omega_1"], tab["zeta_1"], abs(tab["mp_1"])
     peaks = [amplitude_equation_peak(wn, z, mp * V, **k)[0] for V in volts]
 
     def per_volt(w, V):
         return amplitude_equation_roots(w, wn, z, mp * V, **k).max() / V
+
     return np.array(peaks), per_volt, k
 
 
-BAND = (2512.0, 2736.0)   # Sec. 4.3: the frequencies measured for identification and validation
+BAND = (2512.0, 2736.0)  # Sec. 4.3: the frequencies measured for identification and validation
 
 
 def test_t226_coefficient_units_charge_reading_matches_the_paper():
@@ -236,8 +254,8 @@ def test_t226_coefficient_units_charge_reading_matches_the_paper():
     ident = [0.5, 1.5, 2.5, 3.5, 4.5]
     below = [per_volt(2580.0, V) for V in ident]
     above = [per_volt(2637.0, V) for V in ident]
-    assert all(a < b for a, b in zip(below, below[1:]))      # Fig. 9a: faster than linear
-    assert all(a > b for a, b in zip(above, above[1:]))      # Fig. 9b: slower than linear
+    assert all(a < b for a, b in zip(below, below[1:]))  # Fig. 9a: faster than linear
+    assert all(a > b for a, b in zip(above, above[1:]))  # Fig. 9b: slower than linear
     assert np.all((peaks[:6] > 2580.0) & (peaks[:6] < 2637.0))  # Fig. 9 caption, 0.5-6 V
 
 
@@ -251,15 +269,14 @@ def test_t226_coefficient_units_modal_reading_contradicts_the_paper():
     peaks, per_volt, k = _t226_peaks("modal", [0.5, 2.5, 4.5, 10.0])
     assert peaks == pytest.approx([2611.0, 2413.0, 2253.0, 1936.0], abs=1.0)
     assert peaks[1] < BAND[0] and peaks[0] < 2637.0 - 20.0
-    assert per_volt(2580.0, 4.5) < per_volt(2580.0, 0.5)     # contradicts Fig. 9a
+    assert per_volt(2580.0, 4.5) < per_volt(2580.0, 0.5)  # contradicts Fig. 9a
     beam = T226_H4_203X
     modes = beam.modes(1)
     mp, phi_tip = abs(modes.input_gains[0]), modes.shape(0, beam.L)
-    for s in (phi_tip, beam.L ** -0.5, 1.0 / mp):             # tip metres, x in [0, 1], q / m_p
+    for s in (phi_tip, beam.L**-0.5, 1.0 / mp):  # tip metres, x in [0, 1], q / m_p
         assert s > 1.0
         for V in (0.5, 4.5):
-            w, _ = amplitude_equation_peak(2637.0, 0.0085, mp * V, k["k1"] * s ** 2, k["k2"] * s ** 4,
-                                           k["mu1"] * s ** 2)
+            w, _ = amplitude_equation_peak(2637.0, 0.0085, mp * V, k["k1"] * s**2, k["k2"] * s**4, k["mu1"] * s**2)
             assert not BAND[0] < w < BAND[1]
 
 
@@ -290,7 +307,7 @@ def test_every_cli_command(capsys, tmp_path, model, sets):
 def test_model_parameters_and_options(capsys):
     assert "2637" in cli(capsys, "params", T226)
     comp = cli_json(capsys, "linearize", T226, "--set", "frequency=computed", "--json")
-    assert comp["natural_frequencies_rad_s"][0] == pytest.approx(2915.5, rel=1e-4)   # Table 1, exact modes
+    assert comp["natural_frequencies_rad_s"][0] == pytest.approx(2915.5, rel=1e-4)  # Table 1, exact modes
     meas = cli_json(capsys, "linearize", T226, "--json")
     assert meas["natural_frequencies_rad_s"][0] == pytest.approx(2637.0, rel=1e-9)
     assert meas["damping_ratios"][0] == pytest.approx(0.0085, rel=1e-9)
@@ -321,8 +338,9 @@ def test_pi_operator_is_loaded_lazily(monkeypatch):
 # ---- library details -------------------------------------------------------------------------------------
 def test_per_mode_nonlinearity_and_parameters():
     m = bg.Model("two")
-    info = add_bimorph_modes(m, T226_H4_203X, 2, 1.0, alpha=1e-3, beta=1e-5,
-                             nonlinear={2: ModeNonlinearity(k1=-1e17, mu1=1e13)})
+    info = add_bimorph_modes(
+        m, T226_H4_203X, 2, 1.0, alpha=1e-3, beta=1e-5, nonlinear={2: ModeNonlinearity(k1=-1e17, mu1=1e13)}
+    )
     assert {"k1_2", "k2_2", "mu1_2"} <= set(m.parameters) and "k1_1" not in m.parameters
     rates = bg.derive(m).state_equations()
     p2 = [s for s in rates if str(s) == "p_mass_2"][0]
@@ -335,5 +353,5 @@ def test_per_mode_nonlinearity_and_parameters():
 
 def test_effective_tip_mass():
     m = T226_H4_203X.mass
-    assert effective_tip_mass(T226_H4_203X) == pytest.approx(33 / 140 * m, rel=1e-9)   # Wood et al. 2005, eq. 6
+    assert effective_tip_mass(T226_H4_203X) == pytest.approx(33 / 140 * m, rel=1e-9)  # Wood et al. 2005, eq. 6
     assert effective_tip_mass(T226_H4_203X, mode=1) == pytest.approx(m / 4, rel=1e-6)  # 1/phi_1(L)^2

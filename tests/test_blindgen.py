@@ -4,15 +4,16 @@ time, its CSV file is the project's format and reads back to the recorded number
 says nothing of the truth, and the seed rule is balanced (a null every fourth record of a
 family, every cause of a family in each run of consecutive seeds).  The accuracy it measures
 is in benchmarks/README.md ("Blind generator")."""
+
 from __future__ import annotations
 
 import sys
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
 from bondgraph.data import read_csv
-from conftest import ROOT
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import blindgen  # noqa: E402

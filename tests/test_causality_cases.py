@@ -1,4 +1,5 @@
 """Textbook causality cases: derivative causality, algebraic loops, C-fields, conflicts."""
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -10,9 +11,16 @@ def coupled_masses(n=3.0, m1=2.0, m2=0.5, k=50.0, c=1.0):
     """Force on mass m1, rigidly coupled through a lever (TF, ratio n) to m2; m1 on a spring."""
     g = bg.Model("lever")
     F = g.input("F", "N")
-    g.add(bg.Se("force", F), bg.J1("v1"), bg.I("m1", g.parameter("m1", m1)),
-          bg.C("k", 1 / g.parameter("k", k)), bg.R("c", g.parameter("c", c)),
-          bg.TF("lever", g.parameter("n", n)), bg.J1("v2"), bg.I("m2", g.parameter("m2", m2)))
+    g.add(
+        bg.Se("force", F),
+        bg.J1("v1"),
+        bg.I("m1", g.parameter("m1", m1)),
+        bg.C("k", 1 / g.parameter("k", k)),
+        bg.R("c", g.parameter("c", c)),
+        bg.TF("lever", g.parameter("n", n)),
+        bg.J1("v2"),
+        bg.I("m2", g.parameter("m2", m2)),
+    )
     g.bond("force", "v1")
     for e in ("m1", "k", "c"):
         g.bond("v1", e)
@@ -48,7 +56,7 @@ def test_rigidly_coupled_inertias_reduce_to_one():
     se = eqs.state_equations()
     p = sp.Symbol("p_m1", real=True)
     m1, m2, n, F = sp.symbols("m1 m2 n F", real=True)
-    assert sp.simplify(sp.diff(se[p], F) - m1 / (m1 + n ** 2 * m2)) == 0
+    assert sp.simplify(sp.diff(se[p], F) - m1 / (m1 + n**2 * m2)) == 0
 
 
 def test_flow_source_driving_a_mass_uses_input_derivative():
@@ -74,9 +82,16 @@ def two_resistor_loop():
     resistors' causality free, SCAP leaves an algebraic loop between them."""
     g = bg.Model("loop")
     V = g.input("V")
-    g.add(bg.Se("src", V), bg.J0("n0"), bg.J1("s1"), bg.R("R1", g.parameter("R1", 100.0)),
-          bg.J0("n1"), bg.R("R2", g.parameter("R2", 300.0)), bg.I("L", g.parameter("L", 1e-3)),
-          bg.R("R3", g.parameter("R3", 50.0)))
+    g.add(
+        bg.Se("src", V),
+        bg.J0("n0"),
+        bg.J1("s1"),
+        bg.R("R1", g.parameter("R1", 100.0)),
+        bg.J0("n1"),
+        bg.R("R2", g.parameter("R2", 300.0)),
+        bg.I("L", g.parameter("L", 1e-3)),
+        bg.R("R3", g.parameter("R3", 50.0)),
+    )
     g.bond("src", "n0")
     g.bond("n0", "R3")
     g.bond("n0", "s1")
@@ -102,13 +117,12 @@ def test_algebraic_loop_between_resistors_is_solved():
 
 def test_cfield_energy_equals_matrix_form():
     K1, a1, C1 = sp.symbols("K1 a1 C1", positive=True)
-    Kmat = [[K1, -K1 * a1], [-K1 * a1, K1 * a1 ** 2 + 1 / C1]]
+    Kmat = [[K1, -K1 * a1], [-K1 * a1, K1 * a1**2 + 1 / C1]]
 
     def build(field):
         g = bg.Model("layer")
         V = g.input("V")
-        g.add(bg.Se("src", V), bg.R("Re", 4.7), field, bg.J1("e"), bg.J1("mech"), bg.I("M", 0.16),
-              bg.R("c", 3000.0))
+        g.add(bg.Se("src", V), bg.R("Re", 4.7), field, bg.J1("e"), bg.J1("mech"), bg.I("M", 0.16), bg.R("c", 3000.0))
         g.bond("src", "e")
         g.bond("e", "Re")
         g.bond("e", "layer.Q")
@@ -119,8 +133,9 @@ def test_cfield_energy_equals_matrix_form():
         return bg.derive(g)
 
     by_matrix = build(bg.CField("layer", ["x", "Q"], stiffness=Kmat))
-    by_energy = build(bg.CField("layer", ["x", "Q"],
-                                energy=lambda q: K1 * (q["x"] - a1 * q["Q"]) ** 2 / 2 + q["Q"] ** 2 / (2 * C1)))
+    by_energy = build(
+        bg.CField("layer", ["x", "Q"], energy=lambda q: K1 * (q["x"] - a1 * q["Q"]) ** 2 / 2 + q["Q"] ** 2 / (2 * C1))
+    )
     se1, se2 = by_matrix.state_equations(), by_energy.state_equations()
     assert set(se1) == set(se2)
     for s in se1:
@@ -139,7 +154,7 @@ def test_two_effort_sources_on_a_zero_junction_is_a_named_conflict():
 
 def test_unresolvable_derivative_causality_names_elements():
     g = bg.Model("nl")
-    g.add(bg.Sf("s", 1.0), bg.J1("j"), bg.I("m", law=lambda p: p + p ** 3), bg.C("k", 1.0))
+    g.add(bg.Sf("s", 1.0), bg.J1("j"), bg.I("m", law=lambda p: p + p**3), bg.C("k", 1.0))
     g.bond("s", "j")
     g.bond("j", "m")
     g.bond("j", "k")

@@ -8,6 +8,7 @@ every promise the README and ``--help`` make; each runs in-process through
 the exit status the shell sees.  The small model and data files the cases need are written
 into a temporary directory.
 """
+
 from __future__ import annotations
 
 import os
@@ -84,7 +85,9 @@ FILES = {
     "nobuild.py": HEAD,
     "nonmodel.py": HEAD + "def build(p):\n    return 42\n",
     "badparams.py": "PARAMETERS = [1, 2]\ndef build(p):\n    return None\n",
-    "badexperiment.py": HEAD + "EXPERIMENT = 5\n" + textwrap.dedent("""\
+    "badexperiment.py": HEAD
+    + "EXPERIMENT = 5\n"
+    + textwrap.dedent("""\
         def build(p):
             g = Model("t")
             g.add(Se("s", 1.0), C("c", p.k))
@@ -169,17 +172,18 @@ FILES = {
     "list.json": "[1, 2]",
     "unknown.json": '{"params": {"zz_top": 1.0}}',
 }
-FILES.update({
-    "exits.py": HEAD + "import sys\nsys.exit(3)\n",
-    "exits_in_build.py": HEAD + "import sys\ndef build(p):\n    sys.exit(4)\n",
-    "twice.py": "from bondgraph import *\nPARAMETERS = [Parameter('k', 1.0), Parameter('k', 2.0)]\n"
-                "def build(p):\n    return Model('x')\n",
-    "badname.py": "from bondgraph import *\nPARAMETERS = [Parameter('1k', 1.0)]\ndef build(p):\n    return Model('x')\n",
-    "textparam.py": "from bondgraph import *\nPARAMETERS = [Parameter('mode', 'a')]\ndef build(p):\n    return Model('x')\n",
-    "recursion.py": HEAD + "def build(p):\n    return build(p)\n",
-    "empty.py": "",
-    "returns_none.py": HEAD + "def build(p):\n    return None\n",
-    "noio.py": _model("""\
+FILES.update(
+    {
+        "exits.py": HEAD + "import sys\nsys.exit(3)\n",
+        "exits_in_build.py": HEAD + "import sys\ndef build(p):\n    sys.exit(4)\n",
+        "twice.py": "from bondgraph import *\nPARAMETERS = [Parameter('k', 1.0), Parameter('k', 2.0)]\n"
+        "def build(p):\n    return Model('x')\n",
+        "badname.py": "from bondgraph import *\nPARAMETERS = [Parameter('1k', 1.0)]\ndef build(p):\n    return Model('x')\n",
+        "textparam.py": "from bondgraph import *\nPARAMETERS = [Parameter('mode', 'a')]\ndef build(p):\n    return Model('x')\n",
+        "recursion.py": HEAD + "def build(p):\n    return build(p)\n",
+        "empty.py": "",
+        "returns_none.py": HEAD + "def build(p):\n    return None\n",
+        "noio.py": _model("""\
         def build(p):
             g = Model("noio")
             g.add(Se("s", 1.0), J1("j"), C("c", p.k), R("r", 1.0))
@@ -188,44 +192,51 @@ FILES.update({
             g.bond("j", "r")
             return g
         """),
-    "badexpinput.py": GOOD.replace('inputs={"V": Step(1.0)}', 'inputs={"W": Step(1.0)}'),
-    "dup_key.json": '{"k": 1.0, "k": 2.0}',
-    "null.json": '{"k": null}',
-    "params_list.json": '{"params": [1, 2]}',
-    "bad_offset.json": '{"params": {"k": 100.0}, "output": "x", "offset": "abc"}',
-    "offset_elsewhere.json": '{"params": {"k": 100.0}, "output": "y", "offset": 0.001}',
-    "bounds.json": '{"zeta": 5}',
-    "params_dir.json/": None,
-    "data.csv": "t,V,x\n" + "".join(f"{k * 1e-3!r},{(k % 7) * 0.1!r},{(k % 5) * 1e-6!r}\n" for k in range(60)),
-    "data_nan.csv": "t,V,x\n0,0,0\n0.001,nan,0\n0.002,1,0\n",
-    "data_decreasing.csv": "t,V,x\n0,0,0\n0.002,1,0\n0.001,1,0\n",
-    "data_text.csv": "t,V,x\n0,0,0\n0.001,abc,0\n0.002,1,0\n",
-    "data_header_only.csv": "t,V,x\n",
-    "data_empty.csv": "",
-    "data_no_x.csv": "t,V,y\n0,0,0\n0.001,1,0\n0.002,1,0\n",
-    "ref.csv": "t,x\n0,0\n0.01,1e-6\n0.02,2e-6\n",
-    "data_const.csv": "t,V,x\n" + "".join(f"{k * 1e-3!r},2.5,{(k % 5) * 1e-6!r}\n" for k in range(60)),
-})
+        "badexpinput.py": GOOD.replace('inputs={"V": Step(1.0)}', 'inputs={"W": Step(1.0)}'),
+        "dup_key.json": '{"k": 1.0, "k": 2.0}',
+        "null.json": '{"k": null}',
+        "params_list.json": '{"params": [1, 2]}',
+        "bad_offset.json": '{"params": {"k": 100.0}, "output": "x", "offset": "abc"}',
+        "offset_elsewhere.json": '{"params": {"k": 100.0}, "output": "y", "offset": 0.001}',
+        "bounds.json": '{"zeta": 5}',
+        "params_dir.json/": None,
+        "data.csv": "t,V,x\n" + "".join(f"{k * 1e-3!r},{(k % 7) * 0.1!r},{(k % 5) * 1e-6!r}\n" for k in range(60)),
+        "data_nan.csv": "t,V,x\n0,0,0\n0.001,nan,0\n0.002,1,0\n",
+        "data_decreasing.csv": "t,V,x\n0,0,0\n0.002,1,0\n0.001,1,0\n",
+        "data_text.csv": "t,V,x\n0,0,0\n0.001,abc,0\n0.002,1,0\n",
+        "data_header_only.csv": "t,V,x\n",
+        "data_empty.csv": "",
+        "data_no_x.csv": "t,V,y\n0,0,0\n0.001,1,0\n0.002,1,0\n",
+        "ref.csv": "t,x\n0,0\n0.01,1e-6\n0.02,2e-6\n",
+        "data_const.csv": "t,V,x\n" + "".join(f"{k * 1e-3!r},2.5,{(k % 5) * 1e-6!r}\n" for k in range(60)),
+    }
+)
 BINARY = b"\xff\xfe\x00\x01garbage\x00"
 
 N = "!"  # needle prefix: this text must NOT be in the message
 
 CASES = [
     # ---- model files --------------------------------------------------------------------
-    pytest.param(["equations", "typo_port.py"], ["typo_port.py", "tf.p3", "did you mean", "tf.p1"],
-                 id="wrong-port-name"),
-    pytest.param(["equations", "typo_elem.py"], ["typo_elem.py", "'sprng'", "did you mean 'spring'"],
-                 id="misspelt-element"),
+    pytest.param(
+        ["equations", "typo_port.py"], ["typo_port.py", "tf.p3", "did you mean", "tf.p1"], id="wrong-port-name"
+    ),
+    pytest.param(
+        ["equations", "typo_elem.py"], ["typo_elem.py", "'sprng'", "did you mean 'spring'"], id="misspelt-element"
+    ),
     pytest.param(["params", "twoport_bare.py"], ["'tf'", "p1"], id="two-port-without-port"),
     pytest.param(["params", "syntax.py"], ["syntax.py:3", "syntax error"], id="syntax-error-file-line"),
-    pytest.param(["params", "import_error.py"], ["import_error.py:3", "NameError", "undefined_name"],
-                 id="error-at-import-file-line"),
+    pytest.param(
+        ["params", "import_error.py"],
+        ["import_error.py:3", "NameError", "undefined_name"],
+        id="error-at-import-file-line",
+    ),
     pytest.param(["equations", "raises.py"], ["raises.py:5", "RuntimeError", "boom here"], id="raise-in-build"),
     pytest.param(["params", "noparams.py"], ["noparams.py", "PARAMETERS"], id="missing-PARAMETERS"),
     pytest.param(["params", "nobuild.py"], ["nobuild.py", "build"], id="missing-build"),
     pytest.param(["params", "nonmodel.py"], ["nonmodel.py", "Model", "int"], id="build-returns-non-model"),
-    pytest.param(["params", "badparams.py"], ["badparams.py", "PARAMETERS", "Parameter"],
-                 id="PARAMETERS-not-parameters"),
+    pytest.param(
+        ["params", "badparams.py"], ["badparams.py", "PARAMETERS", "Parameter"], id="PARAMETERS-not-parameters"
+    ),
     pytest.param(["params", "badexperiment.py"], ["EXPERIMENT", "Experiment"], id="EXPERIMENT-wrong-type"),
     pytest.param(["params", "duplicate.py"], ["'c'", "twice"], id="duplicate-element-name"),
     pytest.param(["params", "badlaw.py"], ["'cap'", "1/+"], id="unparsable-law"),
@@ -234,8 +245,11 @@ CASES = [
     pytest.param(["equations", "junction1.py"], ["'lonely'", "1 bond"], id="junction-with-one-bond"),
     pytest.param(["equations", "selfbond.py"], ["'j'", "itself"], id="bond-to-itself"),
     pytest.param(["equations", "unconnected.py"], ["'orphan'", "not connected"], id="unconnected-element"),
-    pytest.param(["equations", "conflict.py"], ["causal conflict", "'e1'", "'e2'", "'n'"],
-                 id="two-effort-sources-on-a-0-junction"),
+    pytest.param(
+        ["equations", "conflict.py"],
+        ["causal conflict", "'e1'", "'e2'", "'n'"],
+        id="two-effort-sources-on-a-0-junction",
+    ),
     pytest.param(["causality", "conflict.py"], ["causal conflict"], id="conflict-causality-command"),
     pytest.param(["linearize", "conflict.py", "--json"], ["causal conflict"], id="conflict-linearize-command"),
     pytest.param(["simulate", "conflict.py"], ["causal conflict"], id="conflict-simulate-command"),
@@ -246,49 +260,80 @@ CASES = [
     pytest.param(["params", "binary.py"], ["binary.py:", N + ":None:"], id="binary-file-has-no-line-None"),
     # ---- --set ----------------------------------------------------------------------------
     pytest.param(["params", "good.py", "--set", "kk=2"], ["'kk'", "did you mean 'k'"], id="set-unknown-close"),
-    pytest.param(["params", "good.py", "--set", "zzz=2"], ["'zzz'", "known:", "k", "lumped", "mode", "layers"],
-                 id="set-unknown-lists-known"),
+    pytest.param(
+        ["params", "good.py", "--set", "zzz=2"],
+        ["'zzz'", "known:", "k", "lumped", "mode", "layers"],
+        id="set-unknown-lists-known",
+    ),
     pytest.param(["params", "good.py", "--set", "k=abc"], ["'abc'", "'k'", "real number"], id="set-non-numeric"),
     pytest.param(["params", "good.py", "--set", "k=nan"], ["'nan'", "'k'"], id="set-nan"),
     pytest.param(["params", "good.py", "--set", "k=inf"], ["'inf'", "'k'"], id="set-inf"),
-    pytest.param(["params", "good.py", "--set", "lumped=maybe"], ["'maybe'", "'lumped'", "true or false"],
-                 id="set-bool-maybe"),
+    pytest.param(
+        ["params", "good.py", "--set", "lumped=maybe"], ["'maybe'", "'lumped'", "true or false"], id="set-bool-maybe"
+    ),
     pytest.param(["params", "good.py", "--set", "mode=c"], ["'c'", "'mode'", "one of a, b"], id="set-unknown-choice"),
     pytest.param(["params", "good.py", "--set", "layers=2.5"], ["'layers'", "integer"], id="set-int-fraction"),
     pytest.param(["params", "good.py", "--set", "k"], ["--set 'k'", "NAME=VALUE"], id="set-missing-equals"),
     pytest.param(["params", "good.py", "--set", "k="], ["--set 'k='", "NAME=VALUE"], id="set-empty-value"),
     pytest.param(["params", "good.py", "--set", "=1"], ["--set '=1'"], id="set-empty-name"),
     # ---- --params-file ----------------------------------------------------------------------
-    pytest.param(["params", "good.py", "--params-file", "bad.json"], ["bad.json:1", "not valid JSON"],
-                 id="params-file-bad-json"),
-    pytest.param(["params", "good.py", "--params-file", "missing.json"], ["missing.json", "not found"],
-                 id="params-file-missing"),
-    pytest.param(["params", "good.py", "--params-file", "list.json"], ["list.json", "JSON object"],
-                 id="params-file-not-an-object"),
-    pytest.param(["params", "good.py", "--params-file", "unknown.json"], ["'zz_top'", "known:"],
-                 id="params-file-unknown-parameter"),
+    pytest.param(
+        ["params", "good.py", "--params-file", "bad.json"], ["bad.json:1", "not valid JSON"], id="params-file-bad-json"
+    ),
+    pytest.param(
+        ["params", "good.py", "--params-file", "missing.json"], ["missing.json", "not found"], id="params-file-missing"
+    ),
+    pytest.param(
+        ["params", "good.py", "--params-file", "list.json"],
+        ["list.json", "JSON object"],
+        id="params-file-not-an-object",
+    ),
+    pytest.param(
+        ["params", "good.py", "--params-file", "unknown.json"],
+        ["'zz_top'", "known:"],
+        id="params-file-unknown-parameter",
+    ),
     # ---- --input ----------------------------------------------------------------------------
-    pytest.param(["simulate", "good.py", "--input", "V=foo(amplitude=1)"], ["unknown signal kind 'foo'", "sine"],
-                 id="input-unknown-kind"),
-    pytest.param(["simulate", "good.py", "--input", "V=foo(1)"], ["unknown signal kind 'foo'"],
-                 id="input-unknown-kind-positional"),
-    pytest.param(["simulate", "good.py", "--input", "V=sine(amplitude=x)"], ["sine(amplitude=x)", "numbers"],
-                 id="input-non-numeric"),
-    pytest.param(["simulate", "good.py", "--input", "V=sine(amp=1)"], ["amp", "amplitude"], id="input-unknown-argument"),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=foo(amplitude=1)"],
+        ["unknown signal kind 'foo'", "sine"],
+        id="input-unknown-kind",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=foo(1)"],
+        ["unknown signal kind 'foo'"],
+        id="input-unknown-kind-positional",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=sine(amplitude=x)"],
+        ["sine(amplitude=x)", "numbers"],
+        id="input-non-numeric",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=sine(amp=1)"], ["amp", "amplitude"], id="input-unknown-argument"
+    ),
     pytest.param(["simulate", "good.py", "--input", "V=sine(1, 2)"], ["key=value"], id="input-positional-arguments"),
     pytest.param(["simulate", "good.py", "--input", "V=pwl(0:1, 2)"], ["pwl("], id="input-bad-pwl-pair"),
-    pytest.param(["simulate", "good.py", "--input", "V=pwl(1:0, 0:1)"], ["strictly increasing"],
-                 id="input-pwl-time-decreasing"),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=pwl(1:0, 0:1)"], ["strictly increasing"], id="input-pwl-time-decreasing"
+    ),
     pytest.param(["simulate", "good.py", "--input", "V=chirp(t1=0)"], ["t1", "positive"], id="input-chirp-t1-zero"),
-    pytest.param(["simulate", "good.py", "--input", "V=sine(amplitude=1"], ["sine(amplitude=1"],
-                 id="input-unbalanced-parenthesis"),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=sine(amplitude=1"],
+        ["sine(amplitude=1"],
+        id="input-unbalanced-parenthesis",
+    ),
     pytest.param(["simulate", "good.py", "--input", "V=inf"], ["'inf'", "finite"], id="input-infinite-constant"),
-    pytest.param(["simulate", "good.py", "--input", "V=sine(amplitude=nan)"], ["nan", "finite"],
-                 id="input-nan-argument"),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=sine(amplitude=nan)"], ["nan", "finite"], id="input-nan-argument"
+    ),
     pytest.param(["simulate", "good.py", "--input", "W=1"], ["'W'", "V"], id="input-unknown-name"),
     pytest.param(["simulate", "good.py", "--input", "V"], ["--input 'V'", "NAME=SIGNAL"], id="input-missing-equals"),
-    pytest.param(["simulate", "good.py", "--input", "V=csv(file=nothere.csv, column=V)"], ["nothere.csv"],
-                 id="input-csv-missing-file"),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=csv(file=nothere.csv, column=V)"],
+        ["nothere.csv"],
+        id="input-csv-missing-file",
+    ),
     # ---- times, tolerances, options -------------------------------------------------------------
     pytest.param(["simulate", "good.py", "--t-end", "-1"], ["t_end=-1"], id="negative-t-end"),
     pytest.param(["simulate", "good.py", "--dt", "-0.1"], ["dt=-0.1"], id="negative-dt"),
@@ -310,8 +355,9 @@ CASES = [
     pytest.param([], ["command"], id="no-arguments"),
     # ---- model files: more ---------------------------------------------------------------------
     pytest.param(["params", "exits.py"], ["exits.py:4", "sys.exit(3)"], id="model-file-calls-sys-exit"),
-    pytest.param(["equations", "exits_in_build.py"], ["exits_in_build.py:5", "sys.exit(4)", "return"],
-                 id="build-calls-sys-exit"),
+    pytest.param(
+        ["equations", "exits_in_build.py"], ["exits_in_build.py:5", "sys.exit(4)", "return"], id="build-calls-sys-exit"
+    ),
     pytest.param(["params", "twice.py"], ["'k'", "declared twice", "once"], id="parameter-declared-twice"),
     pytest.param(["params", "badname.py"], ["'1k'", "identifier"], id="parameter-name-not-identifier"),
     pytest.param(["params", "textparam.py"], ["'mode'", "choices"], id="text-parameter-without-choices"),
@@ -322,82 +368,172 @@ CASES = [
     pytest.param(["linearize", "noio.py"], ["declares no input"], id="linearize-model-without-input"),
     pytest.param(["fit", "noio.py", "data.csv", "--params", "k"], ["declares no input"], id="fit-model-without-input"),
     # ---- degenerate and out-of-range parameter values ---------------------------------------------
-    pytest.param(["simulate", "good.py", "--set", "m=0", "--out", "r.csv"], ["m=0", "divide by zero", "physical value"],
-                 id="simulate-mass-zero"),
-    pytest.param(["simulate", "good.py", "--set", "m=1e-300", "--out", "r.csv"], ["m=1e-300", "time constant"],
-                 id="simulate-mass-1e-300"),
+    pytest.param(
+        ["simulate", "good.py", "--set", "m=0", "--out", "r.csv"],
+        ["m=0", "divide by zero", "physical value"],
+        id="simulate-mass-zero",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--set", "m=1e-300", "--out", "r.csv"],
+        ["m=1e-300", "time constant"],
+        id="simulate-mass-1e-300",
+    ),
     pytest.param(["linearize", "good.py", "--set", "m=0"], ["m=0", "not finite"], id="linearize-mass-zero"),
     pytest.param(["linearize", "good.py", "--set", "m=1e-300"], ["m=1e-300"], id="linearize-mass-1e-300"),
     pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--set", "m=0"], ["m=0"], id="fit-mass-zero"),
     pytest.param(["simulate", "good.py", "--set", "k=1e400"], ["'1e400'", "'k'", "finite"], id="set-overflows-to-inf"),
-    pytest.param(["params", "good.py", "--set", "zeta=2"], ["'zeta'", "outside its bounds [0.0, 1.0]"],
-                 id="set-real-out-of-bounds"),
-    pytest.param(["params", "good.py", "--set", "layers=0"], ["'layers'", "outside its bounds [1, 100]"],
-                 id="set-int-out-of-bounds"),
-    pytest.param(["params", "good.py", "--set", "k=1", "--set", "k=2"], ["--set k given twice", "once"],
-                 id="set-same-name-twice"),
+    pytest.param(
+        ["params", "good.py", "--set", "zeta=2"],
+        ["'zeta'", "outside its bounds [0.0, 1.0]"],
+        id="set-real-out-of-bounds",
+    ),
+    pytest.param(
+        ["params", "good.py", "--set", "layers=0"],
+        ["'layers'", "outside its bounds [1, 100]"],
+        id="set-int-out-of-bounds",
+    ),
+    pytest.param(
+        ["params", "good.py", "--set", "k=1", "--set", "k=2"], ["--set k given twice", "once"], id="set-same-name-twice"
+    ),
     # ---- parameter files: more --------------------------------------------------------------------
-    pytest.param(["params", "good.py", "--params-file", "dup_key.json"], ["dup_key.json", "'k'", "twice"],
-                 id="params-file-duplicate-name"),
-    pytest.param(["params", "good.py", "--params-file", "null.json"], ["null.json", "'k'", "null"],
-                 id="params-file-null-value"),
-    pytest.param(["params", "good.py", "--params-file", "params_list.json"], ["'params'", "object"],
-                 id="params-file-params-not-object"),
-    pytest.param(["simulate", "good.py", "--params-file", "bad_offset.json"], ["'offset'", "finite number"],
-                 id="params-file-offset-not-number"),
-    pytest.param(["simulate", "good.py", "--params-file", "offset_elsewhere.json"], ["output 'y'", "x"],
-                 id="params-file-offset-for-unknown-output"),
-    pytest.param(["params", "good.py", "--params-file", "bounds.json"], ["'zeta'", "bounds"],
-                 id="params-file-value-out-of-bounds"),
-    pytest.param(["params", "good.py", "--params-file", "params_dir.json"], ["params_dir.json", "directory"],
-                 id="params-file-is-a-directory"),
+    pytest.param(
+        ["params", "good.py", "--params-file", "dup_key.json"],
+        ["dup_key.json", "'k'", "twice"],
+        id="params-file-duplicate-name",
+    ),
+    pytest.param(
+        ["params", "good.py", "--params-file", "null.json"], ["null.json", "'k'", "null"], id="params-file-null-value"
+    ),
+    pytest.param(
+        ["params", "good.py", "--params-file", "params_list.json"],
+        ["'params'", "object"],
+        id="params-file-params-not-object",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--params-file", "bad_offset.json"],
+        ["'offset'", "finite number"],
+        id="params-file-offset-not-number",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--params-file", "offset_elsewhere.json"],
+        ["output 'y'", "x"],
+        id="params-file-offset-for-unknown-output",
+    ),
+    pytest.param(
+        ["params", "good.py", "--params-file", "bounds.json"],
+        ["'zeta'", "bounds"],
+        id="params-file-value-out-of-bounds",
+    ),
+    pytest.param(
+        ["params", "good.py", "--params-file", "params_dir.json"],
+        ["params_dir.json", "directory"],
+        id="params-file-is-a-directory",
+    ),
     # ---- output paths: checked before any work, nothing written -------------------------------------
-    pytest.param(["simulate", "good.py", "--out", "r.csv", "--plot", "no/such/p.png"],
-                 ["--plot no/such/p.png", "does not exist", "create it"], id="plot-into-missing-directory"),
-    pytest.param(["simulate", "good.py", "--out", "subdir"], ["--out subdir", "is a directory", "file name"],
-                 id="out-is-a-directory"),
-    pytest.param(["simulate", "good.py", "--plot", "p.txt"], ["--plot p.txt", "'.txt'", ".png"],
-                 id="plot-unknown-format"),
+    pytest.param(
+        ["simulate", "good.py", "--out", "r.csv", "--plot", "no/such/p.png"],
+        ["--plot no/such/p.png", "does not exist", "create it"],
+        id="plot-into-missing-directory",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--out", "subdir"],
+        ["--out subdir", "is a directory", "file name"],
+        id="out-is-a-directory",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--plot", "p.txt"], ["--plot p.txt", "'.txt'", ".png"], id="plot-unknown-format"
+    ),
     pytest.param(["simulate", "good.py", "--plot", "p"], ["--plot p", ".png"], id="plot-without-suffix"),
-    pytest.param(["simulate", "good.py", "--out", "r.png", "--plot", "r.png"], ["r.png", "same file"],
-                 id="out-and-plot-same-file"),
-    pytest.param(["simulate", "good.py", "--out", "good.py"], ["--out good.py", "overwrite the input file"],
-                 id="out-overwrites-the-model-file"),
-    pytest.param(["simulate", "good.py", "--input", "V=csv(file=data.csv, column=V)", "--out", "data.csv"],
-                 ["--out data.csv", "overwrite the input"], id="out-overwrites-a-csv-input"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--out", "data.csv"],
-                 ["--out data.csv", "overwrite the input"], id="fit-out-overwrites-the-data"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--out", "f.json", "--params-file", "f.json"],
-                 ["--out f.json", "overwrite the input file f.json"], id="fit-out-overwrites-the-params-file"),
-    pytest.param(["simulate", "raises.py", "--out", "no/dir/r.csv"], ["--out no/dir/r.csv", "does not exist"],
-                 id="output-checked-before-the-model-is-built"),
+    pytest.param(
+        ["simulate", "good.py", "--out", "r.png", "--plot", "r.png"],
+        ["r.png", "same file"],
+        id="out-and-plot-same-file",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--out", "good.py"],
+        ["--out good.py", "overwrite the input file"],
+        id="out-overwrites-the-model-file",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=csv(file=data.csv, column=V)", "--out", "data.csv"],
+        ["--out data.csv", "overwrite the input"],
+        id="out-overwrites-a-csv-input",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--out", "data.csv"],
+        ["--out data.csv", "overwrite the input"],
+        id="fit-out-overwrites-the-data",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--out", "f.json", "--params-file", "f.json"],
+        ["--out f.json", "overwrite the input file f.json"],
+        id="fit-out-overwrites-the-params-file",
+    ),
+    pytest.param(
+        ["simulate", "raises.py", "--out", "no/dir/r.csv"],
+        ["--out no/dir/r.csv", "does not exist"],
+        id="output-checked-before-the-model-is-built",
+    ),
     pytest.param(["simulate", "good.py", "--out", ""], ["--out", "empty file name"], id="out-empty-name"),
-    pytest.param(["equations", "good.py", "--out", "no/dir/eq.txt"], ["--out no/dir/eq.txt", "does not exist"],
-                 id="equations-out-missing-directory"),
-    pytest.param(["causality", "good.py", "--plot", "no/dir/bg.png"], ["--plot no/dir/bg.png", "does not exist"],
-                 id="causality-plot-missing-directory"),
-    pytest.param(["linearize", "good.py", "--bode", "no/dir/b.csv"], ["--bode no/dir/b.csv", "does not exist"],
-                 id="linearize-bode-missing-directory"),
-    pytest.param(["linearize", "good.py", "--plot", "b.jpeg"], ["--plot b.jpeg", "'.jpeg'"],
-                 id="linearize-plot-unknown-format"),
-    pytest.param(["linearize", "good.py", "--out", "no/dir/lin.py"], ["--out no/dir/lin.py", "does not exist"],
-                 id="linearize-out-missing-directory"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--plot", "f.gif"], ["--plot f.gif", "'.gif'"],
-                 id="fit-plot-unknown-format"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--out", "no/dir/f.json"],
-                 ["--out no/dir/f.json", "does not exist"], id="fit-out-missing-directory"),
-    pytest.param(["diagnose", "good.py", "data.csv", "--plot", "no/dir/d.png"], ["--plot no/dir/d.png", "does not exist"],
-                 id="diagnose-plot-missing-directory"),
+    pytest.param(
+        ["equations", "good.py", "--out", "no/dir/eq.txt"],
+        ["--out no/dir/eq.txt", "does not exist"],
+        id="equations-out-missing-directory",
+    ),
+    pytest.param(
+        ["causality", "good.py", "--plot", "no/dir/bg.png"],
+        ["--plot no/dir/bg.png", "does not exist"],
+        id="causality-plot-missing-directory",
+    ),
+    pytest.param(
+        ["linearize", "good.py", "--bode", "no/dir/b.csv"],
+        ["--bode no/dir/b.csv", "does not exist"],
+        id="linearize-bode-missing-directory",
+    ),
+    pytest.param(
+        ["linearize", "good.py", "--plot", "b.jpeg"], ["--plot b.jpeg", "'.jpeg'"], id="linearize-plot-unknown-format"
+    ),
+    pytest.param(
+        ["linearize", "good.py", "--out", "no/dir/lin.py"],
+        ["--out no/dir/lin.py", "does not exist"],
+        id="linearize-out-missing-directory",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--plot", "f.gif"],
+        ["--plot f.gif", "'.gif'"],
+        id="fit-plot-unknown-format",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--out", "no/dir/f.json"],
+        ["--out no/dir/f.json", "does not exist"],
+        id="fit-out-missing-directory",
+    ),
+    pytest.param(
+        ["diagnose", "good.py", "data.csv", "--plot", "no/dir/d.png"],
+        ["--plot no/dir/d.png", "does not exist"],
+        id="diagnose-plot-missing-directory",
+    ),
     # ---- measured inputs of simulate --------------------------------------------------------------
-    pytest.param(["simulate", "good.py", "--input", "V=csv(file=data.csv, column=V)", "--t-end", "5"],
-                 ["--t-end 5", "beyond the end of the input data", "0.059", "shorten --t-end"],
-                 id="t-end-beyond-the-csv-input"),
-    pytest.param(["simulate", "good.py", "--input", "V=csv(file=data.csv, column=Q)"], ["data.csv", "'Q'"],
-                 id="csv-input-unknown-column"),
-    pytest.param(["simulate", "good.py", "--input", "V=csv(column=V)"], ["csv(file=PATH, column=NAME)"],
-                 id="csv-input-without-file"),
-    pytest.param(["simulate", "good.py", "--input", "V=1", "--input", "V=2"], ["--input V given twice", "once"],
-                 id="input-given-twice"),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=csv(file=data.csv, column=V)", "--t-end", "5"],
+        ["--t-end 5", "beyond the end of the input data", "0.059", "shorten --t-end"],
+        id="t-end-beyond-the-csv-input",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=csv(file=data.csv, column=Q)"],
+        ["data.csv", "'Q'"],
+        id="csv-input-unknown-column",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=csv(column=V)"],
+        ["csv(file=PATH, column=NAME)"],
+        id="csv-input-without-file",
+    ),
+    pytest.param(
+        ["simulate", "good.py", "--input", "V=1", "--input", "V=2"],
+        ["--input V given twice", "once"],
+        id="input-given-twice",
+    ),
     pytest.param(["simulate", "good.py", "--input", "=1"], ["--input '=1'", "NAME=SIGNAL"], id="input-empty-name"),
     # ---- tolerances and counts --------------------------------------------------------------------
     pytest.param(["simulate", "good.py", "--rtol", "0"], ["--rtol", "between 0 and 1"], id="rtol-zero"),
@@ -405,78 +541,140 @@ CASES = [
     pytest.param(["simulate", "good.py", "--rtol", "nan"], ["--rtol", "between 0 and 1"], id="rtol-nan"),
     pytest.param(["simulate", "good.py", "--atol", "-1"], ["--atol", "positive"], id="atol-negative"),
     pytest.param(["simulate", "good.py", "--t-end", "0"], ["t_end=0"], id="zero-t-end"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--starts", "0"], ["--starts", "at least 1"],
-                 id="fit-starts-zero"),
-    pytest.param(["diagnose", "good.py", "data.csv", "--workers", "0"], ["--workers", "at least 1"],
-                 id="diagnose-workers-zero"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--validation", "0"], ["--validation", "between 0 and 1"],
-                 id="fit-validation-zero"),
-    pytest.param(["diagnose", "good.py", "data.csv", "--validation", "1.5"], ["--validation", "between 0 and 1"],
-                 id="diagnose-validation-above-one"),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--starts", "0"],
+        ["--starts", "at least 1"],
+        id="fit-starts-zero",
+    ),
+    pytest.param(
+        ["diagnose", "good.py", "data.csv", "--workers", "0"], ["--workers", "at least 1"], id="diagnose-workers-zero"
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--validation", "0"],
+        ["--validation", "between 0 and 1"],
+        id="fit-validation-zero",
+    ),
+    pytest.param(
+        ["diagnose", "good.py", "data.csv", "--validation", "1.5"],
+        ["--validation", "between 0 and 1"],
+        id="diagnose-validation-above-one",
+    ),
     # ---- fit ---------------------------------------------------------------------------------------
     pytest.param(["fit", "good.py", "data.csv"], ["give the parameters to fit", "--params"], id="fit-without-params"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "kk"], ["'kk'", "did you mean 'k'"],
-                 id="fit-unknown-parameter"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k,k"], ["k listed twice", "once"],
-                 id="fit-parameter-listed-twice"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "lumped"], ["'lumped'", "true or false",
-                                                                         "only real-valued"],
-                 id="fit-boolean-parameter"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--split", "random"], ["'random'", "blocks"],
-                 id="fit-unknown-split"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--loss", "l3"], ["'l3'", "soft_l1"],
-                 id="fit-unknown-loss"),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "kk"], ["'kk'", "did you mean 'k'"], id="fit-unknown-parameter"
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k,k"], ["k listed twice", "once"], id="fit-parameter-listed-twice"
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "lumped"],
+        ["'lumped'", "true or false", "only real-valued"],
+        id="fit-boolean-parameter",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--split", "random"],
+        ["'random'", "blocks"],
+        id="fit-unknown-split",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--loss", "l3"], ["'l3'", "soft_l1"], id="fit-unknown-loss"
+    ),
     pytest.param(["fit", "good.py", "missing.csv", "--params", "k"], ["missing.csv"], id="fit-data-file-missing"),
-    pytest.param(["fit", "good.py", "data_no_x.csv", "--params", "k"], ["data_no_x.csv", "'x'", "--output"],
-                 id="fit-data-without-output-column"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--input", "Vin"], ["data.csv", "'Vin'"],
-                 id="fit-data-input-column-missing"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--model-input", "W"], ["'W'", "V"],
-                 id="fit-unknown-model-input"),
-    pytest.param(["fit", "good.py", "data.csv", "--params", "k", "--model-output", "y"], ["'y'", "x"],
-                 id="fit-unknown-model-output"),
+    pytest.param(
+        ["fit", "good.py", "data_no_x.csv", "--params", "k"],
+        ["data_no_x.csv", "'x'", "--output"],
+        id="fit-data-without-output-column",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--input", "Vin"],
+        ["data.csv", "'Vin'"],
+        id="fit-data-input-column-missing",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--model-input", "W"],
+        ["'W'", "V"],
+        id="fit-unknown-model-input",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data.csv", "--params", "k", "--model-output", "y"],
+        ["'y'", "x"],
+        id="fit-unknown-model-output",
+    ),
     pytest.param(["fit", "good.py", "data_nan.csv", "--params", "k"], ["data_nan.csv:3", "nan"], id="fit-data-nan"),
-    pytest.param(["fit", "good.py", "data_decreasing.csv", "--params", "k"], ["data_decreasing.csv", "increasing"],
-                 id="fit-data-time-decreasing"),
-    pytest.param(["fit", "good.py", "data_text.csv", "--params", "k"], ["data_text.csv:3", "abc"],
-                 id="fit-data-non-numeric-cell"),
-    pytest.param(["fit", "good.py", "data_header_only.csv", "--params", "k"], ["data_header_only.csv"],
-                 id="fit-data-header-only"),
-    pytest.param(["fit", "good.py", "data_empty.csv", "--params", "k"], ["data_empty.csv", "empty"],
-                 id="fit-data-empty-file"),
+    pytest.param(
+        ["fit", "good.py", "data_decreasing.csv", "--params", "k"],
+        ["data_decreasing.csv", "increasing"],
+        id="fit-data-time-decreasing",
+    ),
+    pytest.param(
+        ["fit", "good.py", "data_text.csv", "--params", "k"], ["data_text.csv:3", "abc"], id="fit-data-non-numeric-cell"
+    ),
+    pytest.param(
+        ["fit", "good.py", "data_header_only.csv", "--params", "k"], ["data_header_only.csv"], id="fit-data-header-only"
+    ),
+    pytest.param(
+        ["fit", "good.py", "data_empty.csv", "--params", "k"], ["data_empty.csv", "empty"], id="fit-data-empty-file"
+    ),
     pytest.param(["diagnose", "good.py", "missing.csv"], ["missing.csv"], id="diagnose-data-file-missing"),
-    pytest.param(["fit", "good.py", "data_const.csv", "--params", "k", "--out", "f.json"],
-                 ["data_const.csv", "'V'", "constant"], id="fit-constant-input"),
-    pytest.param(["diagnose", "good.py", "data_const.csv", "--plot", "d.png"], ["data_const.csv", "'V'", "constant"],
-                 id="diagnose-constant-input"),
+    pytest.param(
+        ["fit", "good.py", "data_const.csv", "--params", "k", "--out", "f.json"],
+        ["data_const.csv", "'V'", "constant"],
+        id="fit-constant-input",
+    ),
+    pytest.param(
+        ["diagnose", "good.py", "data_const.csv", "--plot", "d.png"],
+        ["data_const.csv", "'V'", "constant"],
+        id="diagnose-constant-input",
+    ),
     # ---- linearize -------------------------------------------------------------------------------------
-    pytest.param(["linearize", "good.py", "--json", "--format", "python-control"], ["--json", "contradict"],
-                 id="linearize-json-and-python-control"),
-    pytest.param(["linearize", "good.py", "--format", "matlab"], ["'matlab'", "python-control"],
-                 id="linearize-unknown-format"),
+    pytest.param(
+        ["linearize", "good.py", "--json", "--format", "python-control"],
+        ["--json", "contradict"],
+        id="linearize-json-and-python-control",
+    ),
+    pytest.param(
+        ["linearize", "good.py", "--format", "matlab"], ["'matlab'", "python-control"], id="linearize-unknown-format"
+    ),
     # ---- compensate and batch ----------------------------------------------------------------------------
-    pytest.param(["compensate", "good.py", "ref.csv", "--plot", "no/dir/c.png"], ["--plot no/dir/c.png", "does not exist"],
-                 id="compensate-plot-missing-directory"),
-    pytest.param(["compensate", "good.py", "ref.csv", "--out", "ref.csv"], ["--out ref.csv", "overwrite the input"],
-                 id="compensate-out-overwrites-the-reference"),
-    pytest.param(["compensate", "good.py", "missing.csv"], ["missing.csv", "no such file"],
-                 id="compensate-reference-missing"),
-    pytest.param(["compensate", "good.py", "data_no_x.csv"], ["data_no_x.csv", "'x'"],
-                 id="compensate-reference-without-output-column"),
-    pytest.param(["compensate", "good.py", "ref.csv", "--iterations", "0"], ["--iterations", "at least 1"],
-                 id="compensate-iterations-zero"),
-    pytest.param(["compensate", "good.py", "ref.csv", "--tol", "2"], ["--tol", "between 0 and 1"],
-                 id="compensate-tol-above-one"),
-    pytest.param(["batch", "fit", "good.py", "--params", "k"], ["batch fit", "data files"], id="batch-fit-without-data"),
-    pytest.param(["batch", "sweep", "good.py", "data.csv"], ["batch sweep", "no data files"],
-                 id="batch-sweep-with-data"),
+    pytest.param(
+        ["compensate", "good.py", "ref.csv", "--plot", "no/dir/c.png"],
+        ["--plot no/dir/c.png", "does not exist"],
+        id="compensate-plot-missing-directory",
+    ),
+    pytest.param(
+        ["compensate", "good.py", "ref.csv", "--out", "ref.csv"],
+        ["--out ref.csv", "overwrite the input"],
+        id="compensate-out-overwrites-the-reference",
+    ),
+    pytest.param(
+        ["compensate", "good.py", "missing.csv"], ["missing.csv", "no such file"], id="compensate-reference-missing"
+    ),
+    pytest.param(
+        ["compensate", "good.py", "data_no_x.csv"],
+        ["data_no_x.csv", "'x'"],
+        id="compensate-reference-without-output-column",
+    ),
+    pytest.param(
+        ["compensate", "good.py", "ref.csv", "--iterations", "0"],
+        ["--iterations", "at least 1"],
+        id="compensate-iterations-zero",
+    ),
+    pytest.param(
+        ["compensate", "good.py", "ref.csv", "--tol", "2"], ["--tol", "between 0 and 1"], id="compensate-tol-above-one"
+    ),
+    pytest.param(
+        ["batch", "fit", "good.py", "--params", "k"], ["batch fit", "data files"], id="batch-fit-without-data"
+    ),
+    pytest.param(
+        ["batch", "sweep", "good.py", "data.csv"], ["batch sweep", "no data files"], id="batch-sweep-with-data"
+    ),
     pytest.param(["batch", "frobnicate", "good.py"], ["'frobnicate'", "diagnose"], id="batch-unknown-action"),
     # ---- options after the subcommand -----------------------------------------------------------------
     pytest.param(["params", "good.py", "--set", "kk=2", "--no-debug"], ["--no-debug"], id="unknown-option-near-debug"),
     pytest.param(["equations", "--format", "latex"], ["MODEL", "required"], id="equations-without-model"),
     pytest.param(["fit", "good.py"], ["DATA", "required"], id="fit-without-data"),
 ]
-
 
 
 @pytest.fixture
@@ -518,6 +716,7 @@ def check_one_error_line(rc, out, err, needles):
 def snapshot(directory):
     """Every file below ``directory`` with its size, modification time and content hash."""
     import hashlib
+
     out = {}
     for root, dirs, files in os.walk(directory):
         for name in dirs + files:
@@ -545,8 +744,13 @@ def test_the_table_has_the_promised_size():
 
 def test_the_good_model_runs(workdir, capsys):
     """The reference model of the table is itself fine (so the cases fail for their own reason)."""
-    for argv in (["params", "good.py"], ["equations", "good.py"], ["causality", "good.py"],
-                 ["linearize", "good.py", "--json"], ["simulate", "good.py", "--quiet", "--t-end", "0.01"]):
+    for argv in (
+        ["params", "good.py"],
+        ["equations", "good.py"],
+        ["causality", "good.py"],
+        ["linearize", "good.py", "--json"],
+        ["simulate", "good.py", "--quiet", "--t-end", "0.01"],
+    ):
         rc, out, err = run_cli(argv, capsys)
         assert rc == 0, (argv, err)
         assert err == "", (argv, err)
@@ -564,9 +768,17 @@ SUBPROCESS_CASES = [
 
 def test_real_processes_exit_2_without_traceback(workdir):
     env = dict(os.environ, PYTHONWARNINGS="ignore")
-    procs = [subprocess.Popen([sys.executable, "-m", "bondgraph", *argv], cwd=workdir, env=env,
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for argv, _ in SUBPROCESS_CASES]
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-m", "bondgraph", *argv],
+            cwd=workdir,
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for argv, _ in SUBPROCESS_CASES
+    ]
     for proc, (argv, needles) in zip(procs, SUBPROCESS_CASES):
         out, err = proc.communicate(timeout=120)
         check_one_error_line(proc.returncode, out, err, needles)
@@ -574,13 +786,16 @@ def test_real_processes_exit_2_without_traceback(workdir):
 
 
 # ---- --out: nothing on failure, the documented CSV on success --------------------------------------------
-@pytest.mark.parametrize("argv", [
-    pytest.param(["simulate", "conflict.py"], id="causal-conflict"),
-    pytest.param(["simulate", "typo_elem.py"], id="model-error"),
-    pytest.param(["simulate", "blowup.py"], id="integration-failure"),
-    pytest.param(["simulate", "good.py", "--input", "V=bogus(x=1)"], id="bad-input"),
-    pytest.param(["simulate", "good.py", "--t-end", "-1"], id="bad-t-end"),
-])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        pytest.param(["simulate", "conflict.py"], id="causal-conflict"),
+        pytest.param(["simulate", "typo_elem.py"], id="model-error"),
+        pytest.param(["simulate", "blowup.py"], id="integration-failure"),
+        pytest.param(["simulate", "good.py", "--input", "V=bogus(x=1)"], id="bad-input"),
+        pytest.param(["simulate", "good.py", "--t-end", "-1"], id="bad-t-end"),
+    ],
+)
 def test_failed_simulate_leaves_no_output_file(argv, workdir, capsys):
     before = set(os.listdir(workdir))
     rc, out, err = run_cli([*argv, "--out", "result.csv"], capsys)
@@ -604,8 +819,23 @@ def test_out_into_a_missing_directory_is_an_input_error(workdir, capsys):
 
 
 def test_simulate_out_writes_the_documented_csv(workdir, capsys):
-    rc, out, err = run_cli(["simulate", "good.py", "--out", "result.csv", "--quiet", "--states",
-                            "--set", "k=400", "--t-end", "0.02", "--dt", "0.001"], capsys)
+    rc, out, err = run_cli(
+        [
+            "simulate",
+            "good.py",
+            "--out",
+            "result.csv",
+            "--quiet",
+            "--states",
+            "--set",
+            "k=400",
+            "--t-end",
+            "0.02",
+            "--dt",
+            "0.001",
+        ],
+        capsys,
+    )
     assert rc == 0, err
     assert err == "" and out == ""
     assert sorted(os.listdir(workdir)) == sorted([*(f.rstrip("/") for f in FILES), "binary.py", "subdir", "result.csv"])
@@ -614,7 +844,7 @@ def test_simulate_out_writes_the_documented_csv(workdir, capsys):
     comments = [ln for ln in lines if ln.startswith("#")]
     data = [ln for ln in lines if not ln.startswith("#")]
     assert comments and all(": " in ln for ln in comments)
-    assert lines[:len(comments)] == comments, "metadata comments come before the header"
+    assert lines[: len(comments)] == comments, "metadata comments come before the header"
     header = data[0].split(",")
     assert header[0] == "t" and "V" in header and "x" in header
     ds = read_csv(workdir / "result.csv", required=("t", "V", "x"))

@@ -6,6 +6,7 @@ Each test reproduces one deviation a new user reported (the issue's items 1-10) 
 promise of the README.  Real processes are used where the behaviour lives in the process
 (signals, exit status, start-up imports); everything else runs in-process.
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -49,8 +50,8 @@ MODEL = textwrap.dedent("""\
     """)
 
 TRUE = {"k": 150.0, "c": 3.0}
-OFFSET = 3e-6      # m: about 20 % of the stroke, as a sensor zero would be
-NOISE = 1e-7       # m
+OFFSET = 3e-6  # m: about 20 % of the stroke, as a sensor zero would be
+NOISE = 1e-7  # m
 
 
 def run(argv, capsys):
@@ -94,7 +95,7 @@ def test_fit_file_reproduces_the_fit_offset_included(work, capsys):
     assert "N*s/m" in lines[1]
     offset_line = next(ln for ln in lines if ln.startswith("offset of x"))
     assert "m" in offset_line.split() and "measured = model output + offset" in offset_line
-    assert float(offset_line.split()[3]) == pytest.approx(OFFSET, rel=0.05)     # the report prints the offset
+    assert float(offset_line.split()[3]) == pytest.approx(OFFSET, rel=0.05)  # the report prints the offset
     assert "rms error: fit" in lines[-1] and " m," in lines[-1]
     fit = json.loads((work / "fitted.json").read_text())
     assert fit["format"] == "bondgraph-fit/1" and fit["output"] == "x" and fit["input"] == "V"
@@ -103,17 +104,31 @@ def test_fit_file_reproduces_the_fit_offset_included(work, capsys):
     assert fit["offset"] == pytest.approx(OFFSET, rel=0.05) and fit["offset_unit"] == "m"
     assert fit["settings"] == {"validation": 0.3, "split": "blocks", "loss": "linear", "starts": 1}
     from conftest import ROOT
+
     docs = (ROOT / "docs" / "json-outputs.md").read_text().split("## Fit files")[1].split("\n## ")[0]
-    documented = {k for row in docs.splitlines() if row.startswith("| `") for k in re.findall(r"`(\w+)`", row.split("|")[1])}
+    documented = {
+        k for row in docs.splitlines() if row.startswith("| `") for k in re.findall(r"`(\w+)`", row.split("|")[1])
+    }
     assert documented == set(fit), "docs/json-outputs.md lists every field of the fit file"
 
     # re-simulate with the fit file and the measured drive: the RMS is the fit's
-    rc, out, err = run(["simulate", "osc.py", "--params-file", "fitted.json", "--input", "V=csv(file=data.csv, column=V)",
-                        "--out", "re.csv"], capsys)
+    rc, out, err = run(
+        [
+            "simulate",
+            "osc.py",
+            "--params-file",
+            "fitted.json",
+            "--input",
+            "V=csv(file=data.csv, column=V)",
+            "--out",
+            "re.csv",
+        ],
+        capsys,
+    )
     assert rc == 0, err
     assert "offset" in err
     data, re_ = read_csv(work / "data.csv"), read_csv(work / "re.csv")
-    np.testing.assert_array_equal(re_.t, data.t)                      # the data's own time stamps
+    np.testing.assert_array_equal(re_.t, data.t)  # the data's own time stamps
     assert re_.metadata["offset x"] == repr(fit["offset"])
     rms = float(np.sqrt(np.mean((re_.columns["x"] - data.columns["x"]) ** 2)))
     assert rms == pytest.approx(fit["rms_fit"], rel=0.05)
@@ -121,8 +136,20 @@ def test_fit_file_reproduces_the_fit_offset_included(work, capsys):
 
     # the same parameters without the offset miss by the offset: it is what made the difference
     (work / "flat.json").write_text(json.dumps(fit["params"]))
-    rc, out, err = run(["simulate", "osc.py", "--params-file", "flat.json", "--input", "V=csv(file=data.csv, column=V)",
-                        "--out", "flat.csv", "--quiet"], capsys)
+    rc, out, err = run(
+        [
+            "simulate",
+            "osc.py",
+            "--params-file",
+            "flat.json",
+            "--input",
+            "V=csv(file=data.csv, column=V)",
+            "--out",
+            "flat.csv",
+            "--quiet",
+        ],
+        capsys,
+    )
     assert rc == 0, err
     flat = read_csv(work / "flat.csv")
     assert np.sqrt(np.mean((flat.columns["x"] - data.columns["x"]) ** 2)) > 10 * rms
@@ -137,6 +164,7 @@ def test_fit_file_reproduces_the_fit_offset_included(work, capsys):
 
 def test_fit_reports_progress_and_plots(work, capsys, monkeypatch):
     from bondgraph.support.progress import Progress
+
     monkeypatch.setitem(Progress.__init__.__kwdefaults__, "delay", 0.0)
     monkeypatch.setitem(Progress.__init__.__kwdefaults__, "interval", 0.0)
     monkeypatch.setenv("BONDGRAPH_PROGRESS", "lines")
@@ -153,8 +181,10 @@ def test_csv_input_spans_the_data_not_the_experiment(work, capsys):
     rows = out.splitlines()
     assert rows[0] == "t,V,F,x,x2,v"
     assert len(rows) - 1 == 4000 and float(rows[-1].split(",")[0]) == pytest.approx(3.999)
-    rc, out, err = run(["simulate", "osc.py", "--input", "V=csv(file=data.csv, column=V)", "--dt", "0.01",
-                        "--t-end", "2", "--quiet"], capsys)
+    rc, out, err = run(
+        ["simulate", "osc.py", "--input", "V=csv(file=data.csv, column=V)", "--dt", "0.01", "--t-end", "2", "--quiet"],
+        capsys,
+    )
     t = np.array([float(r.split(",")[0]) for r in out.splitlines()[1:]])
     np.testing.assert_allclose(t, np.arange(201) * 0.01, atol=1e-12)
     rc, out, err = run(["simulate", "osc.py", "--input", "V=csv(file=data.csv, column=V)", "--t-end", "4.5"], capsys)
@@ -165,16 +195,18 @@ def test_unused_text_column_is_left_out_not_refused(work, capsys):
     lines = (work / "data.csv").read_text().splitlines()
     head = [ln for ln in lines if ln.startswith("#")]
     rows = [ln for ln in lines if not ln.startswith("#")]
-    noted = [rows[0] + ",note,stamp"] + [f"{r},{'pause' if k % 500 == 0 else ''},2026-11-23T10:00:{k % 60:02d}"
-                                         for k, r in enumerate(rows[1:])]
+    noted = [rows[0] + ",note,stamp"] + [
+        f"{r},{'pause' if k % 500 == 0 else ''},2026-11-23T10:00:{k % 60:02d}" for k, r in enumerate(rows[1:])
+    ]
     (work / "noted.csv").write_text("\n".join(head + noted) + "\n")
     rc, out, err = run(["fit", "osc.py", "noted.csv", "--params", "k", "--quiet"], capsys)
     assert rc == 0, err
-    rc, out, err = run(["simulate", "osc.py", "--input", "V=csv(file=noted.csv, column=V)", "--quiet", "--t-end", "0.1"],
-                       capsys)
+    rc, out, err = run(
+        ["simulate", "osc.py", "--input", "V=csv(file=noted.csv, column=V)", "--quiet", "--t-end", "0.1"], capsys
+    )
     assert rc == 0, err
     rc, out, err = run(["fit", "osc.py", "noted.csv", "--params", "k", "--output", "note"], capsys)
-    assert rc == 2 and "non-numeric cell" in err and "'note'" in err     # a needed text column is still refused
+    assert rc == 2 and "non-numeric cell" in err and "'note'" in err  # a needed text column is still refused
 
 
 # ---- items 4 and 5: nothing replaced unless the whole run succeeded ---------------------------------------
@@ -207,7 +239,9 @@ def test_debug_after_the_subcommand(work, capsys):
     rc, out, err = run(["params", "osc.py", "--debug"], capsys)
     assert rc == 0 and "spring stiffness" in out
     rc, out, err = run(["params", "osc.py", "--set", "kk=1", "--debug"], capsys)
-    assert rc == 2 and "Traceback" in err and err.splitlines()[-1].startswith("bondgraph: error: unknown parameter 'kk'")
+    assert (
+        rc == 2 and "Traceback" in err and err.splitlines()[-1].startswith("bondgraph: error: unknown parameter 'kk'")
+    )
 
 
 # ---- plots: units, only what varies, legends ----------------------------------------------------------
@@ -216,12 +250,26 @@ def test_plots_carry_units_skip_constants_and_label_shared_axes(work, capsys, mo
 
     figs = []
     monkeypatch.setattr(plotting.figures, "save", lambda fig, path: (figs.append(fig), open(path, "wb").write(b"png")))
-    rc, out, err = run(["simulate", "osc.py", "--input", "V=sine(amplitude=1e-3, frequency=5)", "--t-end", "0.5",
-                        "--out", "r.csv", "--plot", "r.png", "--quiet"], capsys)
+    rc, out, err = run(
+        [
+            "simulate",
+            "osc.py",
+            "--input",
+            "V=sine(amplitude=1e-3, frequency=5)",
+            "--t-end",
+            "0.5",
+            "--out",
+            "r.csv",
+            "--plot",
+            "r.png",
+            "--quiet",
+        ],
+        capsys,
+    )
     assert rc == 0, err
     axes = figs[0].axes
     labels = [a.get_ylabel() for a in axes]
-    assert labels == ["V (N)", "x, x2 (m)", "v (m/s)"], labels     # F (unused, constant) is left out
+    assert labels == ["V (N)", "x, x2 (m)", "v (m/s)"], labels  # F (unused, constant) is left out
     assert "constant F = 0 N" in axes[0].get_title()
     assert axes[-1].get_xlabel() == "t (s)"
     assert axes[0].get_legend() is None and axes[2].get_legend() is None
@@ -254,15 +302,17 @@ def test_python_control_export_matches_the_poles(work, capsys):
 def test_python_control_missing_is_one_line(work, capsys, monkeypatch):
     import bondgraph.cli.linearize as cli_lin
     from bondgraph.equations.derivation import derive
-    from bondgraph.support.errors import UsageError
     from bondgraph.linear.linearize import linearize
     from bondgraph.model.modelfile import load_model
+    from bondgraph.support.errors import UsageError
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "control" else real(name, *a))
     rc, out, err = run(["linearize", "osc.py", "--format", "python-control"], capsys)
-    assert rc == 2 and err == "bondgraph: error: --format python-control needs python-control: " \
-                              "pip install 'bondgraph[control]'\n"
+    assert (
+        rc == 2
+        and err == "bondgraph: error: --format python-control needs python-control: pip install 'bondgraph[control]'\n"
+    )
     assert cli_lin  # the module that checked
     monkeypatch.setitem(sys.modules, "control", None)
     lin = linearize(derive(load_model(work / "osc.py").model), "V", "x")
@@ -285,20 +335,24 @@ def test_choices_come_from_the_modules():
 
 
 def test_help_imports_neither_sympy_nor_numba():
-    code = ("import sys, io, contextlib\n"
-            "from bondgraph.cli import main\n"
-            "with contextlib.redirect_stdout(io.StringIO()):\n"
-            "    try:\n        main(['--help'])\n    except SystemExit:\n        pass\n"
-            "    try:\n        main(['simulate', '--help'])\n    except SystemExit:\n        pass\n"
-            "import bondgraph\n"
-            "print(sorted(m for m in ('sympy', 'numba', 'scipy', 'numpy', 'matplotlib') if m in sys.modules))\n")
+    code = (
+        "import sys, io, contextlib\n"
+        "from bondgraph.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    try:\n        main(['--help'])\n    except SystemExit:\n        pass\n"
+        "    try:\n        main(['simulate', '--help'])\n    except SystemExit:\n        pass\n"
+        "import bondgraph\n"
+        "print(sorted(m for m in ('sympy', 'numba', 'scipy', 'numpy', 'matplotlib') if m in sys.modules))\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 
 
 def test_help_exits_0_and_names_every_command():
-    for argv, needles in ((["--help"], ["COMMAND", "simulate", "fit", "130"]),
-                          (["simulate", "--help"], ["--params-file", "--plot", "auto", "dopri5", "--debug"])):
+    for argv, needles in (
+        (["--help"], ["COMMAND", "simulate", "fit", "130"]),
+        (["simulate", "--help"], ["--params-file", "--plot", "auto", "dopri5", "--debug"]),
+    ):
         proc = subprocess.run([sys.executable, "-m", "bondgraph", *argv], capture_output=True, text=True)
         assert proc.returncode == 0 and proc.stderr == "", proc.stderr
         for needle in needles:
@@ -308,12 +362,14 @@ def test_help_exits_0_and_names_every_command():
 
 
 def test_lazy_package_names_still_import():
-    code = ("import bondgraph.numerics.simulate, bondgraph.linear.linearize\n"
-            "import bondgraph as bg\n"
-            "from bondgraph import C, Model, Parameter, Sine, simulate\n"
-            "assert callable(bg.simulate) and callable(bg.linearize) and bg.simulate is simulate\n"
-            "assert 'Model' in dir(bg) and bg.Model is Model\n"
-            "print('ok')\n")
+    code = (
+        "import bondgraph.numerics.simulate, bondgraph.linear.linearize\n"
+        "import bondgraph as bg\n"
+        "from bondgraph import C, Model, Parameter, Sine, simulate\n"
+        "assert callable(bg.simulate) and callable(bg.linearize) and bg.simulate is simulate\n"
+        "assert 'Model' in dir(bg) and bg.Model is Model\n"
+        "print('ok')\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.stdout.strip() == "ok", out.stderr
 
@@ -321,11 +377,11 @@ def test_lazy_package_names_still_import():
 def test_printouts_equal_sympys_own_printer(tmp_path):
     """The remembering printers give the same text as sympy's (on the 20-layer stack)."""
     import sympy as sp
+    from conftest import MODELS
 
     from bondgraph.equations.derivation import derive
-    from bondgraph.model.modelfile import load_model
     from bondgraph.equations.printing import render
-    from conftest import MODELS
+    from bondgraph.model.modelfile import load_model
 
     eqs = derive(load_model(MODELS / "stack.py").model)
     text, latex = render(eqs, "text"), render(eqs, "latex")
@@ -337,8 +393,15 @@ def test_printouts_equal_sympys_own_printer(tmp_path):
 # ---- Ctrl-C and SIGTERM (real processes) -------------------------------------------------------------------
 def _spawn(argv, cwd, **kw):
     env = dict(os.environ, BONDGRAPH_PROGRESS="lines", PYTHONWARNINGS="ignore")
-    return subprocess.Popen([sys.executable, "-m", "bondgraph", *map(str, argv)], cwd=cwd, env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, **kw)
+    return subprocess.Popen(
+        [sys.executable, "-m", "bondgraph", *map(str, argv)],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        **kw,
+    )
 
 
 def _alive(pid: int) -> bool:
@@ -355,8 +418,11 @@ def _assert_interrupted(proc, sent_at, code=130, word="interrupted"):
     assert proc.returncode == code, err
     assert "Traceback" not in err
     lines = [ln for ln in err.splitlines() if not ln.startswith(("simulating:", "fitting:", "diagnose:"))]
-    assert lines == [f"bondgraph: {word}; no output file was changed"] if code == 130 else \
-        lines == ["bondgraph: terminated (SIGTERM); no output file was changed"], err
+    assert (
+        lines == [f"bondgraph: {word}; no output file was changed"]
+        if code == 130
+        else lines == ["bondgraph: terminated (SIGTERM); no output file was changed"]
+    ), err
     assert elapsed < 2.0, f"took {elapsed:.2f} s to stop"
 
 
@@ -375,9 +441,15 @@ def _handlers_installed(pid: int) -> bool:
 def test_ctrl_c_during_start_up_ends_every_command(work):
     """SIGINT as soon as the command runs (its imports), or 0.4 s later (sympy, numba, the
     model): one line, status 130, within 2 s, for every command."""
-    commands = [["params", "osc.py"], ["equations", "osc.py"], ["causality", "osc.py"],
-                ["simulate", "osc.py", "--out", "r.csv"], ["linearize", "osc.py"],
-                ["fit", "osc.py", "data.csv", "--params", "k"], ["diagnose", "osc.py", "data.csv"]]
+    commands = [
+        ["params", "osc.py"],
+        ["equations", "osc.py"],
+        ["causality", "osc.py"],
+        ["simulate", "osc.py", "--out", "r.csv"],
+        ["linearize", "osc.py"],
+        ["fit", "osc.py", "data.csv", "--params", "k"],
+        ["diagnose", "osc.py", "data.csv"],
+    ]
     for delay in (0.0, 0.4):
         procs = [_spawn(argv, work) for argv in commands]
         due, sent, ended = {}, {}, {}
@@ -403,9 +475,22 @@ def test_ctrl_c_during_start_up_ends_every_command(work):
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads /proc")
 def test_ctrl_c_during_a_long_simulation(work):
     (work / "r.csv").write_text("keep me\n")
-    proc = _spawn(["simulate", "osc.py", "--input", "V=sine(amplitude=1e-3, frequency=50)", "--t-end", "2000",
-                   "--dt", "1e-3", "--out", "r.csv"], work)
-    line = proc.stderr.readline()                  # the first progress line: the simulation runs
+    proc = _spawn(
+        [
+            "simulate",
+            "osc.py",
+            "--input",
+            "V=sine(amplitude=1e-3, frequency=50)",
+            "--t-end",
+            "2000",
+            "--dt",
+            "1e-3",
+            "--out",
+            "r.csv",
+        ],
+        work,
+    )
+    line = proc.stderr.readline()  # the first progress line: the simulation runs
     assert line.startswith("simulating:"), line
     sent = time.monotonic()
     proc.send_signal(signal.SIGINT)
@@ -416,13 +501,33 @@ def test_ctrl_c_during_a_long_simulation(work):
 
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads /proc")
 def test_sigterm_while_writing_removes_the_temporary_file(work):
-    proc = _spawn(["simulate", "osc.py", "--input", "V=sine(amplitude=1e-3, frequency=3)", "--t-end", "40",
-                   "--dt", "1e-4", "--out", "big.csv", "--quiet"], work)
+    proc = _spawn(
+        [
+            "simulate",
+            "osc.py",
+            "--input",
+            "V=sine(amplitude=1e-3, frequency=3)",
+            "--t-end",
+            "40",
+            "--dt",
+            "1e-4",
+            "--out",
+            "big.csv",
+            "--quiet",
+        ],
+        work,
+    )
     deadline = time.monotonic() + 60
     tmp = None
     while time.monotonic() < deadline and proc.poll() is None:
-        tmp = next((p for p in os.listdir(work) if ".big.csv." in p and p.endswith(".tmp") and (work / p).exists()
-                    and (work / p).stat().st_size > 0), None)   # the CSV writer's file, being filled
+        tmp = next(
+            (
+                p
+                for p in os.listdir(work)
+                if ".big.csv." in p and p.endswith(".tmp") and (work / p).exists() and (work / p).stat().st_size > 0
+            ),
+            None,
+        )  # the CSV writer's file, being filled
         if tmp:
             break
         time.sleep(0.005)
@@ -462,8 +567,14 @@ def test_ctrl_c_in_a_terminal_ends_the_worker_processes_too(work):
     """The terminal sends SIGINT to the whole process group: the workers leave silently, the
     command prints one line; after it no worker process is left."""
     (work / "spin.py").write_text(SPIN)
-    proc = subprocess.Popen([sys.executable, "spin.py"], cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, "spin.py"],
+        cwd=work,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     assert proc.stdout.readline().strip() == "started"
     children = []
     for _ in range(200):
@@ -505,7 +616,7 @@ def test_outputs_commit_together_or_not_at_all(tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["a.csv"] and (tmp_path / "a.csv").read_text() == "old a\n"
     with Outputs() as out:
         out.add(tmp_path / "a.csv")
-        out.add(tmp_path / "never.csv")            # reserved but not written: not created
+        out.add(tmp_path / "never.csv")  # reserved but not written: not created
         with out.path(tmp_path / "a.csv") as tmp:
             assert tmp.endswith(".csv") and os.path.basename(tmp).startswith(".a.csv.")
             with open(tmp, "w") as fh:
@@ -514,8 +625,11 @@ def test_outputs_commit_together_or_not_at_all(tmp_path):
     assert os.stat(tmp_path / "a.csv").st_mode & 0o777 == 0o640, "the file keeps its permissions"
     assert not [t for t in TEMPORARY if str(tmp_path) in t]
     out = Outputs(inputs=[tmp_path / "a.csv"])
-    for path, needle in ((tmp_path / "a.csv", "would overwrite the input"), (tmp_path, "is a directory"),
-                         (tmp_path / "no" / "x.csv", "does not exist")):
+    for path, needle in (
+        (tmp_path / "a.csv", "would overwrite the input"),
+        (tmp_path, "is a directory"),
+        (tmp_path / "no" / "x.csv", "does not exist"),
+    ):
         with pytest.raises(UsageError, match=needle):
             out.add(path)
     out.add(tmp_path / "x.csv", "--out")
@@ -545,8 +659,9 @@ AFTER_COMMIT = textwrap.dedent("""\
 
 def test_an_interrupt_after_the_outputs_are_in_place_says_so(tmp_path):
     (tmp_path / "after.py").write_text(AFTER_COMMIT)
-    proc = subprocess.Popen([sys.executable, "after.py"], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "after.py"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     assert proc.stdout.readline().strip() == "committed"
     proc.send_signal(signal.SIGINT)
     err = proc.communicate(timeout=30)[1]

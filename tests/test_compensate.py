@@ -5,21 +5,21 @@ based on the inverse model calculation and feedforward"; Ghafarirad et al., MCMD
 Sec. 2.4: the PI model's analytic inverse compensates the hysteresis) is about an order of
 magnitude less tracking error than a linear inverse. Checked on simulated plants, then applied
 to the real P-885 record (tests/data/p885_bursts.csv) after identifying its hysteresis."""
+
 from __future__ import annotations
 
 import json
 
 import numpy as np
 import pytest
-
-import bondgraph as bg
-from bondgraph import C, I, J1, Model, R, Se
-from bondgraph.cli import main
-from bondgraph.fit.compensate import feedforward, invert_operator
-from bondgraph.data import read_csv, write_csv
-from bondgraph.support.errors import ModelError
-from bondgraph.model.modelfile import load_model
 from conftest import MODELS, ROOT
+
+from bondgraph import J1, C, I, Model, R, Se
+from bondgraph.cli import main
+from bondgraph.data import read_csv, write_csv
+from bondgraph.fit.compensate import feedforward, invert_operator
+from bondgraph.model.modelfile import load_model
+from bondgraph.support.errors import ModelError
 from library.hysteresis import MaxwellSlip, ModifiedPI, PrandtlIshlinskii, RelativeModifiedPI
 from library.identification import fit_pi, fit_relative_modified_pi
 
@@ -40,14 +40,16 @@ def test_numeric_inverse_matches_the_closed_forms():
     v_closed = invert_operator(PrandtlIshlinskii(R_, W_), y)
     v_num = invert_operator(_NoClosedForm(R_, W_), y)
     np.testing.assert_allclose(v_num, v_closed, rtol=0, atol=1e-10)
-    for op in (ModifiedPI(R_, W_, [0.0, 2.0, -1.0], [1.0, 0.5, 0.3]),
-               RelativeModifiedPI(R_, W_, [0.0, 3.0], [1.0, 0.7])):
+    for op in (
+        ModifiedPI(R_, W_, [0.0, 2.0, -1.0], [1.0, 0.5, 0.3]),
+        RelativeModifiedPI(R_, W_, [0.0, 3.0], [1.0, 0.7]),
+    ):
         np.testing.assert_allclose(op.run(invert_operator(op, y)), y, rtol=0, atol=1e-9)
-    ms = MaxwellSlip([2.0, 1.0, 0.5], [0.2, 0.3, 0.4])           # no closed form: numeric
-    f = 0.85 * np.sin(np.linspace(0.0, 9.0, 400))                 # within the break-away sum 0.9
+    ms = MaxwellSlip([2.0, 1.0, 0.5], [0.2, 0.3, 0.4])  # no closed form: numeric
+    f = 0.85 * np.sin(np.linspace(0.0, 9.0, 400))  # within the break-away sum 0.9
     np.testing.assert_allclose(ms.run(invert_operator(ms, f)), f, rtol=0, atol=1e-12)
     with pytest.raises(ModelError, match="not monotone"):
-        invert_operator(ms, np.array([0.0, 0.95]))                # beyond saturation: no input reaches it
+        invert_operator(ms, np.array([0.0, 0.95]))  # beyond saturation: no input reaches it
 
 
 def pi_plant() -> Model:
@@ -56,8 +58,13 @@ def pi_plant() -> Model:
     m = Model("PI plant")
     h = m.operator("H", PrandtlIshlinskii(R_, W_), m.input("V", "V"))
     mass, wn = 1e-3, 2 * np.pi * 2000
-    m.add(Se("force", mass * wn ** 2 * 1e-6 * h), J1("v"), I("m", mass), C("k", 1 / (mass * wn ** 2)),
-          R("c", 2 * 0.3 * mass * wn))
+    m.add(
+        Se("force", mass * wn**2 * 1e-6 * h),
+        J1("v"),
+        I("m", mass),
+        C("k", 1 / (mass * wn**2)),
+        R("c", 2 * 0.3 * mass * wn),
+    )
     m.bond("force", "v")
     for e in ("m", "k", "c"):
         m.bond("v", e)
@@ -72,10 +79,12 @@ def test_pi_plant_with_its_exact_inverse_tracks_ten_times_better():
     ref = 4e-6 * np.sin(2 * np.pi * t) * (1 - 0.25 * t)
     res = feedforward(pi_plant(), t, ref)
     s = res.summary()
-    print(f"\nPI plant: error {s['relative_error']:.2e} of the range compensated, "
-          f"{s['relative_error_uncompensated']:.3f} uncompensated, {s['improvement']:.0f}x")
+    print(
+        f"\nPI plant: error {s['relative_error']:.2e} of the range compensated, "
+        f"{s['relative_error_uncompensated']:.3f} uncompensated, {s['improvement']:.0f}x"
+    )
     assert res.method == "operator inverse"
-    assert s["relative_error_uncompensated"] > 0.1          # the loop is 16 % of the range
+    assert s["relative_error_uncompensated"] > 0.1  # the loop is 16 % of the range
     assert res.improvement >= 10.0
     assert s["relative_error"] < 1e-3
 
@@ -100,8 +109,20 @@ def test_cli_compensate_bimorph_with_input_hysteresis(tmp_path, capsys):
     ref_file, out = tmp_path / "ref.csv", tmp_path / "ff.csv"
     write_csv(ref_file, t, {"x": -6e-6 * np.sin(2 * np.pi * 20 * t) ** 2})
     model = str(MODELS / "bimorph_t215.py")
-    code = main(["compensate", model, str(ref_file), "--set", "hysteresis=pi", "--out", str(out), "--json",
-                 "--plot", str(tmp_path / "ff.png")])
+    code = main(
+        [
+            "compensate",
+            model,
+            str(ref_file),
+            "--set",
+            "hysteresis=pi",
+            "--out",
+            str(out),
+            "--json",
+            "--plot",
+            str(tmp_path / "ff.png"),
+        ]
+    )
     captured = capsys.readouterr()
     assert code == 0, captured.err
     summary = json.loads(captured.out)
@@ -153,9 +174,8 @@ def test_p885_record_identified_hysteresis_compensation(p885):
     for op, c in ((pi, c_pi), (mpi, c_mpi)):
         v_ff = invert_operator(op, x - c)
         np.testing.assert_allclose(op.run(v_ff) + c, x, rtol=0, atol=1e-12)
-        assert rms(v_ff[~train] - V[~train]) < 0.06      # DAQ volts; the drive it replaces spans 3.3 V
-    predictions = {"linear": x - (g * V + c_lin), "pi": x - (pi.run(V) + c_pi),
-                   "modified_pi": x - (mpi.run(V) + c_mpi)}
+        assert rms(v_ff[~train] - V[~train]) < 0.06  # DAQ volts; the drive it replaces spans 3.3 V
+    predictions = {"linear": x - (g * V + c_lin), "pi": x - (pi.run(V) + c_pi), "modified_pi": x - (mpi.run(V) + c_mpi)}
     for part, (lo, hi) in (("burst 2 (25-50 s)", (25.0, 50.0)), ("burst 3 (50-70 s)", (50.0, 71.0))):
         sel = (t >= lo) & (t < hi)
         for name, e in predictions.items():

@@ -1,4 +1,5 @@
 """Analytic solutions: driven mass-spring-damper, RC circuit, energy balance."""
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -84,12 +85,15 @@ def test_sampled_pulse_reaches_a_model_at_rest(method):
     assert res["vc"].max() == pytest.approx(1.0, abs=1e-3)
     assert abs(res["vc"][-1]) < 1e-6
 
+
 @pytest.mark.parametrize("method", ["radau", "bdf", "lsoda"])
 def test_a_stiff_run_stops_at_its_deadline(method):
     """A deadline already passed stops the stiff solvers at their first step with a
     SimulationTimeout (a SimulationError); one in the future changes nothing."""
     import time
+
     from bondgraph.numerics.simulate import SimulationError, SimulationTimeout
+
     t = np.linspace(0, 3, 3001)
     free = bg.simulate(msd(), t, {"F": bg.Step(1.0)}, method=method)
     with pytest.raises(SimulationTimeout, match="deadline") as err:
@@ -106,7 +110,7 @@ def test_energy_balance_of_driven_msd():
     res = bg.simulate(eqs, np.linspace(0, 2, 20001), {"F": bg.Sine(1.0, 1.3)}, rtol=1e-10)
     p, q = res.states["p_mass"], res.states["q_spring"]
     v = res["v"]
-    H = p ** 2 / 2 + 100.0 * q ** 2 / 2
+    H = p**2 / 2 + 100.0 * q**2 / 2
     work = np.concatenate([[0], np.cumsum(0.5 * (res["F"][1:] * v[1:] + res["F"][:-1] * v[:-1]) * np.diff(res.t))])
     diss = np.concatenate([[0], np.cumsum(0.5 * (2.0 * v[1:] ** 2 + 2.0 * v[:-1] ** 2) * np.diff(res.t))])
     assert np.max(np.abs(work - diss - H)) < 1e-6 * np.max(H)

@@ -1,4 +1,5 @@
 """Measured-data CSV format (bondgraph.data) and atomic file output (bondgraph.support.atomic)."""
+
 from __future__ import annotations
 
 import json
@@ -12,8 +13,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from bondgraph.support.atomic import atomic_write
 from bondgraph.data import Dataset, DataWarning, check_units, read_csv, write_csv
+from bondgraph.support.atomic import atomic_write
 from bondgraph.support.errors import BondGraphError, DataError, UsageError
 
 FAST = settings(
@@ -56,17 +57,15 @@ odd_names = st.text(
     min_size=1,
     max_size=6,
 ).filter(lambda s: s == s.strip() and not s.startswith("#"))
-column_names = st.lists(
-    st.one_of(simple_names, odd_names).filter(lambda s: s != "t"), max_size=4, unique=True
-)
+column_names = st.lists(st.one_of(simple_names, odd_names).filter(lambda s: s != "t"), max_size=4, unique=True)
 meta_keys = st.one_of(
     st.from_regex(r"[A-Za-z_][A-Za-z0-9_ .\-/()\[\]]{0,10}", fullmatch=True),
-    st.text(alphabet=st.characters(blacklist_characters=":#\n\r", blacklist_categories=("Cs",)),
-            min_size=1, max_size=10),
+    st.text(
+        alphabet=st.characters(blacklist_characters=":#\n\r", blacklist_categories=("Cs",)), min_size=1, max_size=10
+    ),
 ).filter(lambda k: k == k.strip() and (k[0].isalpha() or k[0] == "_") and k[0].isidentifier())
 meta_values = st.one_of(
-    st.text(alphabet=st.characters(blacklist_characters="\n\r", blacklist_categories=("Cs",)),
-            max_size=20),
+    st.text(alphabet=st.characters(blacklist_characters="\n\r", blacklist_categories=("Cs",)), max_size=20),
     finite,
     st.integers(),
 )
@@ -101,9 +100,12 @@ def test_write_read_round_trip_is_exact(tmp_path, data):
 
 
 @FAST
-@given(data=datasets(max_rows=12), inserts=st.lists(
-    st.tuples(st.integers(0, 20), st.sampled_from(["", "   ", "# note", "  # k9: v 9", "#"])),
-    max_size=5))
+@given(
+    data=datasets(max_rows=12),
+    inserts=st.lists(
+        st.tuples(st.integers(0, 20), st.sampled_from(["", "   ", "# note", "  # k9: v 9", "#"])), max_size=5
+    ),
+)
 def test_comments_and_blank_lines_between_rows_change_nothing(tmp_path, data, inserts):
     t, columns, _ = data
     p = tmp_path / "cm.csv"
@@ -125,8 +127,7 @@ def test_comments_and_blank_lines_between_rows_change_nothing(tmp_path, data, in
     rows=st.integers(3, 15),
     bad_row=st.integers(0, 14),
     defect=st.sampled_from(["abc", "", "nan", "-inf", "1e999", "cells", "time"]),
-    inserts=st.lists(st.tuples(st.integers(0, 30), st.sampled_from(["", "# c", "# a: b"])),
-                     max_size=4),
+    inserts=st.lists(st.tuples(st.integers(0, 30), st.sampled_from(["", "# c", "# a: b"])), max_size=4),
     crlf=st.booleans(),
 )
 def test_reported_line_is_the_bad_line(tmp_path, rows, bad_row, defect, inserts, crlf):
@@ -154,10 +155,12 @@ def test_reported_line_is_the_bad_line(tmp_path, rows, bad_row, defect, inserts,
 
 
 @settings(FAST, max_examples=150)
-@given(st.one_of(
-    st.text(alphabet="tVx019.,e-+#: \n\r\tabn\ufeff", max_size=60),
-    st.binary(max_size=40),
-))
+@given(
+    st.one_of(
+        st.text(alphabet="tVx019.,e-+#: \n\r\tabn\ufeff", max_size=60),
+        st.binary(max_size=40),
+    )
+)
 def test_any_input_gives_dataset_or_one_line_data_error(tmp_path, content):
     p = tmp_path / "fz.csv"
     p.write_bytes(content if isinstance(content, bytes) else content.encode("utf-8"))
@@ -188,8 +191,10 @@ def test_large_file_round_trip(tmp_path):
 
 
 def test_bom_crlf_metadata_and_quoted_header(tmp_path):
-    content = ("\ufeff# actuator: APA120ML\r\n#free comment\r\n# gain (V/V): 20 : x\r\n"
-               '"t", V ,x\r\n0,1,2e-6\r\n\r\n1e-3, 2 ,3e-6\r\n# end: yes\r\n')
+    content = (
+        "\ufeff# actuator: APA120ML\r\n#free comment\r\n# gain (V/V): 20 : x\r\n"
+        '"t", V ,x\r\n0,1,2e-6\r\n\r\n1e-3, 2 ,3e-6\r\n# end: yes\r\n'
+    )
     ds = read_csv(_write(tmp_path, content))
     assert ds.metadata == {"actuator": "APA120ML", "gain (V/V)": "20 : x", "end": "yes"}
     assert list(ds.columns) == ["V", "x"]
@@ -236,8 +241,7 @@ BAD_FILES = [
     ("NaN-in-t", b"t,V\n0,1\nNaN,2\n", 3, "'NaN' in column 't'"),
     ("inf", b"t,V,x\n0,1,2\n1,-inf,3\n", 3, "'-inf'"),
     ("overflow", b"t,V,x\n0,1,2\n1,1e999,3\n", 3, "overflows"),
-    ("time-repeated", b"t,V,x\n0,1,2\n1,2,3\n1,3,4\n", 4,
-     "t = 1 at line 4 follows t = 1 at line 3"),
+    ("time-repeated", b"t,V,x\n0,1,2\n1,2,3\n1,3,4\n", 4, "t = 1 at line 4 follows t = 1 at line 3"),
     ("time-decreasing", b"t,V\n0,1\n2,2\n1.5,3\n", 4, "not strictly increasing"),
     ("time-after-comments", b"# a: 1\nt,V,x\n0,1,2\n# mid\n\n2,2,3\n1,3,4\n", 7, "line 6"),
     ("nan-after-prelude", b"# a\n# b\n\nt,V\n0,1\n1,nan\n", 6, "'nan'"),
@@ -248,8 +252,7 @@ BAD_FILES = [
 ]
 
 
-@pytest.mark.parametrize("content,line,needle", [b[1:] for b in BAD_FILES],
-                         ids=[b[0] for b in BAD_FILES])
+@pytest.mark.parametrize("content,line,needle", [b[1:] for b in BAD_FILES], ids=[b[0] for b in BAD_FILES])
 def test_bad_file_is_refused_with_file_and_line(tmp_path, content, line, needle):
     p = _write(tmp_path, content, "bad data.csv")
     with pytest.raises(DataError) as exc:
@@ -340,23 +343,26 @@ def test_write_csv_layout(tmp_path):
     p = tmp_path / "out.csv"
     meta = {"model": "stack", "n": 3, "param k1": "[1 2\n 3]", "input V": "sine(a=1)"}
     write_csv(p, [0.0, 0.1], {"V": [1, 2], "x": [1e-6, -0.0]}, meta)
-    assert p.read_bytes() == (b"# model: stack\n# n: 3\n# param k1: [1 2 3]\n# input V: sine(a=1)\n"
-                              b"t,V,x\n0.0,1.0,1e-06\n0.1,2.0,-0.0\n")
-    assert read_csv(p).metadata == {"model": "stack", "n": "3", "param k1": "[1 2 3]",
-                                    "input V": "sine(a=1)"}
+    assert p.read_bytes() == (
+        b"# model: stack\n# n: 3\n# param k1: [1 2 3]\n# input V: sine(a=1)\nt,V,x\n0.0,1.0,1e-06\n0.1,2.0,-0.0\n"
+    )
+    assert read_csv(p).metadata == {"model": "stack", "n": "3", "param k1": "[1 2 3]", "input V": "sine(a=1)"}
 
 
-@pytest.mark.parametrize("t,columns,metadata,needle", [
-    ([0, 1], {"x": [0, np.nan]}, None, "non-finite"),
-    ([0, 0], {"x": [0, 1]}, None, "not strictly increasing"),
-    ([0, 1], {"x": [0, 1, 2]}, None, "same length"),
-    ([0, 1], {"a,b": [0, 1]}, None, "column name"),
-    ([0, 1], {" x": [0, 1]}, None, "column name"),
-    ([0, 1], {"t": [0, 1]}, None, "time axis"),
-    ([0, 1], {"x": [0, 1]}, {"1st": "a"}, "metadata key"),
-    ([0, 1], {"x": [0, 1]}, {"a:b": "a"}, "metadata key"),
-    ([0, 1], {"x": [0, 1]}, {"a#": "a"}, "metadata key"),
-])
+@pytest.mark.parametrize(
+    "t,columns,metadata,needle",
+    [
+        ([0, 1], {"x": [0, np.nan]}, None, "non-finite"),
+        ([0, 0], {"x": [0, 1]}, None, "not strictly increasing"),
+        ([0, 1], {"x": [0, 1, 2]}, None, "same length"),
+        ([0, 1], {"a,b": [0, 1]}, None, "column name"),
+        ([0, 1], {" x": [0, 1]}, None, "column name"),
+        ([0, 1], {"t": [0, 1]}, None, "time axis"),
+        ([0, 1], {"x": [0, 1]}, {"1st": "a"}, "metadata key"),
+        ([0, 1], {"x": [0, 1]}, {"a:b": "a"}, "metadata key"),
+        ([0, 1], {"x": [0, 1]}, {"a#": "a"}, "metadata key"),
+    ],
+)
 def test_write_csv_refuses_what_read_csv_would_refuse(tmp_path, t, columns, metadata, needle):
     p = tmp_path / "out.csv"
     p.write_text("previous")
@@ -441,8 +447,7 @@ def test_atomic_write_matplotlib_png(tmp_path):
 
 def _sine(n=4000, fs=1e4, f=20.0):
     t = np.arange(n) / fs
-    return Dataset(t, {"V": np.sin(2 * np.pi * f * t), "x": 1e-6 * np.cos(2 * np.pi * f * t)},
-                   {"k": "v"})
+    return Dataset(t, {"V": np.sin(2 * np.pi * f * t), "x": 1e-6 * np.cos(2 * np.pi * f * t)}, {"k": "v"})
 
 
 def test_dataset_basics_and_immutability():
@@ -511,8 +516,8 @@ def test_resample_interpolates_onto_uniform_grid():
 
 def test_uniform_sampling_has_one_definition_and_a_config_tolerance():
     from bondgraph import config
-    from bondgraph.fit import identify
     from bondgraph.data import uniform_step
+    from bondgraph.fit import identify
 
     assert identify.uniform_step is uniform_step
     t = np.cumsum(np.r_[0, np.tile([1.0, 1.01], 50)])  # steps 0.5 % from the mean

@@ -13,9 +13,9 @@ The third-party candidate below is defined here, uses only the public contract
 through a monkeypatched entry-point loader).  Its truth, a first-order lag driven through a
 squared drive, is a test model of this file, not one of the piezo candidates.
 """
+
 import json
 import math
-import os
 import signal
 import subprocess
 import sys
@@ -23,8 +23,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-import sympy as sp
 import pytest
+import sympy as sp
+from conftest import MODELS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -33,9 +34,8 @@ from bondgraph import config
 from bondgraph.cli import main
 from bondgraph.data import Dataset, read_csv
 from bondgraph.diagnosis import LINEAR, Candidate, Extension, diagnose, model_file_options
-from bondgraph.diagnosis.decision import _batch_means, compare, judge, Comparison
+from bondgraph.diagnosis.decision import Comparison, _batch_means, compare, judge
 from bondgraph.model.modelfile import load_model
-from conftest import MODELS
 
 DATA = Path(__file__).parent / "data"
 P885 = DATA / "p885_bursts.csv"
@@ -45,9 +45,25 @@ P885 = DATA / "p885_bursts.csv"
 def p885_json(tmp_path_factory):
     """The CLI's JSON report and plot for the real record (run once for the tests below)."""
     png = tmp_path_factory.mktemp("diag") / "p885.png"
-    proc = subprocess.run([sys.executable, "-m", "bondgraph", "diagnose", str(MODELS / "stack.py"), str(P885),
-                           "--json", "--quiet", "--plot", str(png), "--workers", "1"], capture_output=True, text=True,
-                          timeout=900)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "bondgraph",
+            "diagnose",
+            str(MODELS / "stack.py"),
+            str(P885),
+            "--json",
+            "--quiet",
+            "--plot",
+            str(png),
+            "--workers",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
     assert proc.returncode == 0, proc.stderr
     return json.loads(proc.stdout), png
 
@@ -103,11 +119,18 @@ def test_cli_json_contract(p885_json):
     gains = [s["gain"] for s in out["steps"]]
     assert math.prod(gains) == pytest.approx(out["gain"], rel=1e-6)
     assert all({"cause", "gain", "rms"} <= set(s) for s in out["steps"])
-    assert {c["cause"] for c in out["candidates"]} >= {"hysteresis", "creep", "saturation", "softening",
-                                                       "higher-mode", "nonlinear-damping", "electrical-rc"}
+    assert {c["cause"] for c in out["candidates"]} >= {
+        "hysteresis",
+        "creep",
+        "saturation",
+        "softening",
+        "higher-mode",
+        "nonlinear-damping",
+        "electrical-rc",
+    }
     assert all("gain" in c and "passed" in c for c in out["candidates"])
     assert "at_bounds" in out["calibration"] and "held" in out["calibration"]
-    assert out["data"]["blocks"] == config.get("diagnosis.blocks")   # bursts at one frequency: no sweep
+    assert out["data"]["blocks"] == config.get("diagnosis.blocks")  # bursts at one frequency: no sweep
     assert out["why"]
 
 
@@ -164,7 +187,7 @@ def lag_record(square=0.0, seed=3, n=3000, fs=500.0):
     rng = np.random.default_rng(seed)
     t = np.arange(n) / fs
     u = sum(np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi)) for f in (0.5, 1.3, 3.1, 7.9)) / 2
-    v = u + square * u ** 2
+    v = u + square * u**2
     truth = bg.simulate(lag_model(0.025), t, {"u": bg.PiecewiseLinear(t, v)}, rtol=1e-9)
     y = truth["y"] + rng.normal(0, 0.002, n)
     return Dataset(t, {"u": u, "y": y})
@@ -181,13 +204,22 @@ class SquareLaw(Candidate):
 
     def fit(self, view):
         d = np.asarray(view.drive)
-        fit = view.fit_drive([d ** 2], [-np.inf], [np.inf])
+        fit = view.fit_drive([d**2], [-np.inf], [np.inf])
         model = view.rewrite()
         a = model.parameter("sq.a", float(fit.coef[0]), "1/V", "quadratic drive coefficient")
-        expr = view.drive_expr + a * view.drive_expr ** 2
+        expr = view.drive_expr + a * view.drive_expr**2
         view.with_drive(model, expr)
-        return Extension(model, {**fit.values, "sq.a": float(fit.coef[0])}, ["sq.a"], fit.prediction, fit.drive,
-                         expr, fit.at_bounds, fit.success, fit.message)
+        return Extension(
+            model,
+            {**fit.values, "sq.a": float(fit.coef[0])},
+            ["sq.a"],
+            fit.prediction,
+            fit.drive,
+            expr,
+            fit.at_bounds,
+            fit.success,
+            fit.message,
+        )
 
 
 def test_third_party_candidate_named_through_public_contract():
@@ -202,6 +234,7 @@ def test_third_party_candidate_named_through_public_contract():
 
 def test_third_party_candidate_silent_on_effect_free_data(monkeypatch):
     import bondgraph.diagnosis.engine as engine
+
     monkeypatch.setattr(engine, "load_candidates", lambda: [SquareLaw()])
     rep = diagnose(lag_model(), lag_record(square=0.0), workers=2)
     assert rep.causes == [] and rep.cause == "none"
@@ -244,15 +277,25 @@ class PowerLaw(Candidate):
 
     def fit(self, view):
         d = np.abs(np.asarray(view.drive))
-        fit = view.fit_drive(lambda z: [d ** z[0]], [-np.inf], [np.inf], z0=[3.5], z_bounds=[(1.0, 4.0)],
-                             z_names=["pw.p"], max_nfev=2)
+        fit = view.fit_drive(
+            lambda z: [d ** z[0]], [-np.inf], [np.inf], z0=[3.5], z_bounds=[(1.0, 4.0)], z_names=["pw.p"], max_nfev=2
+        )
         model = view.rewrite()
         a = model.parameter("pw.a", float(fit.coef[0]), "", "power-law coefficient")
         p = model.parameter("pw.p", float(fit.z[0]), "", "power-law exponent")
         expr = view.drive_expr + a * sp.Abs(view.drive_expr) ** p
         view.with_drive(model, expr)
-        return Extension(model, {**fit.values, "pw.a": float(fit.coef[0]), "pw.p": float(fit.z[0])},
-                         ["pw.a", "pw.p"], fit.prediction, fit.drive, expr, fit.at_bounds, fit.success, fit.message)
+        return Extension(
+            model,
+            {**fit.values, "pw.a": float(fit.coef[0]), "pw.p": float(fit.z[0])},
+            ["pw.a", "pw.p"],
+            fit.prediction,
+            fit.drive,
+            expr,
+            fit.at_bounds,
+            fit.success,
+            fit.message,
+        )
 
 
 class SquareLawJudgedLinear(SquareLaw):
@@ -270,14 +313,15 @@ def test_a_close_race_is_decided_by_converged_fits():
     improves, the report says so, and the simpler square law is still the one named."""
     data = lag_record(square=0.4)
     cands = [SquareLaw(), PowerLaw(), SquareLawJudgedLinear()]
-    with config.override({"diagnosis.polish_margin": 1.0}):   # no race: only the best counts
+    with config.override({"diagnosis.polish_margin": 1.0}):  # no race: only the best counts
         rough = diagnose(lag_model(), data, candidates=cands, workers=1, chain=False)
     with config.override({"diagnosis.polish_margin": 100.0}):
         polished = diagnose(lag_model(), data, candidates=cands, workers=1, chain=False)
     # judged again after the race, the candidates not fitted again keep their verdicts
     assert all(c.passed for c in rough.steps[0].candidates if c.cause != "power-law")
-    assert [c.verdict for c in polished.steps[0].candidates if c.cause != "power-law"] == \
-        [c.verdict for c in rough.steps[0].candidates if c.cause != "power-law"]
+    assert [c.verdict for c in polished.steps[0].candidates if c.cause != "power-law"] == [
+        c.verdict for c in rough.steps[0].candidates if c.cause != "power-law"
+    ]
     before = {c.cause: c for c in rough.steps[0].candidates}["power-law"]
     after = {c.cause: c for c in polished.steps[0].candidates}["power-law"]
     assert not before.success and before.effort == 1.0
@@ -287,8 +331,7 @@ def test_a_close_race_is_decided_by_converged_fits():
     assert "fitted again, 10× the evaluations" in polished.text()
     assert polished.causes == rough.causes == ["square-law"]
     # the strongest other cause that passes too is what the data could not rule out
-    other = max((c for c in polished.steps[0].candidates if c.passed and c.cause != "square-law"),
-                key=lambda c: c.gain)
+    other = max((c for c in polished.steps[0].candidates if c.passed and c.cause != "square-law"), key=lambda c: c.gain)
     assert f"{other.cause} passes too (×{other.gain:.3g}" in polished.steps[0].why
 
 
@@ -323,7 +366,9 @@ def test_batch_means_are_the_means_of_the_blocks_slices(m, L, start):
     at least L // 2 samples, none otherwise."""
     x = np.random.default_rng(m * 61 + L).normal(size=start + m)
     got = _batch_means(x, start, m, L)
-    cuts = [(start + k * L, start + (k + 1) * L) for k in range(m // L)] or ([(start, start + m)] if m >= L // 2 else [])
+    cuts = [(start + k * L, start + (k + 1) * L) for k in range(m // L)] or (
+        [(start, start + m)] if m >= L // 2 else []
+    )
     assert np.allclose(got, [x[lo:hi].mean() for lo, hi in cuts], rtol=1e-13, atol=1e-15) and got.size == len(cuts)
 
 
@@ -333,7 +378,7 @@ def test_batches_of_a_slowly_varying_error_count_less():
     rng = np.random.default_rng(1)
     n_blocks, m = 40, 50
     blocks = [slice(k * 2 * m, k * 2 * m + m) for k in range(n_blocks)]
-    ratio = 0.8 + 0.15 * np.sin(np.linspace(0, 3 * np.pi, n_blocks))     # the improvement drifts slowly
+    ratio = 0.8 + 0.15 * np.sin(np.linspace(0, 3 * np.pi, n_blocks))  # the improvement drifts slowly
     ea, eb = np.zeros(2 * m * n_blocks), np.zeros(2 * m * n_blocks)
     for s_, r in zip(blocks, ratio):
         ea[s_] = 1.0 + rng.normal(0, 0.05, m)
@@ -354,8 +399,10 @@ def test_a_slow_simulation_stops_at_the_fits_budget():
     finishes, a later one that would outlast the budget stops, the fit returns its best point
     so far as not converged, and the final prediction runs without a deadline."""
     import time
+
     from bondgraph.diagnosis.projection import projected_fit, simulation_deadline, time_budget
     from bondgraph.numerics.simulate import SimulationTimeout
+
     t = np.linspace(0.0, 1.0, 200)
     y = np.exp(-3.0 * t)
     seen = []
@@ -363,7 +410,7 @@ def test_a_slow_simulation_stops_at_the_fits_budget():
     def columns(z, rows):
         deadline = simulation_deadline()
         seen.append(deadline)
-        if deadline is not None:            # a run that would take far longer than the budget
+        if deadline is not None:  # a run that would take far longer than the budget
             while time.monotonic() <= deadline:
                 time.sleep(0.005)
             raise SimulationTimeout("the run passed its deadline")
@@ -382,15 +429,17 @@ def test_a_first_evaluation_that_cannot_finish_stops_at_the_limit():
     """With a limit, the first evaluation (which has no point to fall back on) runs against it,
     and a simulation that would outlast it ends the fit with the SimulationTimeout."""
     import time
+
     from bondgraph.diagnosis.projection import projected_fit, simulation_deadline, time_budget
     from bondgraph.numerics.simulate import SimulationTimeout
+
     t = np.linspace(0.0, 1.0, 200)
     seen = []
 
     def columns(z, rows):
         deadline = simulation_deadline()
         seen.append(deadline)
-        while time.monotonic() <= deadline:     # a run far longer than the limit
+        while time.monotonic() <= deadline:  # a run far longer than the limit
             time.sleep(0.005)
         raise SimulationTimeout("the run passed its deadline")
 
@@ -428,6 +477,7 @@ def test_a_candidate_whose_simulation_passes_the_limit_is_reported_failed():
 
 def test_the_second_fold_holds_out_other_blocks():
     from bondgraph.fit.identify import split_masks
+
     t = np.linspace(0.0, 10.0, 30_001)
     fit0, val0 = split_masks(t, 0.3, "blocks", 30)
     fit2, val2 = split_masks(t, 0.3, "blocks", 30, shift=2)
@@ -438,7 +488,9 @@ def test_the_second_fold_holds_out_other_blocks():
 def test_a_sweeping_drive_is_recognised():
     """Chirps (log and linear, up and down) sweep; drives whose blocks look alike do not."""
     from scipy import signal
+
     from bondgraph.diagnosis.context import drive_sweep
+
     fs = 20_000.0
     t = np.arange(0.0, 3.0, 1 / fs)
     rng = np.random.default_rng(7)
@@ -447,10 +499,10 @@ def test_a_sweeping_drive_is_recognised():
         first, last = drive_sweep(u, fs, 30)
         lo, hi = sorted((first, last))
         assert lo < max(f0, f1) / 10 and hi > max(f0, f1) / 2 and (first < last) == (f0 < f1)
-        assert drive_sweep(5.0 - 3.0 * u, fs, 30) == pytest.approx((first, last))   # units, sign, offset
+        assert drive_sweep(5.0 - 3.0 * u, fs, 30) == pytest.approx((first, last))  # units, sign, offset
         assert drive_sweep(u[::-1], fs, 30) == pytest.approx((last, first))
     assert drive_sweep(np.zeros(t.size), fs, 30) is None
-    steps = np.repeat(rng.uniform(-1, 1, 30), t.size // 30 + 1)[:t.size]
+    steps = np.repeat(rng.uniform(-1, 1, 30), t.size // 30 + 1)[: t.size]
     noise = signal.lfilter(*signal.butter(4, 0.1), rng.standard_normal(t.size))
     bursts = np.sin(2 * np.pi * 300 * t) * (np.sin(2 * np.pi * 0.5 * t) > 0) * np.minimum(t, 1.0)
     triangle = signal.sawtooth(2 * np.pi * 2 * t, 0.5)
@@ -464,13 +516,15 @@ def test_a_chirp_through_a_resonance_is_held_out_in_part_only():
     blocks it spans 0.09-3.3 (the resonance fitted only, or held out only); with the sweep's
     shorter blocks 0.24-1.7, the worst case 40 % closer to 1 on a log scale."""
     from scipy import signal
+
     from bondgraph.diagnosis.context import drive_sweep
     from bondgraph.fit.identify import split_masks
+
     fs, w = 20_000.0, 2 * np.pi * 500
     t = np.arange(0.0, 3.0, 1 / fs)
     worst = {}
     for q in (30, 100):
-        resonator = signal.bilinear([w ** 2], [1, w / q, w ** 2], fs)
+        resonator = signal.bilinear([w**2], [1, w / q, w**2], fs)
         for f0 in range(40, 140, 8):
             u = signal.chirp(t, f0, t[-1], 5000, method="logarithmic")
             assert drive_sweep(u, fs, config.get("diagnosis.blocks")) is not None
@@ -508,8 +562,6 @@ def test_a_mode_on_the_models_own_must_beat_the_reference():
     assert not weak.passed
 
 
-
-
 def steps_through_saturation(sat=0.6, levels=9, n=6000, fs=500.0, noise=0.002, seed=3):
     """The lag behind a static saturation u_eff = sat·tanh(u/sat), driven by steps held at
     ``levels`` levels in random order, each reached once: no memory anywhere."""
@@ -526,12 +578,15 @@ def test_a_saturation_on_steps_is_not_named_hysteresis():
     saturation is named, at no step of the chain hysteresis (it was its second step when
     the twin was skipped on steps)."""
     from library.extensions.drive import InputHysteresis, InputSaturation
-    rep = diagnose(lag_model(), steps_through_saturation(), candidates=[InputHysteresis(), InputSaturation()],
-                   workers=1)
+
+    rep = diagnose(
+        lag_model(), steps_through_saturation(), candidates=[InputHysteresis(), InputSaturation()], workers=1
+    )
     assert rep.causes == ["saturation"]
     pi = next(c for c in rep.steps[0].candidates if c.cause == "hysteresis")
     assert pi.gain > 3 and pi.gain_static < 1.0 and not pi.passed
     assert "static curve" in pi.verdict
+
 
 def test_an_asymmetric_saturation_is_named_with_the_gain_of_the_shape():
     """The lag behind a saturation that bends sooner at one end of a bipolar sine's range than
@@ -541,6 +596,7 @@ def test_an_asymmetric_saturation_is_named_with_the_gain_of_the_shape():
     even term explains (within 3 %), with three parameters; the operator's loops do not beat
     the static curve."""
     from library.extensions.drive import InputHysteresis, InputSaturation
+
     rng = np.random.default_rng(3)
     t = np.arange(6000) / 500.0
     u = np.sin(2 * np.pi * 1.7 * t)
@@ -562,6 +618,7 @@ def test_a_strong_saturation_under_a_sine_is_not_named_hysteresis():
     26x: its quintic leans against its cubic as the tanh's does (a3 = 0.86 ≥ 0, a3 + a5 =
     0.49 ≥ 0); with both coefficients held non-negative it gained 5.6x (a5 on its bound)."""
     from library.extensions.drive import InputHysteresis, InputSaturation
+
     rng = np.random.default_rng(3)
     t = np.arange(6000) / 500.0
     u = np.sin(2 * np.pi * 1.7 * t)
@@ -584,6 +641,7 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     from bondgraph.diagnosis.calibration import calibrate
     from bondgraph.diagnosis.context import Context
     from library.extensions.modes import mode_implausible
+
     rng = np.random.default_rng(7)
     n, fs = 6000, 500.0
     t = np.arange(n) / fs
@@ -593,7 +651,7 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     ctx = Context(lag_model(), Dataset(t, {"u": u, "y": y + rng.normal(0, 0.01, n)}))
     state, cal, _ = calibrate(ctx)
     view = View(ctx, state, cal.free)
-    high = 0.3 * view.fs   # the record may be decimated: well inside its band
+    high = 0.3 * view.fs  # the record may be decimated: well inside its band
     assert high > 20.0 and view.coherence_near(2 * np.pi * 3.1) > 0.99
     assert view.coherence_near(2 * np.pi * high) < view.resolved_coherence
     assert "does not resolve the response near" in mode_implausible(view, 2 * np.pi * high, 0.02)
@@ -601,6 +659,7 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     # a mode up there is still named when what it explains lies where the record resolves the
     # response (its skirt in the drive's band), not when it explains the noise near itself
     from scipy import signal
+
     cut = lambda kind, f: signal.filtfilt(*signal.butter(4, f / (view.fs / 2), kind), view.residual)
     skirt = state.prediction + cut("low", 5.0)
     noise = state.prediction + cut("high", 0.6 * high)
@@ -628,11 +687,16 @@ def test_ctrl_c_stops_diagnosis_and_workers(tmp_path):
     d = read_csv(P885)
     reps = 6  # a long record, so that the workers are busy when the signal comes
     t = np.arange(len(d) * reps) / 200.0
-    rows = "".join(f"{a:.4f},{b:.6g},{c:.6g}\n" for a, b, c in zip(t, np.tile(d.column("V"), reps),
-                                                                   np.tile(d.column("x"), reps)))
+    rows = "".join(
+        f"{a:.4f},{b:.6g},{c:.6g}\n" for a, b, c in zip(t, np.tile(d.column("V"), reps), np.tile(d.column("x"), reps))
+    )
     path.write_text("t,V,x\n" + rows)
-    proc = subprocess.Popen([sys.executable, "-m", "bondgraph", "diagnose", str(MODELS / "stack.py"), str(path),
-                             "--workers", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bondgraph", "diagnose", str(MODELS / "stack.py"), str(path), "--workers", "2"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.time() + 300
     kids = []
     while time.time() < deadline and len(kids) < 2:
@@ -672,6 +736,7 @@ def apa_behind_amplifier_pole(tau=1e-3, fs=10_000.0, T=0.6, noise=2e-3, seed=5):
     stroke.  The pole is filtered exactly (scipy.signal.lsim on a 20× finer grid), the
     actuator integrated by the compiled solver."""
     from scipy import signal as sig
+
     lm = load_model(MODELS / "apa120ml.py", {"K": 10.77e6 * 1.1, "c": 3000.0 * 0.6})
     tf = np.arange(int(T * fs * 20)) / (fs * 20)
     V = 60 + 40 * sig.chirp(tf, 5.0, T, 3000.0, method="logarithmic")
@@ -686,11 +751,11 @@ def test_an_amplifier_pole_hidden_by_implausible_values_is_named():
     lm = load_model(MODELS / "apa120ml.py")
     data = apa_behind_amplifier_pole()
     rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1, chain=False)
-    assert rep.calibration["outside_tolerance"]          # the best linear fit needs an implausible device
+    assert rep.calibration["outside_tolerance"]  # the best linear fit needs an implausible device
     assert rep.cause == "electrical-rc", rep.steps[0].why
     named = next(c for c in rep.steps[0].candidates if c.passed and c.cause == "electrical-rc")
     assert named.against == "plausible"
-    assert rep.unexplained == ""                         # the named input stage accounts for it
+    assert rep.unexplained == ""  # the named input stage accounts for it
     # the chain's gain is counted from the plausible device it was fitted on, not from the free
     # calibration whose implausible values the stage replaces (against which it may be below 1)
     assert rep.baseline == "plausible"
@@ -704,9 +769,16 @@ def test_an_implausible_device_that_no_candidate_explains_is_said_so():
     says that the calibrated device stays outside its tolerance unexplained (in the text and
     the JSON), naming the parameters, instead of a bare `none`."""
     from library.extensions import InputSaturation
+
     lm = load_model(MODELS / "apa120ml.py")
-    rep = diagnose(lm.model, apa_behind_amplifier_pole(), **model_file_options(lm.module), workers=1,
-                   chain=False, candidates=[InputSaturation()])
+    rep = diagnose(
+        lm.model,
+        apa_behind_amplifier_pole(),
+        **model_file_options(lm.module),
+        workers=1,
+        chain=False,
+        candidates=[InputSaturation()],
+    )
     outside = rep.calibration["outside_tolerance"]
     assert rep.cause == "none" and outside
     assert all(f"{k} ×" in rep.unexplained for k in outside)
@@ -743,6 +815,7 @@ def t215_slow_sine(delay_samples=3.0, fs=50_000.0, T=5.0, f=8.6, amp=34.0, level
     behind the drive; noise ``level`` × stroke, 56 % of its power a slow AR(1) drift (0.84 Hz
     corner).  The diagnosis decimates it ×57."""
     from scipy.signal import lfilter
+
     lm0 = load_model(MODELS / "bimorph_t215.py")
     om, ze = lm0.model.parameters["omega_1"][1], lm0.model.parameters["zeta_1"][1]
     lm = load_model(MODELS / "bimorph_t215.py", {"omega_1": 0.96 * om, "zeta_1": 1.15 * ze})
@@ -751,7 +824,7 @@ def t215_slow_sine(delay_samples=3.0, fs=50_000.0, T=5.0, f=8.6, amp=34.0, level
     x = np.interp(t - delay_samples / fs, t, x)
     rng = np.random.default_rng(seed)
     rho = np.exp(-2 * np.pi * 0.84 / fs)
-    drift = lfilter([np.sqrt(1 - rho ** 2)], [1.0, -rho], rng.standard_normal(t.size))
+    drift = lfilter([np.sqrt(1 - rho**2)], [1.0, -rho], rng.standard_normal(t.size))
     noise = np.sqrt(0.44) * rng.standard_normal(t.size) + np.sqrt(0.56) * drift
     return Dataset(t, {"V": amp * np.sin(2 * np.pi * f * t), "x": x + level * np.ptp(x) * noise})
 
@@ -803,10 +876,15 @@ def t215_null_noise(fs=50_000.0, T=1.0, level=3e-3, seed=3):
     second mode 5 % low at 0.4 of its damping (nothing else), driven by noise band-limited to
     10 kHz, ±30 V RMS; white noise ``level`` × stroke."""
     from scipy import signal as sig
+
     lm0 = load_model(MODELS / "bimorph_t215.py")
     nominal = {k: lm0.model.parameters[k][1] for k in ("omega_1", "zeta_1", "omega_2", "zeta_2")}
-    true = {"omega_1": 0.94 * nominal["omega_1"], "zeta_1": 0.5 * nominal["zeta_1"],
-            "omega_2": 0.95 * nominal["omega_2"], "zeta_2": 0.4 * nominal["zeta_2"]}
+    true = {
+        "omega_1": 0.94 * nominal["omega_1"],
+        "zeta_1": 0.5 * nominal["zeta_1"],
+        "omega_2": 0.95 * nominal["omega_2"],
+        "zeta_2": 0.4 * nominal["zeta_2"],
+    }
     lm = load_model(MODELS / "bimorph_t215.py", true)
     t = np.arange(int(T * fs)) / fs
     rng = np.random.default_rng(seed)
@@ -849,8 +927,9 @@ def test_the_calibration_goes_on_until_it_converges():
     converged, and the record stays `none`."""
     from truthgen import draw
     from truthgen.families import ROOT
+
     rec = draw(2015, "bench")
-    assert rec.causes == ()                                   # the truth: nothing hidden
+    assert rec.causes == ()  # the truth: nothing hidden
     lm = load_model(ROOT / rec.model, rec.overrides)
     data = Dataset(np.asarray(rec.t), {"V": np.asarray(rec.V), "x": np.asarray(rec.x)})
     rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1)

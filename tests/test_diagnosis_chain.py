@@ -13,17 +13,18 @@ Asserted: hysteresis, then creep (the creep step is credited only with what it a
 hysteresis weights refitted with it); neither is named when absent; the extended bond graph,
 integrated by the compiled solver, reproduces what the exact route scored.
 """
+
 import math
 
 import numpy as np
 import pytest
+from test_diagnose import lag_model
 
 import bondgraph as bg
 from bondgraph import config
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose
 from library.extensions import InputCreep, InputHysteresis, InputSaturation
-from test_diagnose import lag_model
 
 FS, T = 100.0, 60.0
 
@@ -47,6 +48,7 @@ def drive(t):
 def duhem(u, alpha=3.0, b=0.3, kappa=1.5):
     """Coleman–Hodgdon: dz = α|du|(f(u) − z) + b du, f = tanh(κ(2u − 1))/tanh κ, from the state
     after a sweep from u = 1 down to u[0]; sub-stepped to 0.002 in u."""
+
     def f(x):
         return math.tanh(kappa * (2 * x - 1)) / math.tanh(kappa)
 
@@ -66,7 +68,7 @@ def power_creep(u, t, share=0.12, alpha=0.25):
     """Σ w_j·lag_j(u), τ_j 8 per decade from 0.05 s to 600 s, w_j ∝ τ_j^α, Σ w_j(1 − e^(−T/τ_j))
     = ``share``; the cells start at 0 (settled with the drive off before the record)."""
     taus = np.logspace(math.log10(0.05), math.log10(600.0), int(8 * math.log10(600 / 0.05)) + 1)
-    w = taus ** alpha
+    w = taus**alpha
     w *= share / np.sum(w * -np.expm1(-t[-1] / taus))
     dt = t[1] - t[0]
     out = np.zeros_like(u)
@@ -107,8 +109,10 @@ def test_hysteresis_then_creep(compound):
     # creep, is fitted again with the full budget before the step is judged
     bar = config.get("diagnosis.screen_gain")
     assert creep.effort == 1.0
-    assert all(c.effort == 1.0 or (c.effort == config.get("diagnosis.screen_effort") and c.gain < bar)
-               for c in rep.steps[1].candidates)
+    assert all(
+        c.effort == 1.0 or (c.effort == config.get("diagnosis.screen_effort") and c.gain < bar)
+        for c in rep.steps[1].candidates
+    )
     # the hysteresis weights were refitted with the creep cells (the drive is one sum)
     h1 = {k: v for k, v in rep.steps[0].candidates[0].params.items() if k.startswith("H.w")}
     assert any(abs(rep.extended_values[k] - v) > 1e-6 * max(abs(v), 1e-12) for k, v in h1.items())

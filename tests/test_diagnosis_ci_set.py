@@ -16,10 +16,10 @@ records).  This test guards that level: one record
 more may turn wrong (optimiser paths differ slightly between machines) but not two, at most
 one false alarm, and every record is answered well inside the 2-minute goal.
 """
+
 from __future__ import annotations
 
 import pytest
-
 from truthgen import SEEDS, draw
 from truthgen.runner import diagnose_record
 
@@ -31,8 +31,11 @@ def results(tmp_path_factory):
 
 
 def _table(results) -> str:
-    return "\n".join(f"{r['seed']} {r['family']} {r['truth']}: {r['cause']} {r['causes']} "
-                     f"{'right' if r['right'] else 'WRONG'} {r['wall']} s {r['error'] or ''}" for r in results)
+    return "\n".join(
+        f"{r['seed']} {r['family']} {r['truth']}: {r['cause']} {r['causes']} "
+        f"{'right' if r['right'] else 'WRONG'} {r['wall']} s {r['error'] or ''}"
+        for r in results
+    )
 
 
 def test_every_record_is_answered_in_minutes(results):

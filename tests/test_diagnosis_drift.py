@@ -12,21 +12,22 @@ it a straight line competes with the first step's winner, and when the line expl
 the diagnosis solves it as a sensor drift and starts again (benchmarks/README.md, "Sensor
 drift").
 """
+
 from __future__ import annotations
 
 import json
 
 import numpy as np
 import pytest
+from conftest import MODELS
+from test_diagnose import P885, assert_same_chain
+from truthgen import draw
+from truthgen.families import ROOT
 
 from bondgraph.cli import main
 from bondgraph.data import Dataset, read_csv
 from bondgraph.diagnosis import diagnose, model_file_options
 from bondgraph.model.modelfile import load_model
-from conftest import MODELS
-from test_diagnose import P885, assert_same_chain
-from truthgen import draw
-from truthgen.families import ROOT
 
 
 def drifted(data: Dataset, share: float = 0.01) -> tuple[Dataset, float]:
@@ -54,7 +55,7 @@ def test_the_real_record_with_a_drift_gives_the_drift_back_and_the_same_chain():
 
 def test_a_drift_on_an_effect_free_record_is_not_named_an_effect():
     rec = draw(1011, "ci")
-    assert rec.causes == ()                                   # the truth: nothing hidden
+    assert rec.causes == ()  # the truth: nothing hidden
     lm = load_model(ROOT / rec.model, rec.overrides)
     data, rate = drifted(Dataset(np.asarray(rec.t), {"V": np.asarray(rec.V), "x": np.asarray(rec.x)}))
     rep = diagnose(lm.model, data, **model_file_options(lm.module), workers=1, drift=True)
@@ -92,10 +93,12 @@ def test_a_drift_that_explains_as_much_as_the_first_cause_is_solved_as_a_drift()
 
 def test_the_command_line_option_reports_the_drift(tmp_path, capsys):
     """``diagnose --drift --json``: the calibration's ``drift`` is the one solved (x per s)."""
-    data, rate = drifted(read_csv(P885), 0.2)   # the record drifts by itself too, 4e-9 m/s
+    data, rate = drifted(read_csv(P885), 0.2)  # the record drifts by itself too, 4e-9 m/s
     path = tmp_path / "drifting.csv"
-    path.write_text("t,V,x\n" + "".join(f"{a:.4f},{b:.6g},{c:.8g}\n" for a, b, c in
-                                          zip(data.t, data.columns["V"], data.columns["x"])))
+    path.write_text(
+        "t,V,x\n"
+        + "".join(f"{a:.4f},{b:.6g},{c:.8g}\n" for a, b, c in zip(data.t, data.columns["V"], data.columns["x"]))
+    )
     assert main(["diagnose", str(MODELS / "stack.py"), str(path), "--drift", "--json", "--quiet", "--no-chain"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["calibration"]["drift"] == pytest.approx(rate, rel=0.1)

@@ -12,23 +12,33 @@ resonance sits 4 % lower, which a curve on the drive cannot produce and amplitud
 Asserted: the cause is softening, named through the field-dependent stiffness; the same
 record with a constant spring is effect-free.
 """
-import math
 
 import numpy as np
 import sympy as sp
+from conftest import two_level_chirp
+from test_diagnosis_friction import assert_named_through, model_file_like, resonator
 
 import bondgraph as bg
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose
 from bondgraph.diagnosis.rewrite import modify_law
-from library.extensions import (FieldStiffness, FrictionDamping, InputExpansion, InputSaturation, NonlinearDamping,
-                                StiffnessSoftening)
-from conftest import two_level_chirp
-from test_diagnosis_friction import assert_named_through, model_file_like, resonator
+from library.extensions import (
+    FieldStiffness,
+    FrictionDamping,
+    InputExpansion,
+    InputSaturation,
+    NonlinearDamping,
+    StiffnessSoftening,
+)
 
 FS, T = 2000.0, 4.0
-CANDIDATES = [InputSaturation(), InputExpansion(), StiffnessSoftening(), FieldStiffness(),
-              NonlinearDamping(velocity=True)]
+CANDIDATES = [
+    InputSaturation(),
+    InputExpansion(),
+    StiffnessSoftening(),
+    FieldStiffness(),
+    NonlinearDamping(velocity=True),
+]
 
 
 def drive(t):
@@ -64,6 +74,7 @@ def test_after_a_structural_cause_the_field_is_the_models_input():
     the field law is written on the model's input; it was None there and ended the diagnosis
     with an internal error.  The chain is the friction alone."""
     from test_diagnosis_friction import record as friction_record
+
     rep = diagnose(model_file_like(), friction_record(), candidates=[FrictionDamping(), FieldStiffness()], workers=1)
     assert rep.causes == ["nonlinear-damping"], [s.why for s in rep.steps]
     tried = [c for c in rep.steps[1].candidates if c.label == FieldStiffness.label]

@@ -12,10 +12,10 @@ Asserted: the cause is nonlinear damping, named through the friction candidate (
 falls with amplitude, where the cubic forms' rises); the same record without friction is
 effect-free.
 """
+
 import math
 
 import numpy as np
-import pytest
 import sympy as sp
 
 import bondgraph as bg
@@ -32,8 +32,13 @@ def resonator(f=40.0, zeta=0.02):
     k = (2 * math.pi * f) ** 2
     g = bg.Model("resonator", "mass, spring, damper")
     F = g.input("F", "N")
-    g.add(bg.Se("src", F), bg.J1("v"), bg.I("m", 1.0), bg.C("k", g.parameter("kk", 1 / k, "m/N")),
-          bg.R("c", g.parameter("cc", 2 * zeta * math.sqrt(k), "N*s/m")))
+    g.add(
+        bg.Se("src", F),
+        bg.J1("v"),
+        bg.I("m", 1.0),
+        bg.C("k", g.parameter("kk", 1 / k, "m/N")),
+        bg.R("c", g.parameter("cc", 2 * zeta * math.sqrt(k), "N*s/m")),
+    )
     g.chain("src", "v", "m")
     g.bond("v", "k")
     g.bond("v", "c")
@@ -45,13 +50,13 @@ def resonator(f=40.0, zeta=0.02):
 
 def record(friction=True, seed=2):
     t = np.arange(int(T * FS)) / FS
-    u = np.sin(2 * np.pi * (10 * t + 15 * t ** 2))
+    u = np.sin(2 * np.pi * (10 * t + 15 * t**2))
     lin = bg.simulate(resonator(), t, {"F": bg.PiecewiseLinear(t, u)}, rtol=1e-9)
     truth = resonator()
     if friction:
         vpk = float(np.max(np.abs(np.gradient(lin["x"], t))))
         c = 2 * 0.02 * 2 * math.pi * 40.0
-        force = c * vpk * math.pi / 4            # 4F/(π v_pk) = c at the peak velocity
+        force = c * vpk * math.pi / 4  # 4F/(π v_pk) = c at the peak velocity
         vs = 0.01 * vpk
         modify_law(truth, "c", lambda f, old: old + force * 2 / math.pi * sp.atan(f / vs))
     x = bg.simulate(truth, t, {"F": bg.PiecewiseLinear(t, u)}, rtol=1e-9, method="dopri5")["x"]

@@ -5,10 +5,12 @@ eigenvalue problem of the same two masses written by hand: a mass M = 1 kg on a 
 two natural frequencies are those of the hand-written 2-DOF system, the lower one still the
 40 Hz of the whole mass (the total mass is unchanged, none added), and below it the response
 is the unsplit model's."""
+
 import math
 
 import numpy as np
 from scipy import linalg
+from test_diagnosis_friction import resonator
 
 import bondgraph as bg
 from bondgraph.data import Dataset
@@ -18,14 +20,13 @@ from bondgraph.diagnosis.context import Context
 from bondgraph.linear import lti
 from bondgraph.linear.linearize import linearize
 from library.extensions import OutputMode
-from test_diagnosis_friction import resonator
 
 F0, MU, F_SHELL = 40.0, 0.3, 600.0
 
 
 def view_of_resonator():
     t = np.arange(4000) / 2000.0
-    u = np.sin(2 * np.pi * (5 * t + 20 * t ** 2))
+    u = np.sin(2 * np.pi * (5 * t + 20 * t**2))
     y = bg.simulate(resonator(), t, {"F": bg.PiecewiseLinear(t, u)}, rtol=1e-9)["x"]
     ctx = Context(resonator(), Dataset(t, {"F": u, "x": y}))
     state, cal, _ = calibrate(ctx)
@@ -43,12 +44,14 @@ def test_the_split_mass_has_the_two_mass_modes_of_the_same_masses_by_hand():
     w2 = linalg.eigvals(np.array([[k + k2, -k2], [-k2, k2]]), np.diag([m1, m2])).real
     expected = np.sort(np.sqrt(w2))
     np.testing.assert_allclose(lin.natural_frequencies, expected, rtol=2e-3)
-    assert abs(expected[0] / (2 * math.pi * F0) - 1) < 0.05      # still the whole mass's mode
+    assert abs(expected[0] / (2 * math.pi * F0) - 1) < 0.05  # still the whole mass's mode
     # below the whole mass's mode the split leaves the response as it was
     base = linearize(bg.derive(view.rewrite()), "F", "x")
     w = 2 * math.pi * np.array([5.0, 20.0])
-    ratio = np.abs(lti.frequency_response(lin.A, lin.B, lin.C, lin.D, w)
-                   / lti.frequency_response(base.A, base.B, base.C, base.D, w))
+    ratio = np.abs(
+        lti.frequency_response(lin.A, lin.B, lin.C, lin.D, w)
+        / lti.frequency_response(base.A, base.B, base.C, base.D, w)
+    )
     np.testing.assert_allclose(ratio, 1.0, atol=0.02)
 
 
@@ -61,8 +64,9 @@ def test_a_term_named_after_the_split_is_held_on_the_split_model():
     term, and the chain's model integrated."""
     from bondgraph.diagnosis.engine import advance, run_candidate
     from library.extensions import StiffnessSoftening
+
     t = np.arange(4000) / 2000.0
-    u = np.sin(2 * np.pi * (5 * t + 40 * t ** 2))
+    u = np.sin(2 * np.pi * (5 * t + 40 * t**2))
     clean = view_of_resonator()
     truth = OutputMode().build(clean, clean.rewrite(), 2 * math.pi * 120.0, 0.02, MU)
     y = bg.simulate(truth, t, {"F": bg.PiecewiseLinear(t, u)}, rtol=1e-9)["x"]

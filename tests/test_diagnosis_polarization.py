@@ -14,17 +14,18 @@ model says c 20 % lower and K 10 % higher.
 Asserted: the cause is saturation, named through the term on the dipole capacitance, which
 gains more than the drive-side curve; the same record with a linear dipole is effect-free.
 """
+
 import numpy as np
 import sympy as sp
+from conftest import MODELS, two_level_chirp
+from test_diagnosis_friction import assert_named_through
 
 import bondgraph as bg
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose, model_file_options
 from bondgraph.diagnosis.rewrite import modify_law
 from bondgraph.model.modelfile import load_model
-from conftest import MODELS, two_level_chirp
 from library.extensions import InputHysteresis, InputRC, InputSaturation, PolarizationSaturation
-from test_diagnosis_friction import assert_named_through
 
 FS, T = 10_000.0, 1.0
 CANDIDATES = [InputSaturation(), PolarizationSaturation(), InputRC(), InputHysteresis()]
@@ -43,7 +44,7 @@ def record(saturating=True, seed=5):
     if saturating:
         table = {str(k): float(v) for k, v in truth.parameter_table().items()}
         kx, l = table["kx"], table["l"]
-        ps = 1.6 * 120.0 / l / kx       # the dipole at the peak field, linear, is 1/1.6 of p_s
+        ps = 1.6 * 120.0 / l / kx  # the dipole at the peak field, linear, is 1/1.6 of p_s
         modify_law(truth, "stack.C_NL", lambda q, old: kx * ps * sp.atanh(q / ps))
     res = bg.simulate(truth, t, {"V": bg.PiecewiseLinear(t, u)}, rtol=1e-9, method="dopri5")
     x = res["x"]

@@ -12,23 +12,24 @@ named with gain 1.19 (it explained 78 % of what the reference then explained, cr
 explain 90 %).  Since the residualised modes keep their lag (:func:`bondgraph.linear.lti.residualise`)
 that phase error is gone and creep gains 1.08.
 """
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from truthgen import draw
+from truthgen.families import ROOT
 
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose, model_file_options
-from bondgraph.diagnosis.decision import judge, Comparison
+from bondgraph.diagnosis.decision import Comparison, judge
 from bondgraph.model.modelfile import load_model
-from truthgen import draw
-from truthgen.families import ROOT
 
 
 @pytest.fixture(scope="module")
 def single_sine_null():
     rec = draw(3372, "bench")
-    assert rec.causes == ()                                   # the truth: nothing hidden
+    assert rec.causes == ()  # the truth: nothing hidden
     assert rec.drive["kind"] == "sine"
     lm = load_model(ROOT / rec.model, rec.overrides)
     data = Dataset(np.asarray(rec.t), {"V": np.asarray(rec.V), "x": np.asarray(rec.x)})

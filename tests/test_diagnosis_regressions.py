@@ -22,6 +22,7 @@ diagnosed with the candidates the error was about, as the command line would.
   harmonics as well as the saturation and was named higher-mode.  Asserted: such a mode, below
   half the model's lowest mode, is refused as implausible; saturation named.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -59,7 +60,7 @@ def test_a_bound_stuck_element_is_held_and_the_softening_named():
 def test_the_static_twin_does_not_extrapolate_a_sparse_knee():
     rep, by = run(3447, [InputBoucWen(), InputSaturation()], "saturation", "tanh")
     bw = by[InputBoucWen.label]
-    assert bw.gain_static == pytest.approx(1.4, abs=0.4)     # was 478
+    assert bw.gain_static == pytest.approx(1.4, abs=0.4)  # was 478
     assert "no more than a static curve" in bw.verdict
     assert rep.cause == "saturation", rep.steps[0].why
 

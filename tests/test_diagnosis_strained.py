@@ -17,21 +17,22 @@ where the linear record's went (46 Hz, damping on its upper bound) reaches the f
 from the record's own calibration, within 10 %: it starts from the model file's values too
 (from the bent values alone it ends 29× worse).
 """
+
 import math
 from dataclasses import replace
 
 import numpy as np
 import pytest
 import sympy as sp
+from test_diagnosis_friction import resonator
 
 import bondgraph as bg
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import View, diagnose, load_candidates
 from bondgraph.diagnosis.calibration import calibrate, score
-from bondgraph.diagnosis.context import Context, State
+from bondgraph.diagnosis.context import Context
 from bondgraph.diagnosis.rewrite import modify_law
 from library.extensions import StiffnessSoftening
-from test_diagnosis_friction import resonator
 
 FS, T = 2000.0, 4.0
 AMPS = (1.0, 0.25, 0.6, 0.1)
@@ -69,7 +70,7 @@ def test_a_structure_fit_from_a_calibration_bent_to_its_bound_starts_from_the_mo
     ctx = Context(resonator(38.0, 0.01), record(softening=0.3))
     state, cal, _ = calibrate(ctx)
     assert not cal.at_bounds
-    bent = dict(state.values, kk=1 / (2 * math.pi * 46.0) ** 2, cc=cal.bounds["cc"][1])   # 46 Hz, damping on its bound
+    bent = dict(state.values, kk=1 / (2 * math.pi * 46.0) ** 2, cc=cal.bounds["cc"][1])  # 46 Hz, damping on its bound
     raw = ctx.ident.predict(bent)
     g, b, *_ = score(ctx, raw)
     strained = replace(state, values=bent, raw=raw, gain=g, offset=b)
@@ -80,5 +81,5 @@ def test_a_structure_fit_from_a_calibration_bent_to_its_bound_starts_from_the_mo
         fits[name] = (view, view.score(ext.prediction)[3])
     assert fits["bent"][0].strained() == ["cc"] and fits["device"][0].strained() == []
     before = fits["device"][0].score(state.raw)[3]
-    assert fits["device"][1] < before / 3                    # the softening explains the record
-    assert fits["bent"][1] < 1.1 * fits["device"][1]          # and is found from the bent start too
+    assert fits["device"][1] < before / 3  # the softening explains the record
+    assert fits["bent"][1] < 1.1 * fits["device"][1]  # and is found from the bent start too

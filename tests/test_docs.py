@@ -1,5 +1,6 @@
 """Examples are tests: the code in docs/ runs and does what the text says; the settings table
 covers the framework's settings; the repository explains itself."""
+
 from __future__ import annotations
 
 import re
@@ -7,13 +8,13 @@ import types
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
 import bondgraph as bg
 from bondgraph import config
 from bondgraph.cli import main
 from bondgraph.data import Dataset
 from bondgraph.model.modelfile import load_model
-from conftest import ROOT
 
 DOCS = ROOT / "docs"
 
@@ -37,8 +38,8 @@ def test_model_file_example_is_a_damped_oscillator(tmp_path, capsys):
     x = bg.simulate(lm.model, t, lm.experiment.inputs, rtol=1e-9)["x"]
     m, k, c = 1.0, 100.0, 2.0  # step response of m x'' + c x' + k x = 1
     wn, z = np.sqrt(k / m), c / (2 * np.sqrt(k * m))
-    wd = wn * np.sqrt(1 - z ** 2)
-    exact = (1 - np.exp(-z * wn * t) * (np.cos(wd * t) + z / np.sqrt(1 - z ** 2) * np.sin(wd * t))) / k
+    wd = wn * np.sqrt(1 - z**2)
+    exact = (1 - np.exp(-z * wn * t) * (np.cos(wd * t) + z / np.sqrt(1 - z**2) * np.sin(wd * t))) / k
     assert np.max(np.abs(x - exact)) < 1e-6 / k
 
 
@@ -77,6 +78,7 @@ def test_data_check_example_flags_micrometres():
 
 def test_command_page_lists_every_command():
     from bondgraph.cli.registry import COMMANDS  # filled when bondgraph.cli is imported (above)
+
     text = (DOCS / "command-line.md").read_text()
     assert COMMANDS and all(re.search(rf"^\| `{name}[ `]", text, re.M) for name in COMMANDS), sorted(COMMANDS)
 
@@ -90,9 +92,13 @@ def test_settings_page_lists_the_framework_settings():
 
 def test_docs_cite_the_papers_in_full_and_the_readme_links_them():
     refs = (DOCS / "references.md").read_text()
-    for author, venue in (("Rodriguez-Fortun", "(2010) 303–314"), ("Ghafarirad", "doi:10.1080/13873954.2014.906472"),
-                          ("Shahabi", "doi:10.1016/j.crme.2019.10.007"), ("Wood", "Barcelona, 2005"),
-                          ("Hassani", "Mechanical Systems and Signal Processing")):
+    for author, venue in (
+        ("Rodriguez-Fortun", "(2010) 303–314"),
+        ("Ghafarirad", "doi:10.1080/13873954.2014.906472"),
+        ("Shahabi", "doi:10.1016/j.crme.2019.10.007"),
+        ("Wood", "Barcelona, 2005"),
+        ("Hassani", "Mechanical Systems and Signal Processing"),
+    ):
         assert author in refs and venue in refs
     for page in DOCS.glob("*.md"):
         text = page.read_text()
@@ -102,7 +108,20 @@ def test_docs_cite_the_papers_in_full_and_the_readme_links_them():
     assert "docs/" in (ROOT / "README.md").read_text()
 
 
-@pytest.mark.parametrize("field", ["cause", "gain", "baseline_rms", "extended_rms", "candidates", "causes",
-                                   "steps", "natural_frequencies_rad_s", "rhp_zeros", "dc_gain"])
+@pytest.mark.parametrize(
+    "field",
+    [
+        "cause",
+        "gain",
+        "baseline_rms",
+        "extended_rms",
+        "candidates",
+        "causes",
+        "steps",
+        "natural_frequencies_rad_s",
+        "rhp_zeros",
+        "dc_gain",
+    ],
+)
 def test_json_page_describes_the_fields(field):
     assert f"`{field}`" in (DOCS / "json-outputs.md").read_text()

@@ -6,6 +6,7 @@ bond graph written out here with a cable between amplifier and actuator modelled
 four sections, each a series inductance and resistance and a shunt capacitance (distributed
 L, R and C), off-nominal stiffness and damping, integrated by the compiled solver on a grid 20×
 finer than the record; drive a chirp 5 Hz → 3 kHz about 60 V; white sensor noise."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -15,7 +16,7 @@ import pytest
 from scipy import signal
 
 import bondgraph as bg
-from bondgraph import C, I, J0, J1, Model, R, Se
+from bondgraph import J0, J1, C, I, Model, R, Se
 from bondgraph.data import Dataset
 from bondgraph.diagnosis import diagnose
 from bondgraph.diagnosis.engine import model_file_options
@@ -35,13 +36,21 @@ def apa_behind_cable() -> Model:
     """The APA-120ML (model file's Table 1 values, K and c above) behind the cable ladder."""
     g = Model("APA-120ML behind a cable")
     V = g.input("V", "V", "amplifier voltage")
-    g.add(piezo_layer("stack", l=1.0e-4, a=0.0474, K=K, R_NL=c,
-                      polarization=lambda comp, n: linear_polarization(comp, n, 5e12)))
+    g.add(
+        piezo_layer(
+            "stack", l=1.0e-4, a=0.0474, K=K, R_NL=c, polarization=lambda comp, n: linear_polarization(comp, n, 5e12)
+        )
+    )
     g.add(Se("amp", V), J1("i"), R("Re", 4.7), I("M", 0.160))
     chain = ["amp", "i"]
     for k in range(SECTIONS):
-        g.add(J1(f"s{k}"), I(f"L{k}", CABLE_L / SECTIONS), R(f"R{k}", CABLE_R / SECTIONS), J0(f"n{k}"),
-              C(f"C{k}", CABLE_C / SECTIONS))
+        g.add(
+            J1(f"s{k}"),
+            I(f"L{k}", CABLE_L / SECTIONS),
+            R(f"R{k}", CABLE_R / SECTIONS),
+            J0(f"n{k}"),
+            C(f"C{k}", CABLE_C / SECTIONS),
+        )
         g.bond(f"s{k}", f"L{k}")
         g.bond(f"s{k}", f"R{k}")
         g.bond(f"n{k}", f"C{k}")
@@ -66,7 +75,7 @@ def test_the_drive_loop_is_found_only_where_the_input_is_a_voltage_source():
     apa = load_model(MODELS / "apa120ml.py").model
     assert drive_loop(apa, "V") == ("i", ["Re"])
     assert parameters_of(apa, "Re") == ["Re"] and parameters_of(apa, "amp") == []
-    bimorph = load_model(MODELS / "bimorph_t215.py").model   # the voltage enters as modal forces
+    bimorph = load_model(MODELS / "bimorph_t215.py").model  # the voltage enters as modal forces
     assert drive_loop(bimorph, next(iter(bimorph.inputs))) is None
 
 
@@ -85,7 +94,7 @@ def test_a_cable_in_the_drive_loop_is_named_with_its_inductance(cable_report):
     # sets C = 1/(l^2 kx), is calibrated within its tolerance): measured 3 % and 4 % off
     v = rep.extended_values
     capacitance = 1 / (v["l"] ** 2 * 5e12)
-    truth = 1 / (1e-4 ** 2 * 5e12)
+    truth = 1 / (1e-4**2 * 5e12)
     assert named.params["loop.L"] * capacitance == pytest.approx(CABLE_L * truth, rel=0.1)
     assert named.params["Re"] * capacitance == pytest.approx((4.7 + CABLE_R) * truth, rel=0.1)
 
@@ -94,4 +103,4 @@ def test_the_loop_fits_better_than_a_stage_that_does_not_feel_the_actuators_curr
     by_label = {r.label: r for r in cable_report.steps[0].candidates}
     loop = by_label[LoopInductance.label]
     stage = next(r for r in cable_report.steps[0].candidates if r.label.startswith("series R-L"))
-    assert loop.rms_validation < 0.9 * stage.rms_validation   # measured 0.80
+    assert loop.rms_validation < 0.9 * stage.rms_validation  # measured 0.80

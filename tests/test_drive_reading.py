@@ -13,6 +13,7 @@ Truths here: the APA-120ML model file itself at off-nominal values (nothing hidd
 noise up to 0.4 fs, simulated by the compiled integrator (an independent route) from a drive
 that is linear between the recorded samples, or from a band-limited drive on a grid 8× finer
 of which every 8th sample is recorded."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -74,7 +75,7 @@ def test_each_reading_reproduces_the_integrated_truth_of_its_kind(reading):
         pred = ctx.ident.predict(values)
         errors[r] = np.sqrt(np.mean((pred - data.column("x"))[1000:] ** 2)) / np.std(data.column("x"))
     other = "band-limited" if reading == "linear" else "linear"
-    assert errors[reading] < 4e-3, errors          # 0.1 % (linear), 0.3 % (band-limited: the FIR)
+    assert errors[reading] < 4e-3, errors  # 0.1 % (linear), 0.3 % (band-limited: the FIR)
     assert errors[other] > 10 * errors[reading], errors  # 4 %: the sinc² factor
 
 

@@ -1,6 +1,7 @@
 """The element protocol: a new kind of element, defined here and nowhere in the framework,
 works end to end (causality, equations, printout, simulation, linearisation); causality does
 not depend on the order in which elements and bonds were added."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -8,12 +9,12 @@ import pytest
 import sympy as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_properties import Spec, build, graphs
 
 import bondgraph as bg
-from bondgraph.model.elements import DISSIPATION, Element, sympify
 from bondgraph import config
 from bondgraph.linear.linearize import linearize
-from test_properties import Spec, build, graphs
+from bondgraph.model.elements import DISSIPATION, Element, sympify
 
 
 class CubicDamper(Element):
@@ -34,7 +35,7 @@ class CubicDamper(Element):
     def equations(self, ports, eqs):
         p = ports["p"]
         if p.sets_effort:
-            p.set_effort(self.c * p.f_in ** 3)
+            p.set_effort(self.c * p.f_in**3)
         else:
             p.set_flow_in(sp.sign(p.e) * sp.Abs(p.e / self.c) ** sp.Rational(1, 3))
 
@@ -70,9 +71,9 @@ def test_new_kind_derives_prints_and_simulates_against_the_analytic_solution():
     # m dv/dt = -c v³  ->  v(t) = v0 / sqrt(1 + 2 c v0² t / m)
     t = np.linspace(0.0, 2.0, 401)
     res = bg.simulate(eqs, t, rtol=1e-10)
-    exact = v0 / np.sqrt(1 + 2 * c * v0 ** 2 * t / m)
+    exact = v0 / np.sqrt(1 + 2 * c * v0**2 * t / m)
     assert np.max(np.abs(res["v"] - exact)) < 1e-7 * v0
-    assert np.max(np.abs(res["Fd"] - c * exact ** 3)) < 1e-6 * c * v0 ** 3
+    assert np.max(np.abs(res["Fd"] - c * exact**3)) < 1e-6 * c * v0**3
 
 
 def test_new_kind_in_its_other_causality_and_in_a_model_file_pipeline():
@@ -97,7 +98,7 @@ def test_new_kind_linearizes_to_its_slope_at_the_operating_point():
     eqs = bg.derive(mass_on_cubic_damper(m, c, k=k, v0=v0))
     lin = linearize(eqs, "F", "v", x_op={"p_m": m * v0, "q_k": 0.0})
     i = lin.states.index("p_m")
-    assert lin.A[i, i] == pytest.approx(-3 * c * v0 ** 2 / m)   # d(-c (p/m)³)/dp at p = m v0
+    assert lin.A[i, i] == pytest.approx(-3 * c * v0**2 / m)  # d(-c (p/m)³)/dp at p = m v0
     assert lin.A[i, lin.states.index("q_k")] == pytest.approx(-k)
 
 
@@ -116,10 +117,10 @@ def parallel_capacitors(nonlinear_first: bool):
     g = bg.Model("par")
     g.add(bg.Sf("src", g.input("i")), bg.J0("n"))
     lin = bg.C("lin", 2.0)
-    nl = bg.C("nl", law=lambda q: q + q ** 3)
+    nl = bg.C("nl", law=lambda q: q + q**3)
     g.add(*((nl, lin) if nonlinear_first else (lin, nl)))
     g.bond("src", "n")
-    for e in (("nl", "lin") if nonlinear_first else ("lin", "nl")):
+    for e in ("nl", "lin") if nonlinear_first else ("lin", "nl"):
         g.bond("n", e)
     g.output("e", g.effort("n"))
     return g
@@ -134,8 +135,7 @@ def test_nonlinear_capacitor_in_parallel_is_accepted_in_either_order():
 
 def test_a_true_conflict_names_the_element_that_refuses():
     g = bg.Model("rigid")
-    g.add(bg.Sf("src", 1.0), bg.J0("n"), bg.C("a", law=lambda q: q + q ** 3),
-          bg.C("b", law=lambda q: q + q ** 5))
+    g.add(bg.Sf("src", 1.0), bg.J0("n"), bg.C("a", law=lambda q: q + q**3), bg.C("b", law=lambda q: q + q**5))
     g.bond("src", "n")
     g.bond("n", "a")
     g.bond("n", "b")
@@ -149,8 +149,10 @@ def test_causality_and_equations_do_not_depend_on_insertion_order(data):
     """Same graph, elements and bonds added in another order: the same states, the same
     derivative-causality set, and the same state equations (up to the names of bond variables)."""
     spec = data.draw(graphs(max_junctions=4, max_attached=2), label="graph")
-    shuffled = Spec(data.draw(st.permutations(spec.elements), label="elements"),
-                    data.draw(st.permutations(spec.bonds), label="bonds"))
+    shuffled = Spec(
+        data.draw(st.permutations(spec.elements), label="elements"),
+        data.draw(st.permutations(spec.bonds), label="bonds"),
+    )
     try:
         ref = bg.derive(build(spec))
     except bg.BondGraphError as exc:
@@ -213,8 +215,9 @@ def oscillator(m=0.01, k=400.0, c=0.05, q0=None):
     F = g.input("F", "N")
     K = g.parameter("k", k)
     spring = bg.C("k", 1 / K) if q0 is None else bg.C("k", law=lambda q: K * q0 * sp.tanh(q / q0))
-    g.add(bg.Se("force", F), bg.J1("v"), bg.I("m", g.parameter("m", m)), spring,
-          ViscousDamper("d", g.parameter("c", c)))
+    g.add(
+        bg.Se("force", F), bg.J1("v"), bg.I("m", g.parameter("m", m)), spring, ViscousDamper("d", g.parameter("c", c))
+    )
     g.bond("force", "v")
     for e in ("m", "k", "d"):
         g.bond("v", e)
@@ -236,7 +239,7 @@ def test_diagnosis_on_a_model_with_a_new_kind(q0, cause):
     res = bg.simulate(oscillator(k=440.0, c=0.06, q0=q0), t, {"F": bg.Chirp(0.3, 5.0, 60.0, 2.0)}, rtol=1e-9)
     noise = 1e-3 * np.std(res["x"]) * np.random.default_rng(0).standard_normal(t.size)
     data = Dataset(t, {"F": res["F"], "x": res["x"] + noise})
-    report = diagnose(oscillator(), data, workers=1,
-                      candidates=[c for c in load_candidates() if c.cause == "softening"])
+    report = diagnose(
+        oscillator(), data, workers=1, candidates=[c for c in load_candidates() if c.cause == "softening"]
+    )
     assert report.causes == cause
-

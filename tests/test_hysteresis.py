@@ -1,9 +1,7 @@
 """Hysteresis operators (library/hysteresis/): operator properties, contracts, inverse, fits."""
+
 from __future__ import annotations
 
-import math
-
-import numba
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -75,15 +73,20 @@ inputs = st.lists(st.floats(-2.0, 2.0, **finite), min_size=2, max_size=60)
 
 # --- rate independence, memory properties ---------------------------------------------------
 
+
 @settings(max_examples=40, deadline=None)
-@given(knots=st.lists(st.floats(-1.5, 1.5, **finite), min_size=2, max_size=8),
-       power=st.floats(0.3, 3.0), n_a=st.integers(2, 30), n_b=st.integers(2, 30))
+@given(
+    knots=st.lists(st.floats(-1.5, 1.5, **finite), min_size=2, max_size=8),
+    power=st.floats(0.3, 3.0),
+    n_a=st.integers(2, 30),
+    n_b=st.integers(2, 30),
+)
 @pytest.mark.parametrize("op", ALL_OPS, ids=ALL_IDS)
 def test_rate_independence(op, knots, power, n_a, n_b):
     """The same input path under two clocks gives the same output at every shared path point."""
     k = len(knots) - 1
-    shared = np.linspace(0.0, k, 8 * k + 1)          # path parameter s, includes all knots
-    clock_a = np.linspace(0.0, 1.0, n_a * k) * k      # uniform clock
+    shared = np.linspace(0.0, k, 8 * k + 1)  # path parameter s, includes all knots
+    clock_a = np.linspace(0.0, 1.0, n_a * k) * k  # uniform clock
     clock_b = np.linspace(0.0, 1.0, n_b * k) ** power * k  # time-warped clock
     out = []
     for clock in (clock_a, clock_b):
@@ -101,9 +104,9 @@ def test_return_point_memory(op):
     without = path([0.0, 10.0, -10.0, 4.0, 10.0]) / 10
     y1, y2 = op.run(with_loop), op.run(without)
     n = 20  # samples per segment
-    assert y1[3 * n] == pytest.approx(y1[5 * n], abs=1e-12)          # loop closes at v = 0.4
-    assert y1[4 * n] < y1[3 * n]                                       # and was a real excursion
-    np.testing.assert_allclose(y1[5 * n:], y2[3 * n:], atol=1e-12)     # same branch to v = 1
+    assert y1[3 * n] == pytest.approx(y1[5 * n], abs=1e-12)  # loop closes at v = 0.4
+    assert y1[4 * n] < y1[3 * n]  # and was a real excursion
+    np.testing.assert_allclose(y1[5 * n :], y2[3 * n :], atol=1e-12)  # same branch to v = 1
     np.testing.assert_allclose(final_memory(op, with_loop), final_memory(op, without), atol=1e-12)
 
 
@@ -120,6 +123,7 @@ def test_wiping_out(op):
 
 
 # --- the output/commit contract -----------------------------------------------------------
+
 
 @settings(max_examples=60, deadline=None)
 @given(v=inputs, trials=st.lists(st.floats(-2.5, 2.5, **finite), min_size=1, max_size=5))
@@ -182,9 +186,9 @@ def test_parameter_layout_and_gains():
 
 # --- equivalences ------------------------------------------------------------------------
 
+
 @settings(max_examples=50, deadline=None)
-@given(kf=st.lists(st.tuples(st.floats(0.1, 10.0), st.floats(0.0, 5.0)), min_size=1, max_size=6),
-       v=inputs)
+@given(kf=st.lists(st.tuples(st.floats(0.1, 10.0), st.floats(0.0, 5.0)), min_size=1, max_size=6), v=inputs)
 def test_maxwell_slip_equals_pi_stop(kf, v):
     k, f = map(list, zip(*kf))
     ms = MaxwellSlip(k, f)
@@ -210,6 +214,7 @@ def test_stop_play_identity(v):
 
 # --- inverse and feed-forward compensation ------------------------------------------------
 
+
 @st.composite
 def invertible_pi(draw):
     n = draw(st.integers(1, 8))
@@ -231,7 +236,7 @@ def test_pi_inverse_is_exact(pi, v):
 
 def test_pi_inverse_requires_increasing_loading_curve():
     with pytest.raises(ParameterError):
-        PrandtlIshlinskii([0.1, 0.2], [1.0, 1.0]).inverse()   # no threshold-0 play
+        PrandtlIshlinskii([0.1, 0.2], [1.0, 1.0]).inverse()  # no threshold-0 play
     with pytest.raises(ParameterError):
         PrandtlIshlinskii([0.0, 0.2], [1.0, -1.5]).inverse()  # loading curve turns down
     # unsorted input is fine: the sum does not depend on the order of the plays
@@ -255,30 +260,28 @@ def test_feedforward_compensation():
     r = threshold_grid(y_ref, 10)
     plant = PrandtlIshlinskii(r, np.r_[1.0, np.linspace(0.6, 0.1, 9)])
     ratio, err_lin, err_ff = _compensation_ratio(plant, plant, y_ref)
-    print(f"\nexact model: uncompensated {err_lin:.3%}, compensated {err_ff:.2e}, "
-          f"ratio {ratio:.3g}")
+    print(f"\nexact model: uncompensated {err_lin:.3%}, compensated {err_ff:.2e}, ratio {ratio:.3g}")
     assert err_lin > 0.05 and ratio > 1e6
 
     # realistic case: the plant has a continuum-like threshold density, the compensator uses
     # a 10-play model identified by NNLS from one excitation and is tested on another
-    plant = PrandtlIshlinskii(np.linspace(0.0, 4.0, 100, endpoint=False),
-                              np.r_[1.0, np.full(99, 0.06)])
+    plant = PrandtlIshlinskii(np.linspace(0.0, 4.0, 100, endpoint=False), np.r_[1.0, np.full(99, 0.06)])
     v_id = 5.0 * np.sin(2 * np.pi * 2 * t) * np.exp(-0.5 * t)
     r_id = threshold_grid(np.r_[v_id, -v_id], 10)
     model = PrandtlIshlinskii(r_id, fit_pi_weights(v_id, plant.run(v_id), r_id))
     y_ref = 0.8 * plant.run(np.array([0.0, 5.0, 0.0]))[1] * np.sin(2 * np.pi * t) * (1 - 0.25 * t)
     ratio, err_lin, err_ff = _compensation_ratio(plant, model, y_ref)
-    print(f"identified model: uncompensated {err_lin:.3%}, compensated {err_ff:.3%}, "
-          f"ratio {ratio:.1f}")
+    print(f"identified model: uncompensated {err_lin:.3%}, compensated {err_ff:.3%}, ratio {ratio:.1f}")
     assert ratio >= 10.0
 
 
 # --- modified PI ---------------------------------------------------------------------------
 
+
 def test_modified_pi_dead_zones():
     r, w = [0.0, 0.5], [1.0, 0.5]
     pi = PrandtlIshlinskii(r, w)
-    v = np.linspace(0.0, 2.0, 201)       # virgin ramp: x = v + 0.5 max(v - 0.5, 0)
+    v = np.linspace(0.0, 2.0, 201)  # virgin ramp: x = v + 0.5 max(v - 0.5, 0)
     x = pi.run(v)
     y = ModifiedPI(r, w, [0.0, 1.0, -0.5], [1.0, 2.0, 3.0]).run(v)
     np.testing.assert_allclose(y, x + 2.0 * np.maximum(x - 1.0, 0.0), atol=1e-12)
@@ -297,23 +300,23 @@ def test_modified_pi_zero_dead_zones_reduce_to_pi(v, c):
     v = np.array(v)
     pi = PrandtlIshlinskii(R, W).run(v)
     np.testing.assert_allclose(ModifiedPI(R, W, [0.0], [1.0]).run(v), pi, atol=1e-12)
-    np.testing.assert_allclose(ModifiedPI(R, W, [0.0, 0.0], [c, 1.0]).run(v), (c + 1) * pi,
-                               atol=1e-12)
+    np.testing.assert_allclose(ModifiedPI(R, W, [0.0, 0.0], [c, 1.0]).run(v), (c + 1) * pi, atol=1e-12)
 
 
 def test_modified_pi_loop_is_not_point_symmetric():
-    t = np.linspace(0.0, 3.0, 3001)   # three periods; compare the two halves of the last one
+    t = np.linspace(0.0, 3.0, 3001)  # three periods; compare the two halves of the last one
     v = np.sin(2 * np.pi * t)
 
     def asymmetry(op):
         y = op.run(v)
         return np.max(np.abs(y[2000:2500] + y[2500:3000])) / np.ptp(y[2000:])
 
-    assert asymmetry(PrandtlIshlinskii(R, W)) < 1e-12       # PI loops are point-symmetric
+    assert asymmetry(PrandtlIshlinskii(R, W)) < 1e-12  # PI loops are point-symmetric
     assert asymmetry(ModifiedPI(R, W, [0.0, 0.8], [1.0, 1.5])) > 0.05
 
 
 # --- numba kernels ---------------------------------------------------------------------------
+
 
 def python_reference(op):
     """The operator's output/commit loop in pure Python (run() uses the numba-compiled kernels)."""
@@ -325,6 +328,7 @@ def python_reference(op):
             y[k] = out(v[k], mem, prm)
             commit(v[k], mem, prm)
         return y
+
     return drive
 
 
@@ -340,6 +344,7 @@ def test_numba_kernels_match_python(op):
 
 
 # --- identification ----------------------------------------------------------------------------
+
 
 def test_play_outputs_matrix():
     rng = np.random.default_rng(2)
@@ -364,11 +369,11 @@ def test_nnls_recovers_weights():
     np.testing.assert_allclose(w, w_true, rtol=0, atol=1e-6)
     assert c == pytest.approx(-0.75, abs=1e-6)
     # units do not matter: dipole-sized input, field-sized output
-    np.testing.assert_allclose(fit_pi_weights(v * 1e-7, y * 1e6, r * 1e-7) / 1e13, w_true,
-                               rtol=0, atol=1e-6)
+    np.testing.assert_allclose(fit_pi_weights(v * 1e-7, y * 1e6, r * 1e-7) / 1e13, w_true, rtol=0, atol=1e-6)
 
 
 # --- the device's history: where the plays start ----------------------------------------------
+
 
 @settings(max_examples=30, deadline=None)
 @given(v=inputs, prior=st.floats(-3.0, 3.0, **finite))
@@ -380,7 +385,7 @@ def test_prior_is_a_monotone_approach_from_it(v, prior):
     op = PrandtlIshlinskii(R, W, prior)
     assert op.parameter_names[-1] == "prior"
     ramp = np.linspace(prior, v[0], 50)
-    from_prior = PrandtlIshlinskii(R, W, prior).run(np.r_[ramp, v[1:]])[len(ramp) - 1:]
+    from_prior = PrandtlIshlinskii(R, W, prior).run(np.r_[ramp, v[1:]])[len(ramp) - 1 :]
     np.testing.assert_allclose(op.run(v), from_prior, rtol=0, atol=1e-12)
     np.testing.assert_allclose(play_outputs(v, R, prior) @ np.array(W), op.run(v), rtol=0, atol=1e-12)
     np.testing.assert_allclose(PrandtlIshlinskii(R, W, 0.0).run(v), PrandtlIshlinskii(R, W).run(v), atol=1e-15)

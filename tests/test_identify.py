@@ -8,17 +8,19 @@ of the response's RMS; 30 noise draws (seeds 0-29), k and c fitted from 30 % off
 exactly solved offset), so with white noise and the right model the interval ±1 SE must hold
 the true value in about 68 % of the 60 cases, ±2 SE in about 95 %.
 """
+
 import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import bondgraph as bg
 from bondgraph.data import Dataset
-from bondgraph.support.errors import DataError
 from bondgraph.fit.identify import Identification
 from bondgraph.linear.lti import LTI, residualise
+from bondgraph.support.errors import DataError
 
 K, C_D = 400.0, 4.0
 
@@ -57,8 +59,8 @@ def test_standard_errors_cover_the_true_values():
             err = abs(res.values[name] - true)
             inside1 += err <= res.stderr[name]
             inside2 += err <= 2 * res.stderr[name]
-    assert 31 <= inside1 <= 50, inside1   # 68 % of 60 = 41 (binomial 99 % band)
-    assert inside2 >= 52, inside2         # 95 % of 60 = 57
+    assert 31 <= inside1 <= 50, inside1  # 68 % of 60 = 41 (binomial 99 % band)
+    assert inside2 >= 52, inside2  # 95 % of 60 = 57
 
 
 def test_first_declared_input_and_output_by_default():
@@ -86,8 +88,18 @@ def test_residualisation_keeps_slow_poles_and_static_gain():
     to a slow input matches the full model's."""
     g = bg.Model("two")
     F = g.input("F", "N")
-    g.add(bg.Se("f", F), bg.J1("v1"), bg.I("m1", 1.0), bg.C("k1", 1 / 400.0), bg.R("c1", 4.0),
-          bg.J0("n"), bg.C("k2", 1 / 4e8), bg.J1("v2"), bg.I("m2", 1e-3), bg.R("c2", 10.0))
+    g.add(
+        bg.Se("f", F),
+        bg.J1("v1"),
+        bg.I("m1", 1.0),
+        bg.C("k1", 1 / 400.0),
+        bg.R("c1", 4.0),
+        bg.J0("n"),
+        bg.C("k2", 1 / 4e8),
+        bg.J1("v2"),
+        bg.I("m2", 1e-3),
+        bg.R("c2", 10.0),
+    )
     g.bond("f", "v1")
     for e in ("m1", "k1", "c1"):
         g.bond("v1", e)
@@ -123,6 +135,7 @@ def test_the_rate_term_keeps_the_lag_of_the_residualised_modes():
     second order ((ω/ω_f)² = 1e-4), in the frequency response and in the sampled response.
     Analytically D1 = −C_f·A_f⁻²·B_f = −1/ω_f for the unit fast lag 1/(1 + s/ω_f)."""
     from bondgraph.linear.lti import StateSpace
+
     wf, ws = 2 * math.pi * 2000.0, 2 * math.pi * 1.0
     A = np.diag([-wf, -ws])
     B = np.array([[wf], [ws]])
@@ -140,7 +153,7 @@ def test_the_rate_term_keeps_the_lag_of_the_residualised_modes():
     t = np.arange(30000) * dt
     u = np.sin(w[0] * t)
     y = StateSpace(A, B, C, D).response(dt, u)[:, 0]
-    settled = t > 1.0                                # the slow lag's start-up decayed
+    settled = t > 1.0  # the slow lag's start-up decayed
     err = lambda r: np.max(np.abs(r.response(dt, u)[:, 0] - y)[settled])
     assert err(StateSpace(red.A, red.B, red.C, red.D)) == pytest.approx(w[0] / wf, rel=0.05)
     assert err(red) < 2e-4
@@ -153,7 +166,9 @@ def test_bounded_least_squares_on_any_shape(rows, cols, seed):
     (a wide one, fewer rows than columns, indexed past the QR's diagonal before): within the
     bounds, and as good a fit (to rounding) whenever the columns are independent."""
     from scipy.optimize import lsq_linear
+
     from bondgraph.fit.identify import bounded_lstsq
+
     rng = np.random.default_rng(seed)
     A, b = rng.normal(size=(rows, cols)), rng.normal(size=rows)
     lower = np.where(rng.random(cols) < 0.5, 0.0, -np.inf)

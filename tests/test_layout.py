@@ -5,6 +5,7 @@ functions alike (a function-local import that closes a circle only hides it), an
 fail on an import circle between modules, on an import from a later stage, and on a module
 at the package's root other than its face.
 """
+
 from __future__ import annotations
 
 import ast
@@ -16,8 +17,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1] / "bondgraph"
 
 #: the pipeline, first to last: a stage may import itself and the stages before it
-STAGES = ["support", "data", "model", "equations", "numerics", "linear", "fit", "diagnosis", "plotting", "batch",
-          "cli"]
+STAGES = ["support", "data", "model", "equations", "numerics", "linear", "fit", "diagnosis", "plotting", "batch", "cli"]
 
 
 def _modules() -> dict[str, tuple[Path, bool]]:
@@ -40,7 +40,7 @@ def _targets(module: str, package: bool, node: ast.AST) -> list[str]:
     else:
         if node.level:
             base = module.split(".") if package else module.split(".")[:-1]
-            base = base[:len(base) - node.level + 1]
+            base = base[: len(base) - node.level + 1]
             base = ".".join(base + ([node.module] if node.module else []))
         else:
             base = node.module or ""

@@ -8,6 +8,7 @@ displacement (m = 1 kg, k = (2π·40 Hz)² N/m, c = 2·0.02·√(km)); the drive
 the resonance, sampled at 2 kHz, linear between samples for both routes.  A term's partner is
 another element's displacement or the drive itself (a law that moves with the field).
 """
+
 import math
 
 import numpy as np
@@ -34,7 +35,7 @@ def resonator():
 
 
 def softening(c, r2, x, a):
-    return -c * x * (x ** 2 - r2)
+    return -c * x * (x**2 - r2)
 
 
 def stanton(c, r2, x, a):
@@ -43,7 +44,7 @@ def stanton(c, r2, x, a):
 
 def drive():
     t = np.arange(4000) / 2000.0
-    u = np.sin(2 * np.pi * (10 * t + 15 * t ** 2))  # 10 -> 70 Hz
+    u = np.sin(2 * np.pi * (10 * t + 15 * t**2))  # 10 -> 70 Hz
     return t, u
 
 
@@ -51,28 +52,31 @@ def integrated(model, t, u):
     return bg.simulate(model, t, {"F": bg.PiecewiseLinear(t, u)}, rtol=1e-10, atol=1e-14)["x"]
 
 
-@pytest.mark.parametrize("element, term, partner, change, base", [
-    ("k", softening, None, 0.3, K),       # stiffness 30 % lower at the peak displacement
-    ("c", stanton, "k", 3.0, CD),         # damping x4 at the peak displacement
-    ("c", stanton, None, 3.0, CD),        # velocity-cubic: damping x4 at the peak velocity
-    ("k", softening, DRIVE, 0.3, K),      # the drive's square moves the stiffness (a field law)
-])
+@pytest.mark.parametrize(
+    "element, term, partner, change, base",
+    [
+        ("k", softening, None, 0.3, K),  # stiffness 30 % lower at the peak displacement
+        ("c", stanton, "k", 3.0, CD),  # damping x4 at the peak displacement
+        ("c", stanton, None, 3.0, CD),  # velocity-cubic: damping x4 at the peak velocity
+        ("k", softening, DRIVE, 0.3, K),  # the drive's square moves the stiffness (a field law)
+    ],
+)
 def test_stepped_lure_agrees_with_the_integrated_rewrite(element, term, partner, change, base):
     t, u = drive()
     lure = Lure(resonator(), "F", "x", [element], {element: partner}, t[1] - t[0])
     lin = lure.linear_responses({}, u, term)
     amp = lin[f"diag.x:{element}" if partner is None else f"diag.a:{element}"]
     coef = change * base / float(np.max(np.abs(amp))) ** 2
-    r2 = 0.5 * float(np.mean(amp ** 2))
+    r2 = 0.5 * float(np.mean(amp**2))
     y = lure.simulate({}, u, term, [(coef, r2)])
     rewritten = resonator()
     partner_q = rewritten.inputs["F"].symbol if partner == DRIVE else bg.Quantity("q", partner) if partner else None
     modify_law(rewritten, element, lambda x, old: old + term(coef, r2, x, partner_q))
     ref = integrated(rewritten, t, u)
     linear = integrated(resonator(), t, u)
-    assert np.std(ref - linear) > 0.05 * np.std(linear)           # the term matters
-    assert np.std(y - ref) < 5e-3 * np.std(ref)                     # and both routes agree
-    assert np.std(lin["x"] - linear) < 1e-6 * np.std(linear)        # the linear part is exact
+    assert np.std(ref - linear) > 0.05 * np.std(linear)  # the term matters
+    assert np.std(y - ref) < 5e-3 * np.std(ref)  # and both routes agree
+    assert np.std(lin["x"] - linear) < 1e-6 * np.std(linear)  # the linear part is exact
 
 
 def test_terms_named_before_are_held_while_a_new_one_is_fitted():
@@ -81,10 +85,10 @@ def test_terms_named_before_are_held_while_a_new_one_is_fitted():
     t, u = drive()
     first = Lure(resonator(), "F", "x", ["k"], {"k": None}, t[1] - t[0])
     q = first.linear_responses({}, u, softening)["diag.x:k"]
-    soft = (0.3 * K / float(np.max(np.abs(q))) ** 2, 0.5 * float(np.mean(q ** 2)))
+    soft = (0.3 * K / float(np.max(np.abs(q))) ** 2, 0.5 * float(np.mean(q**2)))
     lure = Lure(resonator(), "F", "x", ["c"], {"c": None}, t[1] - t[0], fixed=[("k", None, softening, *soft)])
-    v = lure.linear_responses({}, u, stanton)["diag.x:c"]          # the damper's velocity, softening held
-    damp = (3.0 * CD / float(np.max(np.abs(v))) ** 2, 0.5 * float(np.mean(v ** 2)))
+    v = lure.linear_responses({}, u, stanton)["diag.x:c"]  # the damper's velocity, softening held
+    damp = (3.0 * CD / float(np.max(np.abs(v))) ** 2, 0.5 * float(np.mean(v**2)))
     y = lure.simulate({}, u, stanton, [damp])
     rewritten = resonator()
     modify_law(rewritten, "k", lambda x, old: old + softening(*soft, x, None))
@@ -92,14 +96,14 @@ def test_terms_named_before_are_held_while_a_new_one_is_fitted():
     ref = integrated(rewritten, t, u)
     assert np.std(y - ref) < 5e-3 * np.std(ref)
     only_soft = first.simulate({}, u, softening, [soft])
-    assert np.std(only_soft - ref) > 0.05 * np.std(ref)             # the damping term mattered
+    assert np.std(only_soft - ref) > 0.05 * np.std(ref)  # the damping term mattered
 
 
 def test_a_diverging_term_is_reported_not_returned():
     t, u = drive()
     lure = Lure(resonator(), "F", "x", ["k"], {"k": None}, t[1] - t[0])
     with pytest.raises(NotConverged):
-        lure.simulate({}, u, softening, [(10 * K / 1e-4 ** 2, 0.0)])  # negative stiffness past 32 um
+        lure.simulate({}, u, softening, [(10 * K / 1e-4**2, 0.0)])  # negative stiffness past 32 um
 
 
 def friction(c, r2, x, a):
@@ -109,15 +113,18 @@ def friction(c, r2, x, a):
 
 def test_terms_are_polynomials_plus_one_saturation_of_the_element_variable():
     P, hg = polynomial_term(softening, False)(2.0, 3.0)
-    assert P[1, 0] == pytest.approx(6.0) and P[3, 0] == pytest.approx(-2.0)     # 2·3·x − 2·x³
+    assert P[1, 0] == pytest.approx(6.0) and P[3, 0] == pytest.approx(-2.0)  # 2·3·x − 2·x³
     assert list(hg) == [0.0, 0.0]
     P, hg = polynomial_term(lambda c, r2, x, a: friction(c, r2, x, a) - c * x, False)(2.0, 0.5)
     assert P[1, 0] == pytest.approx(-2.0) and list(hg) == pytest.approx([1.0, 2.0])  # 1·tanh(2x) − 2x
-    for other in (lambda c, r2, x, a: c * sp.sin(x), lambda c, r2, x, a: c * sp.tanh(x ** 2),
-                  lambda c, r2, x, a: c * (sp.tanh(x) + sp.tanh(2 * x / r2))):
+    for other in (
+        lambda c, r2, x, a: c * sp.sin(x),
+        lambda c, r2, x, a: c * sp.tanh(x**2),
+        lambda c, r2, x, a: c * (sp.tanh(x) + sp.tanh(2 * x / r2)),
+    ):
         with pytest.raises(NotConverged):
             polynomial_term(other, False)
-    with pytest.raises(NotConverged):                                           # of the partner: no
+    with pytest.raises(NotConverged):  # of the partner: no
         polynomial_term(lambda c, r2, x, a: c * sp.tanh(a), True)
 
 

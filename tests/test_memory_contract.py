@@ -1,5 +1,6 @@
 """Elements with memory: the integrator commits operator memory on accepted steps only, so the
 result does not depend on its step pattern (rejections, reversals) beyond the tolerance."""
+
 import numpy as np
 import pytest
 

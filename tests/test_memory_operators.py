@@ -1,6 +1,7 @@
 """Memory operators defined outside the framework: kernels are compiled, not copied as text, so
 helpers, ``staticmethod(f)`` and ready numba functions work, and broken kernels are errors that
 name the operator and the rule."""
+
 from __future__ import annotations
 
 import numba
@@ -81,8 +82,9 @@ def reference(v, r, clip=np.inf):
 V = np.sin(np.linspace(0, 4 * np.pi, 200)) * np.linspace(0.2, 1.0, 200)
 
 
-@pytest.mark.parametrize("op, clip", [(HelperBacklash(0.3), CLIP), (StaticBacklash(0.3), np.inf),
-                                      (JittedBacklash(0.3), np.inf)])
+@pytest.mark.parametrize(
+    "op, clip", [(HelperBacklash(0.3), CLIP), (StaticBacklash(0.3), np.inf), (JittedBacklash(0.3), np.inf)]
+)
 def test_operators_with_helpers_static_functions_and_numba_functions_run(op, clip):
     np.testing.assert_array_equal(op.run(V), reference(V, 0.3, clip))
 
@@ -126,12 +128,18 @@ class UncompilableOutput(_OnePlay):
         return np.frompyfunc(play, 3, 1)(v, mem[0], prm[0])  # numpy ufunc factory: Python objects
 
 
-@pytest.mark.parametrize("op, rule", [
-    (InstanceMethodOutput(0.1), r"output must be a static function output\(v, mem, prm\)"),
-    (TwoArgumentOutput(0.1), r"output must take exactly three arguments \(v, mem, prm\), it takes \(v, mem\)"),
-    (UncompilableOutput(0.1), r"output\(v, mem, prm\) cannot be compiled by numba in nopython mode \(.+"
-                              r"test_memory_operators.py:\d+\)"),
-])
+@pytest.mark.parametrize(
+    "op, rule",
+    [
+        (InstanceMethodOutput(0.1), r"output must be a static function output\(v, mem, prm\)"),
+        (TwoArgumentOutput(0.1), r"output must take exactly three arguments \(v, mem, prm\), it takes \(v, mem\)"),
+        (
+            UncompilableOutput(0.1),
+            r"output\(v, mem, prm\) cannot be compiled by numba in nopython mode \(.+"
+            r"test_memory_operators.py:\d+\)",
+        ),
+    ],
+)
 def test_broken_kernels_are_model_errors_naming_operator_and_rule(op, rule):
     g = bg.Model("m")
     with pytest.raises(bg.ModelError, match=rule) as exc:
@@ -172,7 +180,8 @@ def test_broken_kernel_in_a_model_file_is_a_one_line_error(tmp_path, capsys):
         "    g.chain('s', 'j', 'r')\n"
         "    g.bond('j', 'c')\n"
         "    g.output('x', g.displacement('c'))\n"
-        "    return g\n")
+        "    return g\n"
+    )
     status = main(["equations", str(model)])
     err = capsys.readouterr().err.strip()
     assert status == 2 and "internal error" not in err and len(err.splitlines()) == 1

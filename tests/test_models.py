@@ -1,18 +1,25 @@
 """Every model file in models/ runs through every CLI command."""
+
 import json
 
 import pytest
+from conftest import MODELS
 
 from bondgraph.cli import main
 from bondgraph.data import read_csv
-from conftest import MODELS
 
 MODEL_FILES = sorted(p.name for p in MODELS.glob("*.py"))
 
 
 def test_model_files_exist():
-    for name in ("apa120ml.py", "stack.py", "bimorph_t215.py", "bimorph_t226.py", "triangular_drive.py",
-                 "bender_highfield.py"):
+    for name in (
+        "apa120ml.py",
+        "stack.py",
+        "bimorph_t215.py",
+        "bimorph_t226.py",
+        "triangular_drive.py",
+        "bender_highfield.py",
+    ):
         assert name in MODEL_FILES
 
 
@@ -43,14 +50,18 @@ def test_every_command_runs(name, tmp_path, capsys):
 
 @pytest.mark.parametrize("setting", ["hysteresis=bouc-wen", "hysteresis=pi"])
 def test_apa_hysteresis_options_simulate(setting, tmp_path):
-    assert main(["simulate", str(MODELS / "apa120ml.py"), "--set", setting, "--quiet",
-                 "--out", str(tmp_path / "o.csv")]) == 0
+    assert (
+        main(["simulate", str(MODELS / "apa120ml.py"), "--set", setting, "--quiet", "--out", str(tmp_path / "o.csv")])
+        == 0
+    )
 
 
 def test_readme_images_exist_and_are_small():
     """Every image the README shows is committed in docs/img and stays under 100 kB."""
     import re
+
     from conftest import ROOT
+
     shown = re.findall(r"!\[[^\]]*\]\((docs/img/[^)]+\.png)\)", (ROOT / "README.md").read_text())
     assert len(shown) >= 6
     for rel in shown:

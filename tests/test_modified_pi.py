@@ -3,17 +3,18 @@
 identification", Mechatronics 20 (2010) 303-314: dead zones on the absolute PI sum (eq. 12) and
 measured from the last reversal (Sec. 5.3, Fig. 20), their exact inverses, and the reading of
 the garbled Table 3 in models/apa120ml.py."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import MODELS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import bondgraph as bg
-from bondgraph.support.errors import ParameterError
 from bondgraph.model.modelfile import load_model, read_model_module
-from conftest import MODELS
+from bondgraph.support.errors import ParameterError
 from library.hysteresis import ModifiedPI, PrandtlIshlinskii, RelativeModifiedPI
 
 R = [0.0, 0.1, 0.25, 0.4, 0.6]
@@ -44,8 +45,8 @@ def test_relative_dead_zones_follow_the_branch_formula():
     y_r = 0.0
     for k, (a, b) in enumerate(zip(turns, turns[1:] + [v.size - 1])):
         s = np.sign(x[b] - x[a])
-        expect = [y_r + s * g(s * (xk - x[a])) for xk in x[a:b + 1]]
-        np.testing.assert_allclose(y[a:b + 1], expect, atol=1e-12)
+        expect = [y_r + s * g(s * (xk - x[a])) for xk in x[a : b + 1]]
+        np.testing.assert_allclose(y[a : b + 1], expect, atol=1e-12)
         y_r = expect[-1]
     # the absolute form (eq. 12) differs once a branch crosses a dead zone away from x = d
     assert np.max(np.abs(ModifiedPI(R, W, d, ws).run(v) - y)) > 0.1
@@ -58,8 +59,10 @@ def test_relative_loop_shape_depends_on_amplitude_not_offset():
     t = np.linspace(0.0, 3.0, 3001)
     v = np.sin(2 * np.pi * t)
     last = slice(2000, None)
-    for op, invariant in ((RelativeModifiedPI(R, W, [0.0, 0.6], [1.0, 1.5]), True),
-                          (ModifiedPI(R, W, [0.0, 0.6], [1.0, 1.5]), False)):
+    for op, invariant in (
+        (RelativeModifiedPI(R, W, [0.0, 0.6], [1.0, 1.5]), True),
+        (ModifiedPI(R, W, [0.0, 0.6], [1.0, 1.5]), False),
+    ):
         diff = op.run(v + 2.0)[last] - op.run(v)[last]
         spread = np.ptp(diff) / np.ptp(op.run(v)[last])
         assert (spread < 1e-12) == invariant, (type(op).__name__, spread)
@@ -69,8 +72,9 @@ def test_relative_loop_shape_depends_on_amplitude_not_offset():
 @given(v=st.lists(st.floats(-2.0, 2.0, **finite), min_size=2, max_size=60), c=st.floats(0.1, 3.0))
 def test_relative_zero_dead_zones_reduce_to_pi(v, c):
     v = np.array(v)
-    np.testing.assert_allclose(RelativeModifiedPI(R, W, [0.0, 0.0], [c, 1.0]).run(v),
-                               (c + 1) * PrandtlIshlinskii(R, W).run(v), atol=1e-12)
+    np.testing.assert_allclose(
+        RelativeModifiedPI(R, W, [0.0, 0.0], [c, 1.0]).run(v), (c + 1) * PrandtlIshlinskii(R, W).run(v), atol=1e-12
+    )
 
 
 def normal(low: float, high: float):
@@ -91,15 +95,14 @@ def invertible(draw, relative: bool):
 
 
 @settings(max_examples=60, deadline=None)
-@given(data=st.data(), v=st.lists(st.floats(-2.0, 2.0, **finite), min_size=2, max_size=80),
-       relative=st.booleans())
+@given(data=st.data(), v=st.lists(st.floats(-2.0, 2.0, **finite), min_size=2, max_size=80), relative=st.booleans())
 def test_modified_pi_inverse_is_exact(data, v, relative):
     """H^{-1}[H[v]] = v and H[H^{-1}[v]] = v for both dead-zone forms, from rest (the 'inverse
     model calculation and feedforward' of the paper's Sec. 6)."""
     try:
         op = data.draw(invertible(relative))
         inv = op.inverse()
-    except ParameterError:   # a drawn loading curve that turns down has no inverse
+    except ParameterError:  # a drawn loading curve that turns down has no inverse
         return
     v = np.array(v)
     if relative:
@@ -121,7 +124,7 @@ def test_relative_start_from_rest_is_not_a_reversal():
 
 def test_inverse_needs_an_increasing_operator():
     with pytest.raises(ParameterError, match="dead-zone"):
-        RelativeModifiedPI(R, W, [0.5], [1.0]).inverse()        # no d = 0 term: flat start
+        RelativeModifiedPI(R, W, [0.5], [1.0]).inverse()  # no d = 0 term: flat start
     with pytest.raises(ParameterError, match="PI"):
         ModifiedPI([0.0, 0.2], [1.0, -1.5], [0.0], [1.0]).inverse()
     with pytest.raises(ParameterError, match="d_j >= 0"):
@@ -134,8 +137,8 @@ def loop_width(V, x):
     as a fraction of the stroke."""
     k = int(np.argmax(V))
     grid = np.linspace(V.min(), V.max(), 400)[5:-5]
-    up, dn = np.argsort(V[:k + 1]), np.argsort(V[k:])
-    xu = np.interp(grid, V[:k + 1][up], x[:k + 1][up])
+    up, dn = np.argsort(V[: k + 1]), np.argsort(V[k:])
+    xu = np.interp(grid, V[: k + 1][up], x[: k + 1][up])
     xd = np.interp(grid, V[k:][dn], x[k:][dn])
     return float(np.max(np.abs(xd - xu)) / np.ptp(x))
 
@@ -150,8 +153,9 @@ TABLE3_LOOPS = [
 ]
 
 
-@pytest.mark.parametrize("setting, width, stroke", TABLE3_LOOPS,
-                         ids=[s.get("table3", s["hysteresis"]) for s, _, _ in TABLE3_LOOPS])
+@pytest.mark.parametrize(
+    "setting, width, stroke", TABLE3_LOOPS, ids=[s.get("table3", s["hysteresis"]) for s, _, _ in TABLE3_LOOPS]
+)
 def test_table3_readings_loop_width(setting, width, stroke):
     """Loop widths of the APA-120ML model (Sec. 5, Tables 2-3) on its default 5 Hz, 0-120 V
     drive, second period: the numbers the model file's docstring reports for each reading."""
@@ -172,7 +176,7 @@ def test_table3_reading_is_invertible_with_the_paper_slopes():
     assert op.thresholds[0] == 0.0 and np.all(np.diff(op.thresholds) >= 0) and op.thresholds[-1] == 2e-7
     prm = op.parameter_values()
     assert op.small_signal_gain(prm) == 6.64e12
-    p = np.linspace(0.0, 3e-7, 301)          # virgin loading: slope falls, then the dead zones add
+    p = np.linspace(0.0, 3e-7, 301)  # virgin loading: slope falls, then the dead zones add
     slope = np.diff(op.run(p)) / np.diff(p)
     assert slope[1] > slope[50] > 0 and slope.min() > 0
     E = 1.5e6 * np.abs(np.sin(np.linspace(0.0, 3 * np.pi, 600)))

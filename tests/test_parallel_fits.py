@@ -7,17 +7,18 @@ the GIL).  Truths: an exponentially decaying sine (amplitude and offset solved, 
 frequency fitted), and the tone record of test_diagnosis_strained (a lightly damped resonator
 whose calibration ends on a bound and is retried from random starts: every parallel path).
 """
+
 import math
 import os
 
 import numpy as np
 import pytest
+from test_diagnosis_strained import record, resonator
 
 from bondgraph.diagnosis.calibration import calibrate
 from bondgraph.diagnosis.context import Context
 from bondgraph.diagnosis.pool import fork_map
 from bondgraph.diagnosis.projection import projected_fit
-from test_diagnosis_strained import record, resonator
 
 
 def _square_or_fail(x):
@@ -29,13 +30,13 @@ def _square_or_fail(x):
 def test_fork_map_keeps_the_order_and_the_serial_results():
     out = fork_map(_square_or_fail, [1, 2, 3, 4], 2)
     assert [v for v, _ in out] == [1, 4, 9, 16]
-    assert len({pid for _, pid in out}) == 2          # this process and one child
+    assert len({pid for _, pid in out}) == 2  # this process and one child
     assert [v for v, _ in fork_map(_square_or_fail, [1, 2, 3], 1)] == [1, 4, 9]
 
 
 def test_fork_map_raises_a_childs_exception_here():
     with pytest.raises(ValueError, match="item 5 refused"):
-        fork_map(_square_or_fail, [1, 5, 2, 3], 2)     # item 5 is the child's
+        fork_map(_square_or_fail, [1, 5, 2, 3], 2)  # item 5 is the child's
 
 
 def test_threaded_jacobians_give_the_serial_fit():
@@ -49,8 +50,10 @@ def test_threaded_jacobians_give_the_serial_fit():
         tt = t if rows is None else t[rows]
         return np.column_stack([np.exp(-a * tt) * np.sin(2 * math.pi * f * tt), np.ones(tt.size)])
 
-    fits = [projected_fit(columns, y, idx, [0.0, math.log(2.5)], [-3, 0], [3, 2], [-np.inf] * 2, [np.inf] * 2,
-                          threads=n) for n in (1, 2)]
+    fits = [
+        projected_fit(columns, y, idx, [0.0, math.log(2.5)], [-3, 0], [3, 2], [-np.inf] * 2, [np.inf] * 2, threads=n)
+        for n in (1, 2)
+    ]
     assert np.array_equal(fits[0].z, fits[1].z) and fits[0].cost == fits[1].cost and fits[0].nfev == fits[1].nfev
     assert math.exp(fits[1].z[0]) == pytest.approx(1.3, rel=0.02)
     assert math.exp(fits[1].z[1]) == pytest.approx(3.1, rel=0.01)

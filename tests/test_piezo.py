@@ -1,13 +1,20 @@
 """Rodriguez-Fortun et al. 2010, (Rodriguez-Fortun et al. 2010): layers, stacks, the APA-120ML."""
+
 import numpy as np
 import pytest
 import sympy as sp
+from conftest import MODELS
 
 import bondgraph as bg
 from bondgraph.model.modelfile import load_model
-from library.piezo import (layer_extension, linear_polarization, model1_cfield, model2_cfield,
-                           model2_from_model1, piezo_layer)
-from conftest import MODELS
+from library.piezo import (
+    layer_extension,
+    linear_polarization,
+    model1_cfield,
+    model2_cfield,
+    model2_from_model1,
+    piezo_layer,
+)
 
 K1, A1, C1 = 2.0e7, 0.05, 2.0e-6
 
@@ -16,8 +23,7 @@ def cfield_actuator(field):
     """Amplifier (Re) → C-field layer → moving mass with damper."""
     g = bg.Model("layer")
     V = g.input("V")
-    g.add(bg.Se("amp", V), bg.J1("i"), bg.R("Re", 10.0), field, bg.J1("v"), bg.I("M", 0.01),
-          bg.R("c", 50.0))
+    g.add(bg.Se("amp", V), bg.J1("i"), bg.R("Re", 10.0), field, bg.J1("v"), bg.I("M", 0.01), bg.R("c", 50.0))
     g.chain("amp", "i", "layer.Q")
     g.bond("i", "Re")
     g.bond("layer.x", "v")
@@ -37,7 +43,7 @@ def test_model1_and_model2_layers_give_the_same_response():
     # both stiffness matrices equal the model-1 matrix of eq. 5
     f1 = model1_cfield("f", K1=K1, a1=A1, C1=C1).stiffness_matrix()
     f2 = model2_cfield("f", K2=K2, a2=a2, C2=C2).stiffness_matrix()
-    expect = sp.Matrix([[K1, -K1 * A1], [-K1 * A1, K1 * A1 ** 2 + 1 / C1]])
+    expect = sp.Matrix([[K1, -K1 * A1], [-K1 * A1, K1 * A1**2 + 1 / C1]])
     assert np.allclose(np.array(f1 - expect, float), 0, atol=1e-6 * K1)
     assert np.allclose(np.array(f2 - expect, float), 0, atol=1e-6 * K1)
 
@@ -98,17 +104,18 @@ def test_apa_bouc_wen_produces_a_closed_e_p_loop():
     t = np.linspace(0, cycles / f, cycles * n + 1)
     res = bg.simulate(lm.model, t, {"V": bg.Sine(60.0, f, phase=-90, offset=60.0)}, rtol=1e-8)
     p, E = res["p"], res["E"]
-    last, prev = slice((cycles - 1) * n, cycles * n + 1), slice((cycles - 2) * n, (cycles - 1) * n + 1)
+    last = slice((cycles - 1) * n, cycles * n + 1)
     # the loop closes: the last cycle retraces the one before
-    gap = [np.max(np.abs(p[k * n:(k + 1) * n + 1] - p[(k - 1) * n:k * n + 1])) for k in range(1, cycles)]
+    gap = [np.max(np.abs(p[k * n : (k + 1) * n + 1] - p[(k - 1) * n : k * n + 1])) for k in range(1, cycles)]
     assert gap[-1] < 1e-3 * np.ptp(p) and gap[-1] < 0.2 * gap[0]
     # and it encloses area: the hysteresis loss per cycle ∮E dp is positive and a sizeable
     # fraction of the stored-energy scale
     area = np.trapezoid(E[last], p[last])
     assert area > 0.02 * np.ptp(E[last]) * np.ptp(p[last])
     # the linear model has no loop
-    lin = bg.simulate(load_model(MODELS / "apa120ml.py").model, t, {"V": bg.Sine(60.0, f, phase=-90, offset=60.0)},
-                      rtol=1e-8)
+    lin = bg.simulate(
+        load_model(MODELS / "apa120ml.py").model, t, {"V": bg.Sine(60.0, f, phase=-90, offset=60.0)}, rtol=1e-8
+    )
     assert abs(np.trapezoid(lin["E"][last], lin["p"][last])) < 1e-6 * np.ptp(lin["E"]) * np.ptp(lin["p"])
 
 

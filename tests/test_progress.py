@@ -1,4 +1,5 @@
 """bondgraph.support.progress: a bar on a terminal, plain lines otherwise, nothing when quiet or quick."""
+
 from __future__ import annotations
 
 import io
@@ -35,11 +36,11 @@ def test_lines_with_percentage_count_and_time_left(clock):
     s = io.StringIO()
     p = Progress("fitting", total=8, unit="candidates", stream=s, delay=1.0, interval=5.0)
     assert p.mode == "lines"
-    p.update(1)                      # at once: too early to show
+    p.update(1)  # at once: too early to show
     clock.now += 2
-    p.update(2)                      # 2 of 8 after 2 s: 6 s left
+    p.update(2)  # 2 of 8 after 2 s: 6 s left
     clock.now += 1
-    p.update(3)                      # within the interval: nothing
+    p.update(3)  # within the interval: nothing
     clock.now += 5
     p.advance(status="creep: gain 1.8")
     p.close()
@@ -68,7 +69,7 @@ def test_a_fraction_and_an_open_count(clock):
 
 def test_quick_work_and_quiet_mode_print_nothing(clock):
     s = io.StringIO()
-    with Progress("simulating", total=1.0, stream=s) as p:   # ends within the default 1 s delay
+    with Progress("simulating", total=1.0, stream=s) as p:  # ends within the default 1 s delay
         p(0.5)
         p(1.0)
     assert s.getvalue() == ""
@@ -81,7 +82,9 @@ def test_quick_work_and_quiet_mode_print_nothing(clock):
 
 
 def test_bar_on_a_terminal_redraws_one_line(clock, monkeypatch):
-    monkeypatch.setattr("bondgraph.support.progress.shutil.get_terminal_size", lambda default: __import__("os").terminal_size((60, 20)))
+    monkeypatch.setattr(
+        "bondgraph.support.progress.shutil.get_terminal_size", lambda default: __import__("os").terminal_size((60, 20))
+    )
     s = Tty()
     p = Progress("simulating", total=1.0, stream=s, delay=0)
     assert p.mode == "bar"
@@ -120,10 +123,15 @@ def test_updates_from_threads_and_a_broken_stream(clock):
         t.join()
     assert p.done == 400
     s.close()
-    p.update(401)   # a closed stream never makes the work fail
+    p.update(401)  # a closed stream never makes the work fail
     p.close()
 
 
 def test_durations():
-    assert [_duration(x) for x in (0.04, 9.96, 42.4, 185, 3725)] == ["0.0 s", "10.0 s", "42 s", "3 min 05 s",
-                                                                    "1 h 02 min"]
+    assert [_duration(x) for x in (0.04, 9.96, 42.4, 185, 3725)] == [
+        "0.0 s",
+        "10.0 s",
+        "42 s",
+        "3 min 05 s",
+        "1 h 02 min",
+    ]

@@ -20,6 +20,7 @@ Properties:
    nothing but its name;
 6. a one-character typo in an endpoint is a ModelError that suggests the right name.
 """
+
 from __future__ import annotations
 
 import difflib
@@ -38,8 +39,9 @@ import bondgraph as bg
 from bondgraph.equations.causality import assign_causality
 from bondgraph.linear.linearize import linearize
 
-SYMBOLIC = settings(max_examples=60, deadline=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+SYMBOLIC = settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much]
+)
 NUMERIC = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 ONE_PORTS = ("C", "I", "R", "Se", "Sf")
@@ -135,8 +137,7 @@ class SpecBuilder:
         self.link(junction, elem, via or "bond")
 
 
-def general_spec(ch, one_ports=ONE_PORTS, two_ports=TWO_PORTS, max_junctions=5, max_loops=2,
-                 max_attached=3) -> Spec:
+def general_spec(ch, one_ports=ONE_PORTS, two_ports=TWO_PORTS, max_junctions=5, max_loops=2, max_attached=3) -> Spec:
     """A random junction tree (plus loops) with one-ports attached, possibly behind TF/GY."""
     b = SpecBuilder(ch)
     js = [b.add(ch.choice(("J0", "J1"))) for _ in range(ch.int(1, max_junctions))]
@@ -205,9 +206,15 @@ def pname(elem: str) -> str:
     return f"k_{elem}"
 
 
-def build(spec: Spec, *, values: dict | None = None, with_input: bool = False,
-          component: set | None = None, storage_outputs: bool = False,
-          param_names: dict | None = None) -> bg.Model:
+def build(
+    spec: Spec,
+    *,
+    values: dict | None = None,
+    with_input: bool = False,
+    component: set | None = None,
+    storage_outputs: bool = False,
+    param_names: dict | None = None,
+) -> bg.Model:
     """The bond graph of ``spec`` with one symbolic parameter ``k_<element>`` per element
     (``param_names`` renames some of them).
 
@@ -330,7 +337,7 @@ def hamiltonian(res: bg.SimResult, values: dict, spec: Spec) -> np.ndarray:
         if kind in STORAGE:
             state = f"{'q' if kind == 'C' else 'p'}_{name}"
             x = res.states[state] if state in res.states else res.outputs[f"{state.upper()[0]}_{name}"]
-            H = H + x ** 2 / (2 * values[pname(name)])
+            H = H + x**2 / (2 * values[pname(name)])
     return np.asarray(H)
 
 
@@ -364,7 +371,8 @@ def test_random_graph_derives_or_raises_a_named_error(spec):
 # and then reported "bond o1 → z2 admits no causality").
 SCAP_COUNTEREXAMPLE = Spec(
     elements=[("J1", "o1", 1.0), ("J0", "z2", 1.0), ("GY", "GY3", 1.0), ("C", "C4", 1.0)],
-    bonds=[("o1", "z2"), ("o1", "GY3.p1"), ("GY3.p2", "z2"), ("C4", "o1")])
+    bonds=[("o1", "z2"), ("o1", "GY3.p1"), ("GY3.p2", "z2"), ("C4", "o1")],
+)
 
 
 @settings(SYMBOLIC, max_examples=120)
@@ -438,8 +446,9 @@ def _energy_run(data, pool: str):
     index = data.draw(st.integers(0, N_POOL - 1), label="structure")
     spec, sim = rigid_pool(index) if pool == "rigid" else conservative_pool(index, pool == "passive")
     values = _random_values(data, spec)
-    x0 = np.array([data.draw(st.floats(0.1, 1.0), label=n) * data.draw(st.sampled_from((-1, 1)))
-                   for n in sim.state_names])
+    x0 = np.array(
+        [data.draw(st.floats(0.1, 1.0), label=n) * data.draw(st.sampled_from((-1, 1))) for n in sim.state_names]
+    )
     T = _fastest_period(sim, values)
     periods = 30 if pool == "passive" else 100
     t = np.linspace(0, periods * T, 20 * periods + 1)
@@ -547,8 +556,10 @@ def test_symbolic_jacobian_matches_finite_differences(data):
 # ---- 5. components: same equations up to the name prefix ------------------------------------------
 def _strip_prefix(expr_map: dict) -> dict:
     def ren(e):
-        return e.xreplace({s: sp.Symbol(s.name.replace("sub.", ""), **s.assumptions0)
-                           for s in e.free_symbols if "sub." in s.name})
+        return e.xreplace(
+            {s: sp.Symbol(s.name.replace("sub.", ""), **s.assumptions0) for s in e.free_symbols if "sub." in s.name}
+        )
+
     return {ren(k): ren(v) for k, v in expr_map.items()}
 
 
@@ -594,7 +605,8 @@ def _flat_in_component_order(spec: Spec, inside: set) -> bg.Model:
 # effort/flow e_<elem>/f_<elem>) is silently merged with that variable.
 CLASH_SPEC = Spec(
     elements=[("J1", "o1", 1.0), ("Se", "Se2", 1.0), ("C", "C3", 1.0), ("I", "I4", 1.0), ("R", "R5", 1.0)],
-    bonds=[("Se2", "o1"), ("o1", "C3"), ("o1", "I4"), ("o1", "R5")])
+    bonds=[("Se2", "o1"), ("o1", "C3"), ("o1", "I4"), ("o1", "R5")],
+)
 
 
 @settings(SYMBOLIC, max_examples=40)
@@ -608,8 +620,7 @@ def test_parameter_names_never_alias_generated_variables(spec, victim, clash):
     except bg.BondGraphError:
         assume(False)
     params = [pname(n) for k, n, _ in spec.elements if k in PARAMETRIC]
-    generated = sorted({str(s) for s in ref.state_symbols}
-                       | {str(v) for ef in ref.bond_vars.values() for v in ef})
+    generated = sorted({str(s) for s in ref.state_symbols} | {str(v) for ef in ref.bond_vars.values() for v in ef})
     assume(params and generated)
     victim = victim if isinstance(victim, str) else params[victim % len(params)]
     clash = clash if isinstance(clash, str) else generated[clash % len(generated)]
@@ -633,8 +644,13 @@ def test_parameter_names_never_alias_generated_variables(spec, victim, clash):
 def test_a_parameter_named_t_is_a_parameter_not_time():
     def model(damping_name):
         g = bg.Model("msd")
-        g.add(bg.Se("force", 1.0), bg.J1("v"), bg.I("mass", 1.0), bg.C("spring", 0.01),
-              bg.R("damper", g.parameter(damping_name, 2.0)))
+        g.add(
+            bg.Se("force", 1.0),
+            bg.J1("v"),
+            bg.I("mass", 1.0),
+            bg.C("spring", 0.01),
+            bg.R("damper", g.parameter(damping_name, 2.0)),
+        )
         g.bond("force", "v")
         for e in ("mass", "spring", "damper"):
             g.bond("v", e)
@@ -669,7 +685,7 @@ def test_endpoint_typo_suggests_the_right_name(names, data):
     elem, dot, port = target.partition(".")
     pos = data.draw(st.integers(0, len(elem) - 1), label="position")
     new = data.draw(st.sampled_from("abcdefghijklmnopqrstuvwxyz0123456789_"), label="char")
-    typo_elem = elem[:pos] + new + elem[pos + 1:]
+    typo_elem = elem[:pos] + new + elem[pos + 1 :]
     assume(typo_elem != elem and typo_elem not in names and typo_elem != "HUB")
     typo = typo_elem + dot + port
     how = data.draw(st.sampled_from(["bond-from", "bond-to", "effort", "output"]), label="how")

@@ -1,6 +1,7 @@
 """Examples are tests: every command and Python example of README.md runs (a shell block's
 commands in order, in a directory with the README's model file and data), and the numbers
 the README shows are the numbers they give."""
+
 import contextlib
 import io
 import re
@@ -8,12 +9,12 @@ import shlex
 
 import numpy as np
 import pytest
+from conftest import ROOT
+from truth import apa_data
 
 import bondgraph as bg
 from bondgraph.cli import main
 from bondgraph.data import read_csv, write_csv
-from conftest import ROOT
-from truth import apa_data
 
 README = (ROOT / "README.md").read_text()
 
@@ -88,8 +89,9 @@ def block_with(text: str) -> list[str]:
 FIT_FILE, PLANT = "apa.csv --params", "--format python-control"
 
 
-@pytest.mark.parametrize("cmds", [c for c in readme_commands() if not any(FIT_FILE in x or PLANT in x for x in c)],
-                         ids=lambda c: c[0][:40])
+@pytest.mark.parametrize(
+    "cmds", [c for c in readme_commands() if not any(FIT_FILE in x or PLANT in x for x in c)], ids=lambda c: c[0][:40]
+)
 def test_readme_commands_run(cmds, tmp_path, monkeypatch):
     run_commands(cmds, setup_dir(tmp_path), monkeypatch)
 
@@ -122,6 +124,7 @@ def test_readme_python_control_example(tmp_path, monkeypatch):
     namespace = {}
     exec(python_block("from plant import model"), namespace)
     import control
+
     wn, zeta, _ = control.damp(namespace["model"], doprint=False)
     assert wn == pytest.approx([10.0, 10.0]) and zeta == pytest.approx([0.1, 0.1])
     assert control.dcgain(namespace["model"]) == pytest.approx(0.01)
@@ -149,6 +152,7 @@ def test_readme_operator_example_makes_a_backlash_loop(tmp_path, monkeypatch):
     (tmp_path / "backlash_example.py").write_text(python_block("class Backlash"))
     monkeypatch.syspath_prepend(str(tmp_path))
     from backlash_example import Backlash
+
     g = bg.Model("gap")
     V = g.input("V")
     h = g.operator("gap", Backlash(0.5), V)

@@ -5,6 +5,7 @@ coherence 0.035 at 3 kHz on a 10 kHz, 18 s amplified-actuator record whose outpu
 response there).  The estimates average a second segmentation that ends at the last sample: on
 a known linear filter driven by such a sweep, the coherence at the top is ~1 and the empirical
 response is the filter's analytic one; on a stationary drive both segmentations agree."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -14,7 +15,7 @@ from bondgraph.diagnosis.calibration import coherence_spectrum, empirical_frf
 from bondgraph.diagnosis.context import drive_band, welch, welch_length
 from bondgraph.diagnosis.filters import lowpass
 
-FS, N, TAU = 1000.0, 20000, 1e-3          # 20 s at 1 kHz; a lag with its corner at 159 Hz
+FS, N, TAU = 1000.0, 20000, 1e-3  # 20 s at 1 kHz; a lag with its corner at 159 Hz
 
 
 def _sweep(f0=1.0, f1=400.0):
@@ -40,16 +41,16 @@ def _record(u, noise=1e-3, seed=0):
 
 def test_the_segments_leave_out_the_end_of_the_record_without_the_second_segmentation():
     nper = welch_length(N, 8, 15)
-    assert (N - nper) % (nper - nper // 2) > 0.02 * N     # the first segmentation drops > 2 % of the record
+    assert (N - nper) % (nper - nper // 2) > 0.02 * N  # the first segmentation drops > 2 % of the record
 
 
 def test_a_sweep_is_resolved_up_to_its_last_frequencies():
     u = _sweep()
     y = _record(u)
-    f_top = 360.0                                          # passed 0.35 s before the end
+    f_top = 360.0  # passed 0.35 s before the end
     f, coh_single = signal.coherence(u, y, FS, nperseg=welch_length(N, 8, 15), detrend="linear")
     near = np.abs(f - f_top) <= 0.03 * f_top
-    assert np.median(coh_single[near]) < 0.5               # one segmentation: noise there
+    assert np.median(coh_single[near]) < 0.5  # one segmentation: noise there
     w, coh = coherence_spectrum(u, y, FS)
     near = np.abs(w - 2 * np.pi * f_top) <= 0.03 * 2 * np.pi * f_top
     assert np.median(coh[near]) > 0.9
@@ -57,7 +58,7 @@ def test_a_sweep_is_resolved_up_to_its_last_frequencies():
     top = np.abs(w - 2 * np.pi * f_top) <= 0.03 * 2 * np.pi * f_top
     assert top.any()
     assert np.max(np.abs(H[top] / _exact(w[top]) - 1)) < 0.05
-    assert drive_band(u, FS) > 330.0                       # 219 Hz from one segmentation
+    assert drive_band(u, FS) > 330.0  # 219 Hz from one segmentation
 
 
 def test_a_stationary_record_reads_alike_from_either_end():

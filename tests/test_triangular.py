@@ -22,6 +22,7 @@ an ellipse whose semi-axes are the singular values of [[Re X̂, Im X̂], [Re Ŷ,
 simulated steady-state ellipse comes from the eigenvalues of the x-y covariance over whole
 periods (λ = σ²/2).
 """
+
 from __future__ import annotations
 
 import json
@@ -29,19 +30,23 @@ import math
 
 import numpy as np
 import pytest
+from conftest import MODELS
 from scipy.linalg import solve_banded
 
 import bondgraph as bg
 from bondgraph.cli import main
 from bondgraph.data import read_csv
-from bondgraph.model.modelfile import load_model
-from conftest import MODELS
+from bondgraph.model.modelfile import load_model, read_model_module
 from bondgraph.support.errors import ModelError
-from bondgraph.model.modelfile import read_model_module
 from library.identification import fit_pi
+from library.triangular import (
+    MeasuredStroke,
+    contact_displacement,
+    static_tip_displacement,
+    stiffness_ratio,
+    tip_displacement,
+)
 from library.triangular import ellipse_axes as phasor_ellipse
-from library.triangular import (MeasuredStroke, contact_displacement, static_tip_displacement,
-                                stiffness_ratio, tip_displacement)
 
 TRI = str(MODELS / "triangular_drive.py")
 A = 50.0  # V, drive amplitude of the default EXPERIMENT
@@ -64,14 +69,14 @@ def stack_numbers(p):
 def tip_phasors(p, w, V1, V2):
     """Complex tip amplitudes (X̂, Ŷ) for drive phasors V1, V2 at ω = w (rad/s)."""
     _, K, CT, a, _ = stack_numbers(p)
-    D = 1j * w * p["Re"] + K * a ** 2 + 1 / CT
+    D = 1j * w * p["Re"] + K * a**2 + 1 / CT
     G = K * a / D
     Ks = K * (1j * w * p["Re"] + 1 / CT) / D + 1j * w * p["c_stack"]
     th = math.radians(p["half_angle"])
     s, c = math.sin(th), math.cos(th)
     ms = p["rho"] * p["area"] * p["length"] / 3
-    Zx = -w ** 2 * (p["m_x"] + 2 * s * s * ms) + 1j * w * p["c_x"] + p["k_x"]
-    Zy = -w ** 2 * (p["m_y"] + 2 * c * c * ms) + 1j * w * p["c_y"] + p["k_y"]
+    Zx = -(w**2) * (p["m_x"] + 2 * s * s * ms) + 1j * w * p["c_x"] + p["k_x"]
+    Zy = -(w**2) * (p["m_y"] + 2 * c * c * ms) + 1j * w * p["c_y"] + p["k_y"]
     return s * G * (V1 - V2) / (Zx + 2 * s * s * Ks), c * G * (V1 + V2) / (Zy + 2 * c * c * Ks)
 
 
@@ -86,10 +91,12 @@ def analytic_poles(p):
     _, K, CT, a, _ = stack_numbers(p)
     th = math.radians(p["half_angle"])
     ms = p["rho"] * p["area"] * p["length"] / 3
-    D = np.poly1d([p["Re"], K * a ** 2 + 1 / CT])
+    D = np.poly1d([p["Re"], K * a**2 + 1 / CT])
     out = []
-    for sig2, m, cc, k in ((math.sin(th) ** 2, p["m_x"], p["c_x"], p["k_x"]),
-                           (math.cos(th) ** 2, p["m_y"], p["c_y"], p["k_y"])):
+    for sig2, m, cc, k in (
+        (math.sin(th) ** 2, p["m_x"], p["c_x"], p["k_x"]),
+        (math.cos(th) ** 2, p["m_y"], p["c_y"], p["k_y"]),
+    ):
         body = np.poly1d([m + 2 * sig2 * ms, cc, k])
         stacks = K * np.poly1d([p["Re"], 1 / CT]) + np.poly1d([p["c_stack"], 0]) * D
         out += list((body * D + 2 * sig2 * stacks).roots)
@@ -111,7 +118,7 @@ def run(sim, p, f, phase=90.0, periods=2, n=200, settle=0.015, amplitude=A):
     k0 = math.ceil(settle * f)
     t = np.arange((k0 + periods) * n + 1) / (n * f)
     u = {"V": bg.Sine(amplitude, f), "Vq": bg.Sine(amplitude, f, phase=90.0)}
-    known = {s.name for s in sim.eqs.params}   # the symbolic parameters (not half_angle, formulation)
+    known = {s.name for s in sim.eqs.params}  # the symbolic parameters (not half_angle, formulation)
     r = sim.run(t, u, params={**{k: v for k, v in p.items() if k in known}, "phase": phase}, rtol=1e-10)
     keep = slice(k0 * n, (k0 + periods) * n)
     return r, keep
@@ -132,7 +139,7 @@ def test_in_phase_drive_gives_a_vertical_straight_line(field, f):
     r, keep = run(sim, p, f, phase=0.0)
     (major, minor), direction = ellipse_axes(r["x"][keep], r["y"][keep])
     assert minor / major < 1e-3
-    assert abs(direction[1]) > 1 - 1e-6          # along y (Sec. 3: in phase → vertical motion)
+    assert abs(direction[1]) > 1 - 1e-6  # along y (Sec. 3: in phase → vertical motion)
     assert major == pytest.approx(analytic_axes(p, f, 0.0)[0], rel=1e-4)
 
 
@@ -154,8 +161,10 @@ def test_phase_shifted_drive_ellipse_matches_the_lumped_analytic_axes(field, pha
     r, keep = run(sim, p, f, phase=phase)
     (major, minor), _ = ellipse_axes(r["x"][keep], r["y"][keep])
     amaj, amin = analytic_axes(p, f, phase)
-    print(f"phase {phase:g}, f = {f:g} Hz: axis ratio simulated {minor / major:.8f}, analytic {amin / amaj:.8f}; "
-          f"axes {major:.6e}, {minor:.6e} m vs {amaj:.6e}, {amin:.6e} m")
+    print(
+        f"phase {phase:g}, f = {f:g} Hz: axis ratio simulated {minor / major:.8f}, analytic {amin / amaj:.8f}; "
+        f"axes {major:.6e}, {minor:.6e} m vs {amaj:.6e}, {amin:.6e} m"
+    )
     assert minor / major == pytest.approx(amin / amaj, rel=1e-6)
     assert major == pytest.approx(amaj, rel=1e-6)
     assert minor == pytest.approx(amin, rel=1e-6)
@@ -179,11 +188,12 @@ def test_quasi_static_tip_amplitudes_follow_the_free_stroke_mapping(field):
     sim, p = field
     K_i, _, _, _, U_per_V = stack_numbers(p)
     U = U_per_V * A
-    assert U == pytest.approx(400e-12 * (A / 60e-6) * 36e-3)   # d33·E·l, 12 µm
-    assert K_i == pytest.approx(1e-4 / (36e-3 * 20.7e-12))     # A/(l·s33^E), 134 N/µm
+    assert U == pytest.approx(400e-12 * (A / 60e-6) * 36e-3)  # d33·E·l, 12 µm
+    assert K_i == pytest.approx(1e-4 / (36e-3 * 20.7e-12))  # A/(l·s33^E), 134 N/µm
     # the library's closed forms say the same (static, stack 1 alone)
-    assert [float(v) for v in static_tip_displacement(U, 0.0, K_i=K_i, k_x=p["k_x"], k_y=p["k_y"])] == \
-        pytest.approx([tip_phasors(p, 0.0, A, 0.0)[0].real, tip_phasors(p, 0.0, A, 0.0)[1].real], rel=1e-9)
+    assert [float(v) for v in static_tip_displacement(U, 0.0, K_i=K_i, k_x=p["k_x"], k_y=p["k_y"])] == pytest.approx(
+        [tip_phasors(p, 0.0, A, 0.0)[0].real, tip_phasors(p, 0.0, A, 0.0)[1].real], rel=1e-9
+    )
     for kx, ky in ((p["k_x"], p["k_y"]), (0.0, 0.0)):
         q = {**p, "k_x": kx, "k_y": ky}
         r, keep = run(sim, q, 5.0, periods=1, n=400)
@@ -238,8 +248,9 @@ def test_cli_simulate_default_experiment_and_phase_override(capsys, tmp_path):
     assert ds.names[:3] == ("t", "V", "Vq") and {"x", "y", "delta1", "delta2", "V1", "V2"} <= set(ds.names)
     last = slice(-1001, -1)  # the third 100 Hz period, 1000 samples: steady state
     col = ds.columns
-    np.testing.assert_allclose(col["V2"][last], p["offset"] + A * np.sin(2 * np.pi * 100 * ds.t[last] + np.pi / 2),
-                               atol=1e-9)
+    np.testing.assert_allclose(
+        col["V2"][last], p["offset"] + A * np.sin(2 * np.pi * 100 * ds.t[last] + np.pi / 2), atol=1e-9
+    )
     (major, minor), _ = ellipse_axes(col["x"][last], col["y"][last])
     amaj, amin = analytic_axes(p, 100.0, 90.0)
     assert minor / major == pytest.approx(amin / amaj, rel=1e-3)
@@ -256,7 +267,7 @@ def test_cli_linearize_json_against_the_analytic_poles_and_gain(capsys):
     res = json.loads(cli(capsys, "linearize", TRI, "--json"))
     assert res["input"] == "V" and res["output"] == "x"
     wn = res["natural_frequencies_rad_s"]
-    assert wn == sorted(wn) and len(wn) == 4      # x and y modes, two electrical poles
+    assert wn == sorted(wn) and len(wn) == 4  # x and y modes, two electrical poles
     poles = np.array([complex(*z) for z in res["poles"]])
     expect = analytic_poles(p)
     assert np.max(np.abs(np.sort_complex(poles) - expect) / np.abs(expect)) < 1e-6
@@ -285,13 +296,13 @@ def test_eq17_against_a_finite_difference_wave_solution():
         gamma = w * math.sqrt(rho * s33E)
         n = 2000
         h = l / n
-        ab = np.zeros((4, n + 1), complex)            # banded form: 2 sub-, 1 super-diagonal
-        ab[1, 0] = 1.0                                 # u(0) = 0
-        ab[0, 2:] = 1 / h ** 2                         # interior: (u[i-1] - 2u[i] + u[i+1])/h^2 + gamma^2 u[i]
-        ab[1, 1:n] = -2 / h ** 2 + gamma ** 2
-        ab[2, 0:n - 1] = 1 / h ** 2
+        ab = np.zeros((4, n + 1), complex)  # banded form: 2 sub-, 1 super-diagonal
+        ab[1, 0] = 1.0  # u(0) = 0
+        ab[0, 2:] = 1 / h**2  # interior: (u[i-1] - 2u[i] + u[i+1])/h^2 + gamma^2 u[i]
+        ab[1, 1:n] = -2 / h**2 + gamma**2
+        ab[2, 0 : n - 1] = 1 / h**2
         Ke = stiffness_ratio(w, K_i=K_i, **body) * K_i
-        ab[1, n] = 3 / (2 * h) + s33E * Ke / A         # head: second-order one-sided u'(l)
+        ab[1, n] = 3 / (2 * h) + s33E * Ke / A  # head: second-order one-sided u'(l)
         ab[2, n - 1] = -4 / (2 * h)
         ab[3, n - 2] = 1 / (2 * h)
         b = np.zeros(n + 1, complex)
@@ -305,7 +316,7 @@ def test_eq17_against_a_finite_difference_wave_solution():
 def _phasors(x, y):
     """First-harmonic phasors of x and y over whole periods (uniform samples)."""
     k = np.arange(x.size)
-    e = np.exp(-2j * np.pi * k / (x.size // 2))     # two periods in the window
+    e = np.exp(-2j * np.pi * k / (x.size // 2))  # two periods in the window
     return 2 * np.mean((x - x.mean()) * e).conjugate(), 2 * np.mean((y - y.mean()) * e).conjugate()
 
 
@@ -327,19 +338,32 @@ def test_ellipse_versus_frequency_matches_eq17(stroke):
         if stroke == "measured":
             U_per_V = mod.MEASURED_STROKE.per_volt(f)
         w = 2 * math.pi * f
-        X, Y = tip_displacement(U_per_V * A, U_per_V * A * 1j, omega=w, K_i=K_i, k_x=p["k_x"], k_y=p["k_y"],
-                                m_x=p["m_x"], m_y=p["m_y"], c_x=p["c_x"], c_y=p["c_y"], rho=p["rho"],
-                                s33E=p["s33E"], length=p["length"], half_angle=p["half_angle"])
+        X, Y = tip_displacement(
+            U_per_V * A,
+            U_per_V * A * 1j,
+            omega=w,
+            K_i=K_i,
+            k_x=p["k_x"],
+            k_y=p["k_y"],
+            m_x=p["m_x"],
+            m_y=p["m_y"],
+            c_x=p["c_x"],
+            c_y=p["c_y"],
+            rho=p["rho"],
+            s33E=p["s33E"],
+            length=p["length"],
+            half_angle=p["half_angle"],
+        )
         eq17 = phasor_ellipse(X, Y)
         lumped = analytic_axes({**p, "d33": U_per_V * p["h"] / p["length"]}, f, 90.0)
         print(f"{stroke} {f:g} Hz: simulated {sim_axes * 1e6} um, eq. 17 {eq17 * 1e6}, lumped {lumped * 1e6}")
         np.testing.assert_allclose(sim_axes, lumped, rtol=1e-5)
-        np.testing.assert_allclose(sim_axes, eq17, rtol=2e-3)   # amplifier and coupling terms
+        np.testing.assert_allclose(sim_axes, eq17, rtol=2e-3)  # amplifier and coupling terms
         axes[f] = sim_axes
     ratio = axes[100.0] / axes[5.0]
     expect = 5.5 / 13.4 if stroke == "measured" else 1.0
     np.testing.assert_allclose(ratio, expect, rtol=1e-3)
-    if stroke == "measured":   # the numbers of the model file's docstring
+    if stroke == "measured":  # the numbers of the model file's docstring
         np.testing.assert_allclose(axes[5.0] * 1e6, [12.50, 10.05], atol=0.01)
         np.testing.assert_allclose(axes[100.0] * 1e6, [5.13, 4.13], atol=0.01)
 
@@ -364,8 +388,10 @@ def test_hysteretic_stroke_loop_from_the_p885_record(capsys):
     """The hysteretic stroke option (eq. 18) uses the loop shape identified on the real P-885
     record: re-derive the normalised weights, then check the drive: at 5 Hz the tip motion is no
     longer an ellipse and stack 1's stroke traces a loop against its drive voltage."""
-    from bondgraph.data import read_csv
     from conftest import ROOT
+
+    from bondgraph.data import read_csv
+
     mod, _ = read_model_module(TRI)
     ds = read_csv(ROOT / "tests" / "data" / "p885_bursts.csv")
     train = ds.t < 25.0
@@ -383,9 +409,8 @@ def test_hysteretic_stroke_loop_from_the_p885_record(capsys):
     X, Y = _phasors(np.r_[x1, x1], np.r_[y1, y1])
     k = np.arange(x1.size)
     fit_x = x1.mean() + np.real(X * np.exp(2j * np.pi * k / x1.size))
-    assert np.max(np.abs(x1 - fit_x)) > 0.02 * np.ptp(x1)          # harmonics: not an ellipse
+    assert np.max(np.abs(x1 - fit_x)) > 0.02 * np.ptp(x1)  # harmonics: not an ellipse
     d1, v1 = r["delta1"][keep], r["V"][keep]
-    up = np.argsort(v1)
     assert np.ptp(d1) > 0 and abs(np.corrcoef(v1, d1)[0, 1]) < 0.999  # a loop, not a line
     out = cli(capsys, "equations", TRI, "--set", "stroke=hysteretic")
     assert "H1" in out and "H2" in out

@@ -6,26 +6,26 @@ where it claims none, every effect visible by the rule, every cause and mechanis
 and that its hand-written physics agrees with the model files it is drawn around (an
 independent route to the same linear response).  They do not run the diagnosis.
 """
+
 from __future__ import annotations
 
 import math
 
 import numpy as np
 import pytest
+from truthgen import SEEDS, VISIBLE, bimorph, design, draw, drives, fresh_seeds, stack
+from truthgen.draws import factor
+from truthgen.families import FAMILIES, ROOT, Shape
+from truthgen.generator import plan
+from truthgen.mechanisms import MECHANISMS, creep_cells
+from truthgen.operators import HYSTERESIS, MaxwellSlip, loop_stats
+from truthgen.runner import _chain, diagnose_record, score
+from truthgen.system import simulate
 
 from bondgraph import Sine
 from bondgraph.data import read_csv
 from bondgraph.model.modelfile import load_model
 from bondgraph.numerics.simulate import simulate as bondgraph_simulate
-from truthgen import SEEDS, VISIBLE, design, draw, fresh_seeds
-from truthgen.generator import plan
-from truthgen import bimorph, drives, stack
-from truthgen.draws import factor
-from truthgen.families import FAMILIES, ROOT, Shape
-from truthgen.mechanisms import MECHANISMS, creep_cells
-from truthgen.operators import HYSTERESIS, MaxwellSlip, loop_stats
-from truthgen.runner import _chain, diagnose_record, score
-from truthgen.system import simulate
 
 
 @pytest.fixture(scope="module")
@@ -34,6 +34,7 @@ def ci_records():
 
 
 # ----------------------------------------------------------------------------- the protocol
+
 
 def test_seed_sets_are_disjoint_and_meet_the_protocol():
     sets = {k: set(v) for k, v in SEEDS.items()}
@@ -73,11 +74,18 @@ def test_every_cause_of_every_family_has_mechanisms_and_revealing_drives():
 
 def test_dev_seeds_reach_every_mechanism_of_every_cause():
     """Every mechanism a family's causes can use is drawn by some dev seed, at either size."""
-    wanted = {(f.physics, c, name) for f in FAMILIES.values() for entry in f.causes
-              for c in entry.split("+") if c != "none" for name in MECHANISMS[f.physics][c]}
+    wanted = {
+        (f.physics, c, name)
+        for f in FAMILIES.values()
+        for entry in f.causes
+        for c in entry.split("+")
+        if c != "none"
+        for name in MECHANISMS[f.physics][c]
+    }
     for size in ("ci", "bench"):
-        seen = {(pl.family.physics, m.cause, m.name) for pl in (plan(s, size) for s in SEEDS["dev"])
-                for m in pl.mechanisms}
+        seen = {
+            (pl.family.physics, m.cause, m.name) for pl in (plan(s, size) for s in SEEDS["dev"]) for m in pl.mechanisms
+        }
         assert seen == wanted, sorted(wanted - seen)
 
 
@@ -90,6 +98,7 @@ def test_factor_never_returns_the_nominal_value():
 
 
 # ----------------------------------------------------------------------------- the records
+
 
 def test_draw_is_deterministic_per_seed():
     a, b = draw(1011, "ci"), draw(1011, "ci")
@@ -135,7 +144,7 @@ def test_records_are_realistic_measurements(ci_records):
         assert rec.noise_rms / stroke == pytest.approx(rec.noise["level"], rel=0.1)
         # the measurement is gain * truth + offset + noise
         resid = rec.x - rec.noise["gain"] * rec.clean - rec.noise["offset"] * rec.stroke
-        assert np.sqrt(np.mean(resid ** 2)) == pytest.approx(rec.noise_rms, rel=1e-6)
+        assert np.sqrt(np.mean(resid**2)) == pytest.approx(rec.noise_rms, rel=1e-6)
         assert rec.params != rec.nominal
         assert abs(rec.V[0]) < 1e-6 * max(1.0, np.ptp(rec.V)) + 0.01 * np.ptp(rec.V)
 
@@ -155,12 +164,16 @@ def test_csv_writes_and_reads_back_without_the_truth(tmp_path, ci_records):
 
 # ----------------------------------------------------------------------------- the physics
 
-@pytest.mark.parametrize("family,overrides,signal,h,T", [
-    ("apa", {}, Sine(amplitude=60.0, frequency=50.0, phase=-90.0, offset=60.0), 1e-5, 0.05),
-    ("stack", {"lumped": True}, Sine(amplitude=100.0, frequency=500.0), 1e-6, 0.004),
-    ("t215", {}, Sine(amplitude=1.0, frequency=300.0), 1e-5, 0.05),
-    ("t226", {}, Sine(amplitude=1.0, frequency=400.0), 1e-5, 0.05),
-])
+
+@pytest.mark.parametrize(
+    "family,overrides,signal,h,T",
+    [
+        ("apa", {}, Sine(amplitude=60.0, frequency=50.0, phase=-90.0, offset=60.0), 1e-5, 0.05),
+        ("stack", {"lumped": True}, Sine(amplitude=100.0, frequency=500.0), 1e-6, 0.004),
+        ("t215", {}, Sine(amplitude=1.0, frequency=300.0), 1e-5, 0.05),
+        ("t226", {}, Sine(amplitude=1.0, frequency=400.0), 1e-5, 0.05),
+    ],
+)
 def test_hand_written_linear_truth_matches_the_model_file(family, overrides, signal, h, T):
     """Two routes to one answer: the truth's hand-written equations at the file's values and
     the bond-graph model file simulated by the framework."""
@@ -193,7 +206,7 @@ def test_cantilever_ratios_match_the_t215_beam_modes():
 def test_field_hysteresis_operators_lag_and_are_rate_independent(name):
     op = HYSTERESIS[name](np.random.default_rng(3))
     gap, span = loop_stats(op)
-    assert gap > 0.05 * span      # the descending branch lies above the rising one: dissipative
+    assert gap > 0.05 * span  # the descending branch lies above the rising one: dissipative
     u = np.sin(np.linspace(0, 4 * np.pi, 801))
     fine = op.apply(np.interp(np.linspace(0, 800, 3201), np.arange(801), u))[::4]
     assert np.allclose(op.apply(u), fine, atol=0.02 * span)
@@ -208,7 +221,7 @@ def test_maxwell_slip_force_is_bounded_by_its_sliders():
 def test_log_time_creep_grows_by_its_strength_per_decade():
     cells = creep_cells("log-time", 0.02, {"taus": 10 ** np.arange(-4, 4, 1 / 3)}, 10.0)
     tau, w = map(np.array, zip(*cells))
-    creep = lambda t: float(np.sum(w * -np.expm1(-t / tau)))   # noqa: E731
+    creep = lambda t: float(np.sum(w * -np.expm1(-t / tau)))  # noqa: E731
     assert creep(1.0) - creep(0.1) == pytest.approx(0.02, rel=0.05)
 
 
@@ -221,8 +234,11 @@ def test_every_mechanism_changes_the_response():
         t = np.arange(int(T / h) + 1) * h
         r = fam.drive_range(p, Shape(fs, T, h, "fast"), np.random.default_rng(0))
         for cause, mechs in MECHANISMS[fam.physics].items():
-            kinds = [k for k in fam.reveal.get(cause, ()) if k in ("steps", "chirp", "stepped-sine",
-                                                                      "resonant-bursts", "triangle")]
+            kinds = [
+                k
+                for k in fam.reveal.get(cause, ())
+                if k in ("steps", "chirp", "stepped-sine", "resonant-bursts", "triangle")
+            ]
             if not kinds:
                 continue
             V = drives.signal(drives.draw(kinds[0], r, T, fs, np.random.default_rng(1)), t)
@@ -240,6 +256,7 @@ def test_every_mechanism_changes_the_response():
 
 
 # ----------------------------------------------------------------------------- scoring
+
 
 def test_scoring_of_null_single_and_compound_truths():
     assert score((), True, "none", [])["right"]
@@ -260,14 +277,86 @@ def test_fresh_seeds_lie_outside_every_set_and_hold_one_effect_or_none():
     with pytest.raises(ValueError, match="unknown families"):
         fresh_seeds(3000, 5, {"apa", "t251"})
     # the runs of 20 measured so far (benchmarks/README.md, "Fresh records" and later)
-    assert [fresh_seeds(s, 20, {"apa", "t215"})[-1] for s in (3000, 3032, 3066, 3100, 3135, 3170, 3202, 3236, 3272,
-                                                              3304, 3339, 3373, 3409, 3441, 3475, 3511, 3543,
-                                                              3578, 3610, 3646, 3680, 3712, 3747, 3782, 3817,
-                                                              3849, 3883, 3919, 3951, 3986, 4018, 4054, 4088, 4120,
-                                                              4155, 4190, 4225)] == \
-        [3031, 3063, 3098, 3134, 3169, 3201, 3235, 3271, 3303, 3338, 3372, 3408, 3440, 3474, 3510, 3542, 3577,
-         3609, 3645, 3679, 3711, 3746, 3781, 3816, 3848, 3882, 3918, 3950, 3985, 4017, 4053, 4087, 4119, 4154,
-         4189, 4224, 4256]
+    assert [
+        fresh_seeds(s, 20, {"apa", "t215"})[-1]
+        for s in (
+            3000,
+            3032,
+            3066,
+            3100,
+            3135,
+            3170,
+            3202,
+            3236,
+            3272,
+            3304,
+            3339,
+            3373,
+            3409,
+            3441,
+            3475,
+            3511,
+            3543,
+            3578,
+            3610,
+            3646,
+            3680,
+            3712,
+            3747,
+            3782,
+            3817,
+            3849,
+            3883,
+            3919,
+            3951,
+            3986,
+            4018,
+            4054,
+            4088,
+            4120,
+            4155,
+            4190,
+            4225,
+        )
+    ] == [
+        3031,
+        3063,
+        3098,
+        3134,
+        3169,
+        3201,
+        3235,
+        3271,
+        3303,
+        3338,
+        3372,
+        3408,
+        3440,
+        3474,
+        3510,
+        3542,
+        3577,
+        3609,
+        3645,
+        3679,
+        3711,
+        3746,
+        3781,
+        3816,
+        3848,
+        3882,
+        3918,
+        3950,
+        3985,
+        4017,
+        4053,
+        4087,
+        4119,
+        4154,
+        4189,
+        4224,
+        4256,
+    ]
 
 
 def test_diagnosis_json_chains_are_read_in_every_shape():
@@ -275,12 +364,19 @@ def test_diagnosis_json_chains_are_read_in_every_shape():
     simpler shapes of other tools."""
     assert _chain({"cause": "none", "gain": 1.0}) == ([], [])
     assert _chain({"cause": "creep", "gain": 2.5}) == (["creep"], [2.5])
-    assert _chain({"cause": "creep", "causes": ["creep", "hysteresis"],
-                   "steps": [{"cause": "creep", "gain": 3.0}, {"cause": "hysteresis", "gain": 1.5}]}) == (
-        ["creep", "hysteresis"], [3.0, 1.5])
-    assert _chain({"cause": "hysteresis", "causes": [{"cause": "hysteresis", "gain": 4.0},
-                                                     {"cause": "electrical-rc", "gain": 1.3}]}) == (
-        ["hysteresis", "electrical"], [4.0, 1.3])
+    assert _chain(
+        {
+            "cause": "creep",
+            "causes": ["creep", "hysteresis"],
+            "steps": [{"cause": "creep", "gain": 3.0}, {"cause": "hysteresis", "gain": 1.5}],
+        }
+    ) == (["creep", "hysteresis"], [3.0, 1.5])
+    assert _chain(
+        {
+            "cause": "hysteresis",
+            "causes": [{"cause": "hysteresis", "gain": 4.0}, {"cause": "electrical-rc", "gain": 1.3}],
+        }
+    ) == (["hysteresis", "electrical"], [4.0, 1.3])
 
 
 def test_diagnose_helper_reports_cli_failures(tmp_path, ci_records):

@@ -8,16 +8,17 @@ law vs. a drive polynomial; a second mass vs. a parallel resonator; quadratic ve
 vs. Stanton damping; a second beam mode vs. a parallel resonator ...), then simulated and
 sampled with white sensor noise.
 """
+
 from __future__ import annotations
 
 import numpy as np
 import sympy as sp
+from conftest import MODELS
 
 import bondgraph as bg
-from bondgraph import C, I, J0, J1, Quantity, R, Se
+from bondgraph import J0, J1, C, I, Quantity, R, Se
 from bondgraph.data import Dataset
 from bondgraph.model.modelfile import load_model
-from conftest import MODELS
 from library.hysteresis import MaxwellSlip
 from library.piezo import piezo_layer
 
@@ -42,7 +43,7 @@ def apa_drive(t: np.ndarray) -> np.ndarray:
     d = t >= seg[2]
     td = t[d] - seg[2]
     span = T - seg[2]
-    v[d] = 60 + 20 * np.sin(2 * np.pi * (2 * td + 0.5 * (1500 - 2) / span * td ** 2))
+    v[d] = 60 + 20 * np.sin(2 * np.pi * (2 * td + 0.5 * (1500 - 2) / span * td**2))
     return _smooth_edges(t, v)
 
 
@@ -83,8 +84,9 @@ def measure(model: bg.Model, t: np.ndarray, V: np.ndarray, noise: float, seed: i
 # ---- APA-like truths ----------------------------------------------------------------------------
 def apa_truth(effect: str, changes: dict = APA_CHANGES) -> bg.Model:
     """The APA-120ML with changed linear parameters (factors) and one hidden effect, built from elements."""
-    lm = load_model(MODELS / "apa120ml.py", {k: f * load_model(MODELS / "apa120ml.py").params.value(k)
-                                              for k, f in changes.items()})
+    lm = load_model(
+        MODELS / "apa120ml.py", {k: f * load_model(MODELS / "apa120ml.py").params.value(k) for k, f in changes.items()}
+    )
     p = lm.params
     if effect == "electrical-rc":
         p.set("Re", 400.0)
@@ -164,9 +166,9 @@ def t226_truth(effect: str, changes: dict = T226_CHANGES) -> bg.Model:
         drive = 0.8 * V + 0.5 * zb
     g.add(Se("force", mp * drive), J1("mode"), I("mass", 1))
     if effect == "softening":  # Shahabi et al. (2019)'s cubic and quintic modal stiffness
-        g.add(C("spring", energy=lambda q: w ** 2 * q ** 2 / 2 - 6.94e17 * q ** 4 / 4 + 1.443e28 * q ** 6 / 6))
+        g.add(C("spring", energy=lambda q: w**2 * q**2 / 2 - 6.94e17 * q**4 / 4 + 1.443e28 * q**6 / 6))
     else:
-        g.add(C("spring", 1 / w ** 2))
+        g.add(C("spring", 1 / w**2))
     if effect == "nonlinear-damping":  # damping growing with the amplitude |q| (loss per cycle ∝ q³)
         q = Quantity("q", "spring")
         g.add(R("damper", law=lambda f: (2 * z * w + 2.0e7 * sp.Abs(q)) * f))
@@ -178,8 +180,13 @@ def t226_truth(effect: str, changes: dict = T226_CHANGES) -> bg.Model:
     x = phi * g.displacement("spring")
     if effect == "higher-mode":  # the second bending mode of the same beam, ratio 6.27 (uniform beam)
         w2, z2 = 6.27 * w, 0.012
-        g.add(Se("force2", -1.5 * mp * drive), J1("mode2"), I("mass2", 1), C("spring2", 1 / w2 ** 2),
-              R("damper2", 2 * z2 * w2))
+        g.add(
+            Se("force2", -1.5 * mp * drive),
+            J1("mode2"),
+            I("mass2", 1),
+            C("spring2", 1 / w2**2),
+            R("damper2", 2 * z2 * w2),
+        )
         g.bond("force2", "mode2")
         for e in ("mass2", "spring2", "damper2"):
             g.bond("mode2", e)

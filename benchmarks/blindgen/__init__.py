@@ -113,7 +113,9 @@ References
       piezoelectric bending actuators: theoretical and experimental studies", Comptes Rendus
       Mecanique 347(12) (2019) 953-966.
 """
-from .generate import FAMILIES, Refused, generate as draw, plan
+
+from .generate import FAMILIES, Refused, plan
+from .generate import generate as draw
 from .record import Record
 
 __all__ = ["FAMILIES", "Record", "Refused", "draw", "plan"]

@@ -13,6 +13,7 @@ polarization Kelvin-Voigt chain (creep: p0 = l Q - sum p_n, tau_n p_n' = r_n E2/
 electrical source (series R, series L, amplifier bandwidth, amplifier current limit), an end
 stop on x, or one more mechanical degree of freedom (shell, base, sensor bracket).
 """
+
 from __future__ import annotations
 
 import math
@@ -43,26 +44,47 @@ DRIVES = {
     "electrical": ("chirp", "noise", "bursts", "steps"),
     "higher-mode": ("hi-chirp", "hi-noise", "bursts", "stepped-sine"),
 }
-LIN = ("Re", "iC", "a", "K", "c", "M")          # iC = l^2 kx = 1/C0 (V/C)
-SPREAD = {"Re": (2.0, True), "iC": (0.25, False), "a": (0.25, False), "K": (0.30, False),
-          "c": (8.0, True), "M": (0.30, False)}
+LIN = ("Re", "iC", "a", "K", "c", "M")  # iC = l^2 kx = 1/C0 (V/C)
+SPREAD = {
+    "Re": (2.0, True),
+    "iC": (0.25, False),
+    "a": (0.25, False),
+    "K": (0.30, False),
+    "c": (8.0, True),
+    "M": (0.30, False),
+}
 REFIT = {"Re": 3.0, "iC": 1.6, "a": 1.6, "K": 1.6, "c": 15.0, "M": 1.6}
 HM_BAND = (1500.0, 0.4 * FS)
 
 
 def nominal() -> dict:
     p = model_values("apa")
-    return {"Re": p["Re"], "iC": p["l"] ** 2 * p["kx"], "a": p["a"] * p["T"], "K": p["K"],
-            "c": p["c"], "M": p["M"], "l": p["l"]}
+    return {
+        "Re": p["Re"],
+        "iC": p["l"] ** 2 * p["kx"],
+        "a": p["a"] * p["T"],
+        "K": p["K"],
+        "c": p["c"],
+        "M": p["M"],
+        "l": p["l"],
+    }
 
 
 def limits() -> drives.Limits:
     n = nominal()
-    return drives.Limits(vmax=V_RATED, vbip=V_RATED / 2, qs_f=(0.5, 20.0), dyn_f=(1.0, 0.45 * FS),
-                         f_res=math.sqrt(n["K"] / n["M"]) / (2 * math.pi),
-                         zeta_res=n["c"] / (2 * math.sqrt(n["K"] * n["M"])), holds=(1.0, 4.0),
-                         ramps=(0.05, 1.0), dyn_amp=(3.0, 20.0), p_unipolar=0.7,
-                         hi_band=(100.0, 500.0))
+    return drives.Limits(
+        vmax=V_RATED,
+        vbip=V_RATED / 2,
+        qs_f=(0.5, 20.0),
+        dyn_f=(1.0, 0.45 * FS),
+        f_res=math.sqrt(n["K"] / n["M"]) / (2 * math.pi),
+        zeta_res=n["c"] / (2 * math.sqrt(n["K"] * n["M"])),
+        holds=(1.0, 4.0),
+        ramps=(0.05, 1.0),
+        dyn_amp=(3.0, 20.0),
+        p_unipolar=0.7,
+        hi_band=(100.0, 500.0),
+    )
 
 
 def draw_linear(rng) -> dict:
@@ -77,8 +99,7 @@ def draw_linear(rng) -> dict:
 def linear_ss(lin, output="x"):
     """(A, B, C) of the linear device, states (Q, x, v), input Vs; output x or Q."""
     Re, iC, a, K, c, M = (lin[k] for k in LIN)
-    A = np.array([[-(iC + a * a * K) / Re, a * K / Re, 0.0], [0.0, 0.0, 1.0],
-                  [K * a / M, -K / M, -c / M]])
+    A = np.array([[-(iC + a * a * K) / Re, a * K / Re, 0.0], [0.0, 0.0, 1.0], [K * a / M, -K / M, -c / M]])
     C = np.array([0.0, 1.0, 0.0]) if output == "x" else np.array([1.0, 0.0, 0.0])
     return A, np.array([1.0 / Re, 0.0, 0.0]), C
 
@@ -106,12 +127,22 @@ def pilot(lin, V, dt) -> dict:
 
 # ---- causes: knobs (drawn), strength (knob, step, limit) and realisation -----------------------
 STRENGTH = {
-    "bouc-wen": ("h", 1.3, 0.25), "maxwell-slip": ("h", 1.3, 0.25), "duhem": ("h", 1.3, 0.15),
-    "kelvin-voigt": ("r_T", 1.3, 0.25), "log": ("r_T", 1.3, 0.25), "fractional": ("r_T", 1.3, 0.25),
-    "tanh": ("r_max", 1.1, 0.8), "polynomial": ("e3", 1.3, 0.35), "end-stop": ("overshoot", 1.3, 0.45),
-    "series-resistance": ("ratio", 1.5, 600.0), "series-inductance": ("f_lc", 1 / 1.3, 200.0),
-    "amplifier-pole": ("f_a", 1 / 1.4, 60.0), "current-limit": ("i_max", 1 / 1.4, 0.01),
-    "shell": ("mu", 1.3, 0.5), "base": ("mass_ratio", 1 / 1.4, 1.0), "sensor-bracket": ("eps", 1.5, 0.6),
+    "bouc-wen": ("h", 1.3, 0.25),
+    "maxwell-slip": ("h", 1.3, 0.25),
+    "duhem": ("h", 1.3, 0.15),
+    "kelvin-voigt": ("r_T", 1.3, 0.25),
+    "log": ("r_T", 1.3, 0.25),
+    "fractional": ("r_T", 1.3, 0.25),
+    "tanh": ("r_max", 1.1, 0.8),
+    "polynomial": ("e3", 1.3, 0.35),
+    "end-stop": ("overshoot", 1.3, 0.45),
+    "series-resistance": ("ratio", 1.5, 600.0),
+    "series-inductance": ("f_lc", 1 / 1.3, 200.0),
+    "amplifier-pole": ("f_a", 1 / 1.4, 60.0),
+    "current-limit": ("i_max", 1 / 1.4, 0.01),
+    "shell": ("mu", 1.3, 0.5),
+    "base": ("mass_ratio", 1 / 1.4, 1.0),
+    "sensor-bracket": ("eps", 1.5, 0.6),
 }
 
 
@@ -178,7 +209,7 @@ class Kernel:
         self.stiff = 1.0
         self.info = {}
         kx = lin["iC"] / lin["l"] ** 2
-        self.ep[0] = V_RATED / (lin["l"] * kx)                  # p_ref: dipole at rated voltage
+        self.ep[0] = V_RATED / (lin["l"] * kx)  # p_ref: dipole at rated voltage
         if mech is not None:
             self._realise(mech, knobs, pil, kx)
 
@@ -208,7 +239,7 @@ class Kernel:
         elif mech == "polynomial":
             self.flags[2] = 2
             ep[8], ep[9], ep[10] = k["e2"], k["e3"], pil["p_max"]
-            self.stiff = 1 + 2 * abs(k["e2"]) + 3 * k["e3"] * 1.5 ** 2
+            self.stiff = 1 + 2 * abs(k["e2"]) + 3 * k["e3"] * 1.5**2
         elif mech == "end-stop":
             self.flags[2] = 3
             ep[8] = pil["x_max"] * (1 - k["overshoot"])
@@ -222,30 +253,31 @@ class Kernel:
             self.flags[0] = 1
             ep[1] = 1 / ((2 * np.pi * k["f_lc"]) ** 2 / (lin["iC"] + lin["a"] ** 2 * lin["K"]))
             self.info = {"L": ep[1]}
-        elif mech == "amplifier-pole":     # second-order amplifier bandwidth
+        elif mech == "amplifier-pole":  # second-order amplifier bandwidth
             self.flags[0] = 2
             ep[2] = 2 * np.pi * k["f_a"]
             ep[3] = k["zeta"]
-        elif mech == "current-limit":      # amplifier output current saturating at i_max
+        elif mech == "current-limit":  # amplifier output current saturating at i_max
             self.flags[0] = 3
             ep[1] = k["i_max"]
         else:
             self.flags[3] = ("shell", "base", "sensor-bracket").index(mech) + 1
             w2 = (2 * np.pi * k["f"]) ** 2
-            if mech == "shell":       # output part mu*M on a frame flexure k_f
+            if mech == "shell":  # output part mu*M on a frame flexure k_f
                 mu = k["mu"]
                 mred = mu * (1 - mu) * lin["M"]
                 ep[11], ep[12], ep[13] = mu, w2 * mred, 2 * k["zeta"] * np.sqrt(w2) * mred
-            elif mech == "base":      # base of mass m_b on a fixture spring k_b
+            elif mech == "base":  # base of mass m_b on a fixture spring k_b
                 mb = k["mass_ratio"] * lin["M"]
                 ep[11], ep[12], ep[13] = mb, w2 * mb, 2 * k["zeta"] * np.sqrt(w2) * mb
-            else:                     # sensor bracket, excited by the reaction force
+            else:  # sensor bracket, excited by the reaction force
                 ep[11], ep[12], ep[13] = k["eps"], np.sqrt(w2), k["zeta"]
 
     def args(self):
         lin = self.lin
-        la = np.array([lin["Re"], lin["iC"], lin["a"], lin["K"], lin["c"], lin["M"], lin["l"],
-                       lin["iC"] / lin["l"] ** 2])
+        la = np.array(
+            [lin["Re"], lin["iC"], lin["a"], lin["K"], lin["c"], lin["M"], lin["l"], lin["iC"] / lin["l"] ** 2]
+        )
         return la, self.flags, self.ep, self.cr_r, self.cr_tau, self.ms_k, self.ms_f
 
     def jacobian(self):
@@ -287,7 +319,7 @@ def _softplus(z):
 
 @njit(cache=True)
 def _rhs(y, vc, lin, fl, ep, cr_r, cr_tau, ms_k, ms_f, ms_s, dy):
-    Re, iC, a, K, c, M, l, kx = lin[0], lin[1], lin[2], lin[3], lin[4], lin[5], lin[6], lin[7]
+    Re, a, K, c, M, l, kx = lin[0], lin[2], lin[3], lin[4], lin[5], lin[6], lin[7]
     nc = cr_r.size
     Q, x, v = y[0], y[1], y[2]
     vs = y[4] if fl[0] == 2 else vc

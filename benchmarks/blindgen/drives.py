@@ -10,6 +10,7 @@ frequency grid, swept up then down, at one to three levels); ``hi-chirp`` and ``
 are high-band tests that start above the first resonance (at lim.hi_band).  Frequencies come
 from the model file's nominal device, never from the drawn one.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -65,7 +66,7 @@ def _periodic(rng, n, dt, lim, wave):
     k = (f * t).astype(int)
     amp = np.where(k < cycles, levels[np.minimum(k * levels.size // cycles, levels.size - 1)], 0.0)
     frac = (f * t) % 1.0
-    if lo == 0.0:       # unipolar, 0..hi
+    if lo == 0.0:  # unipolar, 0..hi
         w = (1 - np.cos(phase)) / 2 if wave == "sine" else 1 - np.abs(2 * frac - 1)
         return hi * amp * w
     w = np.sin(phase) if wave == "sine" else 2 / np.pi * np.arcsin(np.sin(phase))
@@ -84,7 +85,7 @@ def _staircase(rng, n, dt, lim, ramp_range):
         new = rng.uniform(lo, hi) if rng.random() < 0.8 else 0.0
         end = min(n, i + ramp)
         v[i:end] = level + (new - level) * np.arange(1, end - i + 1) / ramp
-        v[end:end + hold] = new
+        v[end : end + hold] = new
         level, i = new, end + hold
     return _to_zero(v, max(1, int(ramp_range[1] / dt)))
 
@@ -117,8 +118,8 @@ def _with_bias(x, bias, dt):
     b[-m:] *= rise[::-1]
     w = np.ones(n)
     w[:m] = w[-m:] = 0.0
-    w[m:2 * m] = rise
-    w[-2 * m:-m] = rise[::-1]
+    w[m : 2 * m] = rise
+    w[-2 * m : -m] = rise[::-1]
     return b + x * w
 
 
@@ -136,10 +137,13 @@ def chirp(rng, n, dt, lim, high=False):
 def noise(rng, n, dt, lim, high=False):
     amp = rng.uniform(*lim.dyn_amp)
     fc = min(logu(rng, 0.3 * lim.dyn_f[1], lim.dyn_f[1]), 0.45 / dt)
-    band = butter(4, [logu(rng, *lim.hi_band), fc], "bandpass", fs=1 / dt, output="sos") if high else \
-        butter(4, fc, fs=1 / dt, output="sos")
+    band = (
+        butter(4, [logu(rng, *lim.hi_band), fc], "bandpass", fs=1 / dt, output="sos")
+        if high
+        else butter(4, fc, fs=1 / dt, output="sos")
+    )
     x = sosfilt(band, rng.standard_normal(n))
-    x *= amp / 2.5 / np.std(x)          # peaks near amp
+    x *= amp / 2.5 / np.std(x)  # peaks near amp
     return _with_bias(x, _offset(rng, lim, amp), dt)
 
 
@@ -153,20 +157,34 @@ def _burst_train(rng, n, dt, lim, freqs, cycles, gap):
         if i + m >= n - int((0.45 if lim.vmax is not None else 0.05) / dt):
             break
         s = np.arange(m)
-        x[i:i + m] = amp * np.sin(2 * np.pi * f * s * dt) * np.hanning(m) ** 0.5
+        x[i : i + m] = amp * np.sin(2 * np.pi * f * s * dt) * np.hanning(m) ** 0.5
         i += m + int(gap(m))
     return _with_bias(x, _offset(rng, lim, amp), dt)
 
 
 def bursts(rng, n, dt, lim):
-    return _burst_train(rng, n, dt, lim, lambda: logu(rng, 20 * lim.dyn_f[0], lim.dyn_f[1]),
-                        lambda: rng.integers(5, 40), lambda m: m * rng.uniform(1, 4))
+    return _burst_train(
+        rng,
+        n,
+        dt,
+        lim,
+        lambda: logu(rng, 20 * lim.dyn_f[0], lim.dyn_f[1]),
+        lambda: rng.integers(5, 40),
+        lambda m: m * rng.uniform(1, 4),
+    )
 
 
 def ringdown(rng, n, dt, lim):
     decay = 1 / (2 * np.pi * lim.f_res * lim.zeta_res)
-    return _burst_train(rng, n, dt, lim, lambda: lim.f_res * rng.uniform(0.94, 1.06),
-                        lambda: rng.integers(20, 120), lambda m: 6 * decay / dt * rng.uniform(1, 2))
+    return _burst_train(
+        rng,
+        n,
+        dt,
+        lim,
+        lambda: lim.f_res * rng.uniform(0.94, 1.06),
+        lambda: rng.integers(20, 120),
+        lambda m: 6 * decay / dt * rng.uniform(1, 2),
+    )
 
 
 def stepped_sine(rng, n, dt, lim):
@@ -202,7 +220,8 @@ def segment(kind, rng, n, dt, lim: Limits) -> np.ndarray:
     elif kind in ("hi-chirp", "hi-noise"):
         v = (chirp if kind == "hi-chirp" else noise)(rng, n, dt, lim, high=True)
     else:
-        v = {"chirp": chirp, "noise": noise, "bursts": bursts, "ringdown": ringdown,
-             "stepped-sine": stepped_sine}[kind](rng, n, dt, lim)
+        v = {"chirp": chirp, "noise": noise, "bursts": bursts, "ringdown": ringdown, "stepped-sine": stepped_sine}[
+            kind
+        ](rng, n, dt, lim)
     v[0] = 0.0
     return _to_zero(v, max(2, n // 200)) if abs(v[-1]) > 0 else v

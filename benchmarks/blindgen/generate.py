@@ -1,4 +1,5 @@
 """The seed rule and the draw of one record: device, drive, cause, visibility check."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -11,7 +12,7 @@ from .record import Record
 FAMILIES = {"apa": apa, "t215": t215}
 SALT = 0xB11D6E4
 ATTEMPTS = 3
-VISIBLE = 3.0            # visible size >= VISIBLE x noise RMS
+VISIBLE = 3.0  # visible size >= VISIBLE x noise RMS
 
 
 class Refused(RuntimeError):
@@ -46,7 +47,7 @@ def _drive(fam, cause, rng, lin):
     if rng.random() < 0.5:
         kinds.append(str(rng.choice(fam.DRIVES["none"])))
     cut = int(n * rng.uniform(0.55, 0.8)) if len(kinds) == 2 else n
-    lengths = [cut, n - cut][:len(kinds)]
+    lengths = [cut, n - cut][: len(kinds)]
     segs = []
     for kind, m in zip(kinds, lengths):
         v = drives.segment(kind, rng, m, dt, fam.limits())
@@ -72,7 +73,7 @@ def _escalate(fam, lin, mech, pil, chain, step, knobs, kernel):
     """One step towards visibility, alternating a stronger effect (within its range) and less
     noise (by 1.5, down to the lower end of its range).  Returns (kernel, knobs, quieter):
     kernel None when neither is left, quieter when only the noise changed."""
-    for what in ((0, 1) if step % 2 == 0 else (1, 0)):
+    for what in (0, 1) if step % 2 == 0 else (1, 0):
         if what == 0:
             stronger = _strengthen(fam, mech, knobs)
             k = None if stronger is None else _kernel(fam, lin, mech, stronger, pil)
@@ -134,9 +135,28 @@ def _generate(seed: int) -> Record:
             noise = measure.noise_rms(chain, stroke)
             ratio = chain.gain * rms / noise
             if mech is None or ratio >= VISIBLE:
-                return _record(seed, family, cause, mech, knobs, kernel, lin, V, y, chain, kinds,
-                               dict(attempt=attempt, steps=steps, stroke=stroke, visible_rms=chain.gain * rms,
-                                    noise_rms=noise, visible_ratio=ratio, refit=refit))
+                return _record(
+                    seed,
+                    family,
+                    cause,
+                    mech,
+                    knobs,
+                    kernel,
+                    lin,
+                    V,
+                    y,
+                    chain,
+                    kinds,
+                    dict(
+                        attempt=attempt,
+                        steps=steps,
+                        stroke=stroke,
+                        visible_rms=chain.gain * rms,
+                        noise_rms=noise,
+                        visible_ratio=ratio,
+                        refit=refit,
+                    ),
+                )
             kernel, knobs, quieter = _escalate(fam, lin, mech, pil, chain, steps, knobs, kernel)
             if not quieter:
                 y = None
@@ -160,7 +180,15 @@ def _plain(v):
 def _record(seed, family, cause, mech, knobs, kernel, lin, V, y, chain, kinds, vis):
     rng = _rng(seed, vis["attempt"], 4)
     t, Vr, x = measure.apply(chain, rng, V, y, 1 / FAMILIES[family].FS)
-    truth = {"family": family, "cause": cause, "mechanism": mech, "knobs": _plain(knobs or {}),
-             "derived": _plain(kernel.info), "device": _plain(lin), "drive": kinds,
-             "chain": chain.to_dict(), **_plain(vis)}
+    truth = {
+        "family": family,
+        "cause": cause,
+        "mechanism": mech,
+        "knobs": _plain(knobs or {}),
+        "derived": _plain(kernel.info),
+        "device": _plain(lin),
+        "drive": kinds,
+        "chain": chain.to_dict(),
+        **_plain(vis),
+    }
     return Record(seed=seed, family=family, model=MODELS[family], t=t, V=Vr, x=x, truth=truth)

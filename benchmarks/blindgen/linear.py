@@ -4,6 +4,7 @@ visibility rule.
 
 x' = A x + B u, y = C x, from rest; samples every dt; y in the model's output unit.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -21,8 +22,7 @@ def foh(A: np.ndarray, B: np.ndarray, dt: float):
     F[:n, n] = B
     F[n, n + 1] = 1.0
     E = expm(F * dt)
-    return (np.ascontiguousarray(E[:n, :n]), np.ascontiguousarray(E[:n, n]),
-            np.ascontiguousarray(E[:n, n + 1]))
+    return (np.ascontiguousarray(E[:n, :n]), np.ascontiguousarray(E[:n, n]), np.ascontiguousarray(E[:n, n + 1]))
 
 
 @njit(cache=True)
@@ -67,8 +67,7 @@ def refit(y, predict, theta0, lower, upper, starts=(), enough=0.0):
     best = None
     for t0 in (theta0, *starts):
         t0 = np.clip(np.asarray(t0, float), lower + 1e-9, upper - 1e-9)
-        sol = least_squares(resid, t0, bounds=(lower, upper), diff_step=1e-4, xtol=1e-8, ftol=1e-4,
-                            max_nfev=100)
+        sol = least_squares(resid, t0, bounds=(lower, upper), diff_step=1e-4, xtol=1e-8, ftol=1e-4, max_nfev=100)
         if best is None or sol.cost < best.cost:
             best = sol
         if np.sqrt(2 * best.cost / y.size) <= enough:

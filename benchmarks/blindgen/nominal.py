@@ -10,6 +10,7 @@ modes, mass-normalised (int_0^L rhoA phi^2 dx = 1, phi(L) > 0):
 EI and rhoA as in Ghafarirad et al. (2015), eq. 11 (units: phi in kg^-1/2, m_p in N kg^-1/2 V^-1,
 modal coordinate q in kg^1/2 m; sensor reading w = sum phi_n(x_s) q_n in m).
 """
+
 from __future__ import annotations
 
 import functools
@@ -19,14 +20,14 @@ import numpy as np
 from scipy.optimize import brentq
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-MODELS = {"apa": os.path.join(ROOT, "models", "apa120ml.py"),
-          "t215": os.path.join(ROOT, "models", "bimorph_t215.py")}
+MODELS = {"apa": os.path.join(ROOT, "models", "apa120ml.py"), "t215": os.path.join(ROOT, "models", "bimorph_t215.py")}
 
 
 @functools.lru_cache(maxsize=None)
 def model_values(family: str) -> dict:
     """{name: default} of the model file's PARAMETERS (numbers only)."""
     from bondgraph.model.modelfile import load_model
+
     declared = load_model(MODELS[family]).declared
     return {p.name: float(p.default) for p in declared if isinstance(p.default, (int, float))}
 
@@ -37,11 +38,21 @@ def beam() -> dict:
     alpha (1/s), beta (s), target (fraction of L), modes kept."""
     p = model_values("t215")
     h = p["t_b"] / 2
-    EI = p["c_b"] * p["b"] * p["t_b"] ** 3 / 12 + p["c_p"] * 2 * p["b"] * ((h + p["t_p"]) ** 3 - h ** 3) / 3
+    EI = p["c_b"] * p["b"] * p["t_b"] ** 3 / 12 + p["c_p"] * 2 * p["b"] * ((h + p["t_p"]) ** 3 - h**3) / 3
     rhoA = p["rho_b"] * p["b"] * p["t_b"] + 2 * p["rho_p"] * p["b"] * p["t_p"]
-    return {"L": p["L"], "EI": EI, "rhoA": rhoA, "M_p": p["b"] * p["e31"] * (p["t_b"] + p["t_p"]),
-            "alpha": p["alpha"], "beta": p["beta"], "target": p["target"], "modes": int(p["modes"]),
-            "b": p["b"], "t": p["t_b"] + 2 * p["t_p"], "rho": rhoA / (p["b"] * (p["t_b"] + 2 * p["t_p"]))}
+    return {
+        "L": p["L"],
+        "EI": EI,
+        "rhoA": rhoA,
+        "M_p": p["b"] * p["e31"] * (p["t_b"] + p["t_p"]),
+        "alpha": p["alpha"],
+        "beta": p["beta"],
+        "target": p["target"],
+        "modes": int(p["modes"]),
+        "b": p["b"],
+        "t": p["t_b"] + 2 * p["t_p"],
+        "rho": rhoA / (p["b"] * (p["t_b"] + 2 * p["t_p"])),
+    }
 
 
 def _beta_l(n: int) -> float:
@@ -62,11 +73,11 @@ def cantilever_mode(n: int, x_frac: float) -> tuple[float, float, float, float]:
 
     sign = np.sign(shape(L))
     slope_tip = sign * norm * b * (np.sinh(z) + np.sin(z) - sigma * (np.cosh(z) - np.cos(z)))
-    omega = z ** 2 * np.sqrt(c["EI"] / (c["rhoA"] * L ** 4))
+    omega = z**2 * np.sqrt(c["EI"] / (c["rhoA"] * L**4))
     return omega, sign * shape(x_frac * L), sign * shape(L), c["M_p"] * slope_tip
 
 
 def rayleigh_zeta(omega: float) -> float:
     """Model-file damping ratio of a mode at omega: 2 zeta omega = alpha + beta omega^2."""
     c = beam()
-    return (c["alpha"] + c["beta"] * omega ** 2) / (2 * omega)
+    return (c["alpha"] + c["beta"] * omega**2) / (2 * omega)

@@ -11,12 +11,13 @@ between nominal samples.  All take and return volts.
 * Creep cells (generalised Kelvin-Voigt in the polarization): u = V + sum r_n c_n,
   tau_n c_n' = V - c_n, exact for V linear between grid points.
 """
+
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-EDGE = 1.5      # Preisach thresholds span [-EDGE, EDGE] Vr
+EDGE = 1.5  # Preisach thresholds span [-EDGE, EDGE] Vr
 
 
 def preisach_table(rng, n=241):
@@ -34,7 +35,7 @@ def preisach_table(rng, n=241):
         a = rng.uniform(0.5, 1.0)
         mu += a * np.exp(-0.5 * ((c - cc) / sc) ** 2 - 0.5 * ((r - rc) / sr) ** 2)
         bumps.append({"c": cc, "sc": sc, "r": rc, "sr": sr, "a": a})
-    mu += 0.05 * np.exp(-r / 0.5)          # broad background: no flat dead spots
+    mu += 0.05 * np.exp(-r / 0.5)  # broad background: no flat dead spots
     mu[al < be] = 0.0
     # cumulative over alpha ascending and beta descending
     E = np.cumsum(np.cumsum(mu[:, ::-1], axis=1)[:, ::-1], axis=0)
@@ -50,8 +51,7 @@ def _everett(g, E, a, b):
     fb = min(max((b - g[0]) / h, 0.0), n - 1.000001)
     i, j = int(fa), int(fb)
     u, v = fa - i, fb - j
-    return ((1 - u) * (1 - v) * E[i, j] + u * (1 - v) * E[i + 1, j]
-            + (1 - u) * v * E[i, j + 1] + u * v * E[i + 1, j + 1])
+    return (1 - u) * (1 - v) * E[i, j] + u * (1 - v) * E[i + 1, j] + (1 - u) * v * E[i, j + 1] + u * v * E[i + 1, j + 1]
 
 
 @njit(cache=True)
@@ -69,15 +69,15 @@ def _preisach(x, g, E):
     prev = lo
     for t in range(x.size):
         xt = min(max(x[t], g[0]), g[-1])
-        if m % 2 == 1 and xt < prev:            # rising -> falling: prev is a maximum
+        if m % 2 == 1 and xt < prev:  # rising -> falling: prev is a maximum
             tp[m] = prev
             ps[m] = ps[m - 1]
             m += 1
-        elif m % 2 == 0 and xt > prev:          # falling -> rising: prev is a minimum
+        elif m % 2 == 0 and xt > prev:  # falling -> rising: prev is a minimum
             tp[m] = prev
             ps[m] = ps[m - 1] + 2 * (_everett(g, E, tp[m - 1], tp[m - 2]) - _everett(g, E, tp[m - 1], prev))
             m += 1
-        if m % 2 == 1:                          # wiping out
+        if m % 2 == 1:  # wiping out
             while m >= 3 and xt >= tp[m - 2]:
                 m -= 2
         else:
@@ -99,7 +99,7 @@ def preisach(V, Vr, h, table):
     Preisach operator; V starts at 0 (the demagnetised rest)."""
     g, E, _ = table
     V = np.asarray(V, float)
-    p = _preisach(np.concatenate([_DEMAG, V / Vr]), g, E)[_DEMAG.size:]
+    p = _preisach(np.concatenate([_DEMAG, V / Vr]), g, E)[_DEMAG.size :]
     return (1 - h) * V + h * Vr * (p - p[0])
 
 
@@ -114,7 +114,7 @@ def _bouc_wen(V, Vr, w, b, n):
         for _ in range(m):
             zz = z
             d = 0.0
-            for stage in range(2):          # Heun in V
+            for stage in range(2):  # Heun in V
                 sg = 1.0 if s * zz > 0 else -1.0
                 f = (1.0 - (b * sg + 1.0 - b) * abs(zz) ** n) / w
                 d += f * s / 2.0

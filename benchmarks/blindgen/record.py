@@ -1,5 +1,6 @@
 """A generated record and its CSV file (the project's format: ``# key: value`` metadata,
 one ``t,V,x`` header, SI units).  The metadata never reveal the truth."""
+
 from __future__ import annotations
 
 import hashlib
@@ -33,8 +34,14 @@ class Record:
     def write_csv(self, path) -> None:
         actuator, sensor = DESCRIPTION[self.family]
         rate = 1.0 / np.median(np.diff(self.t))
-        head = [f"# actuator: {actuator}", f"# sensor: {sensor}", f"# sample_rate_hz: {rate:.0f}",
-                f"# record: {self.record_id}", "# source: benchmarks/blindgen", "t,V,x"]
+        head = [
+            f"# actuator: {actuator}",
+            f"# sensor: {sensor}",
+            f"# sample_rate_hz: {rate:.0f}",
+            f"# record: {self.record_id}",
+            "# source: benchmarks/blindgen",
+            "t,V,x",
+        ]
         body = np.column_stack([self.t, self.V, self.x])
         with open(path, "w", encoding="utf-8", newline="\n") as f:
             f.write("\n".join(head) + "\n")

@@ -1,9 +1,10 @@
 """Random factors for drawing a device around its nominal values, and creep spectra."""
+
 from __future__ import annotations
 
 import numpy as np
 
-MIN_DEV = 0.02   # a drawn linear parameter differs from the model file's by at least 2 %
+MIN_DEV = 0.02  # a drawn linear parameter differs from the model file's by at least 2 %
 
 
 def factor(rng, spread: float, log: bool) -> float:
@@ -20,8 +21,7 @@ def logu(rng, lo: float, hi: float) -> float:
     return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
 
 
-def creep_knobs(mech: str, rng, size: tuple, cells_tau: tuple, log_from: float, frac_from: float,
-                to: float) -> dict:
+def creep_knobs(mech: str, rng, size: tuple, cells_tau: tuple, log_from: float, frac_from: float, to: float) -> dict:
     """A creep mechanism's draw: the creep ratio over the record r_T uniform in ``size``, and
     its cells (time constants s, weights): ``kelvin-voigt`` 2-4 cells log-uniform in
     ``cells_tau``; ``log`` equal weights two a decade from 10^log_from to 10^to s;
@@ -34,4 +34,4 @@ def creep_knobs(mech: str, rng, size: tuple, cells_tau: tuple, log_from: float, 
         tau = 10.0 ** np.arange(log_from, to + 0.01, 0.5)
         return {"r_T": u(*size), "tau": tau, "w": np.ones_like(tau)}
     tau, alpha = 10.0 ** np.arange(frac_from, to + 0.01, 0.5), u(0.15, 0.45)
-    return {"r_T": u(*size), "alpha": alpha, "tau": tau, "w": tau ** alpha}
+    return {"r_T": u(*size), "alpha": alpha, "tau": tau, "w": tau**alpha}

@@ -12,6 +12,7 @@ al. 2019: k1 q^3 + k2 q^5, mu1 q^2 q'; or a modulus that softens with the vibrat
 or a third resonator (bending mode 3, or a torsional or lateral mode seen through a small
 sensor offset).  The sign convention is the model file's: m_p,i < 0, so V > 0 bends to w < 0.
 """
+
 from __future__ import annotations
 
 import math
@@ -45,22 +46,35 @@ DRIVES = {
     "higher-mode": ("hi-chirp", "hi-noise", "bursts", "steps"),
 }
 REFIT = {"omega": 1.3, "zeta": 15.0, "ratio": 2.0}
-TIP_LIMIT = (5e-5, 4e-4)     # tip amplitude (m) the experimenter aims at in dynamic tests
+TIP_LIMIT = (5e-5, 4e-4)  # tip amplitude (m) the experimenter aims at in dynamic tests
 
 
 def limits() -> drives.Limits:
     w1 = cantilever_mode(1, 1.0)[0]
-    return drives.Limits(vmax=None, vbip=V_RATED, qs_f=(1.0, 40.0), dyn_f=(10.0, 0.4 * FS),
-                         f_res=w1 / (2 * math.pi), zeta_res=rayleigh_zeta(w1), holds=(0.3, 1.0),
-                         ramps=(0.01, 0.3), dyn_amp=(0.2, 3.0), p_unipolar=0.0,
-                         hi_band=(700.0, 3000.0))
+    return drives.Limits(
+        vmax=None,
+        vbip=V_RATED,
+        qs_f=(1.0, 40.0),
+        dyn_f=(10.0, 0.4 * FS),
+        f_res=w1 / (2 * math.pi),
+        zeta_res=rayleigh_zeta(w1),
+        holds=(0.3, 1.0),
+        ramps=(0.01, 0.3),
+        dyn_amp=(0.2, 3.0),
+        p_unipolar=0.0,
+        hi_band=(700.0, 3000.0),
+    )
 
 
 def _mode(n, target, coupling, rng, zeta=None):
     w, phi_s, phi_l, mp = cantilever_mode(n, target)
-    return {"omega": w * factor(rng, 0.06, False),
-            "zeta": zeta if zeta is not None else rayleigh_zeta(w) * factor(rng, 4.0, True),
-            "mp": mp * coupling * factor(rng, 0.03, False), "phi_s": phi_s, "phi_l": phi_l}
+    return {
+        "omega": w * factor(rng, 0.06, False),
+        "zeta": zeta if zeta is not None else rayleigh_zeta(w) * factor(rng, 4.0, True),
+        "mp": mp * coupling * factor(rng, 0.03, False),
+        "phi_s": phi_s,
+        "phi_l": phi_l,
+    }
 
 
 def draw_linear(rng) -> dict:
@@ -68,8 +82,7 @@ def draw_linear(rng) -> dict:
     (common) and +-3 % (per mode), sensor at 0.92-0.98 L (model file: 0.95 L)."""
     target = rng.uniform(0.92, 0.98)
     coupling = factor(rng, 0.25, False)
-    return {"target": target, "coupling": coupling,
-            "modes": [_mode(n, target, coupling, rng) for n in (1, 2)]}
+    return {"target": target, "coupling": coupling, "modes": [_mode(n, target, coupling, rng) for n in (1, 2)]}
 
 
 def _ss(omegas, zetas, gains, phis):
@@ -90,8 +103,7 @@ def linear_ss(lin, output="x"):
     """(A, B, C) of the device's two modes, states (q_i, q_i'); output the sensor (x), the tip
     (tip) or mode 1's coordinate (q1)."""
     ms = lin["modes"]
-    phis = {"x": [m["phi_s"] for m in ms], "tip": [m["phi_l"] for m in ms],
-            "q1": [1.0] + [0.0] * (len(ms) - 1)}[output]
+    phis = {"x": [m["phi_s"] for m in ms], "tip": [m["phi_l"] for m in ms], "q1": [1.0] + [0.0] * (len(ms) - 1)}[output]
     return _ss([m["omega"] for m in ms], [m["zeta"] for m in ms], [m["mp"] for m in ms], phis)
 
 
@@ -110,8 +122,9 @@ def refit_spec(lin, V, dt):
     centre = np.log([nm[0][0], rz[0], nm[1][0], rz[1], ratio])
     half = np.log([REFIT["omega"], REFIT["zeta"], REFIT["omega"], REFIT["zeta"], REFIT["ratio"]])
     m1, m2 = lin["modes"]
-    theta0 = np.log([m1["omega"], m1["zeta"], m2["omega"], m2["zeta"],
-                     m2["phi_s"] * m2["mp"] / (m1["phi_s"] * m1["mp"])])
+    theta0 = np.log(
+        [m1["omega"], m1["zeta"], m2["omega"], m2["zeta"], m2["phi_s"] * m2["mp"] / (m1["phi_s"] * m1["mp"])]
+    )
     cache = {}
 
     def mode(w, z):
@@ -133,19 +146,35 @@ def pilot(lin, V, dt) -> dict:
     x = linear.simulate(*linear_ss(lin), V, dt)
     tip = linear.simulate(*linear_ss(lin, "tip"), V, dt)
     q1 = linear.simulate(*linear_ss(lin, "q1"), V, dt)
-    return {"x_max": float(x.max()), "x_min": float(x.min()), "tip_max": float(tip.max()),
-            "tip_min": float(tip.min()), "q1_max": float(np.abs(q1).max()),
-            "v_peak": float(np.abs(V).max())}
+    return {
+        "x_max": float(x.max()),
+        "x_min": float(x.min()),
+        "tip_max": float(tip.max()),
+        "tip_min": float(tip.min()),
+        "q1_max": float(np.abs(q1).max()),
+        "v_peak": float(np.abs(V).max()),
+    }
 
 
 # ---- causes: knobs (drawn), strength (knob, step, limit) and realisation -----------------------
 STRENGTH = {
-    "preisach": ("h", 1.3, 0.7), "bouc-wen": ("H", 1.3, 0.2),
-    "kelvin-voigt": ("r_T", 1.3, 0.3), "log": ("r_T", 1.3, 0.3), "fractional": ("r_T", 1.3, 0.3),
-    "tanh": ("r_max", 1.1, 1.0), "polynomial": ("e3", 1.3, 0.3), "end-stop": ("overshoot", 1.3, 0.45),
-    "cubic": ("drop", 1.4, 0.08), "cubic-quintic": ("drop", 1.4, 0.08), "amplitude-modulus": ("drop", 1.4, 0.08),
-    "amplitude-damping": ("eta", 1.4, 3.0), "air-drag": ("eta", 1.4, 3.0), "friction": ("eta", 1.4, 1.0),
-    "bending-3": ("zeta", 1 / 1.5, 0.004), "torsion": ("ratio", 1.5, 0.06), "lateral": ("ratio", 1.5, 0.06),
+    "preisach": ("h", 1.3, 0.7),
+    "bouc-wen": ("H", 1.3, 0.2),
+    "kelvin-voigt": ("r_T", 1.3, 0.3),
+    "log": ("r_T", 1.3, 0.3),
+    "fractional": ("r_T", 1.3, 0.3),
+    "tanh": ("r_max", 1.1, 1.0),
+    "polynomial": ("e3", 1.3, 0.3),
+    "end-stop": ("overshoot", 1.3, 0.45),
+    "cubic": ("drop", 1.4, 0.08),
+    "cubic-quintic": ("drop", 1.4, 0.08),
+    "amplitude-modulus": ("drop", 1.4, 0.08),
+    "amplitude-damping": ("eta", 1.4, 3.0),
+    "air-drag": ("eta", 1.4, 3.0),
+    "friction": ("eta", 1.4, 1.0),
+    "bending-3": ("zeta", 1 / 1.5, 0.004),
+    "torsion": ("ratio", 1.5, 0.06),
+    "lateral": ("ratio", 1.5, 0.06),
 }
 
 
@@ -176,8 +205,11 @@ def draw_knobs(mech, rng) -> dict:
     if mech == "bending-3":
         return {"zeta": logu(rng, 0.01, 0.06), "omega_f": factor(rng, 0.06, False)}
     if mech in ("torsion", "lateral"):
-        return {"ratio": logu(rng, 0.003, 0.02) * float(rng.choice([-1.0, 1.0])),
-                "f_f": u(0.85, 1.15), "zeta": logu(rng, 0.005, 0.03)}
+        return {
+            "ratio": logu(rng, 0.003, 0.02) * float(rng.choice([-1.0, 1.0])),
+            "f_f": u(0.85, 1.15),
+            "zeta": logu(rng, 0.005, 0.03),
+        }
     raise ValueError(mech)
 
 
@@ -250,16 +282,16 @@ class Kernel:
         elif mech in ("cubic", "cubic-quintic"):
             self.flags[2] = 1
             d1 = k["drop"] / (1 - k.get("chi", 0.0))
-            ep[0] = -8 / 3 * d1 * w1 ** 2 / q_ref ** 2
-            ep[1] = 32 / 10 * (d1 - k["drop"]) * w1 ** 2 / q_ref ** 4
+            ep[0] = -8 / 3 * d1 * w1**2 / q_ref**2
+            ep[1] = 32 / 10 * (d1 - k["drop"]) * w1**2 / q_ref**4
             self.info = {"k1": ep[0], "k2": ep[1]}
         elif mech == "amplitude-modulus":
             self.flags[2] = 2
-            ep[2], ep[3], ep[4] = 2 * k["drop"], 10 * 2 * math.pi / w1, q_ref ** 2
+            ep[2], ep[3], ep[4] = 2 * k["drop"], 10 * 2 * math.pi / w1, q_ref**2
             self.info = {"kappa": ep[2], "tau_A": ep[3]}
         elif mech == "amplitude-damping":
             self.flags[3] = 1
-            ep[5] = 8 * k["eta"] * z1 * w1 / q_ref ** 2
+            ep[5] = 8 * k["eta"] * z1 * w1 / q_ref**2
             self.info = {"mu1": ep[5]}
         elif mech == "air-drag":
             self.flags[3] = 2
@@ -273,11 +305,18 @@ class Kernel:
             self.info = {"F_c": ep[7], "v_eps": ep[8]}
         elif mech == "bending-3":
             w, phi_s, phi_l, mp = cantilever_mode(3, self.lin["target"])
-            self.modes.append({"omega": w * k["omega_f"], "zeta": k["zeta"], "mp": mp * self.lin["coupling"],
-                               "phi_s": phi_s, "phi_l": phi_l})
+            self.modes.append(
+                {
+                    "omega": w * k["omega_f"],
+                    "zeta": k["zeta"],
+                    "mp": mp * self.lin["coupling"],
+                    "phi_s": phi_s,
+                    "phi_l": phi_l,
+                }
+            )
         else:
             self.flags[1] = 1
-            g1 = m1["phi_s"] * m1["mp"] / w1 ** 2
+            g1 = m1["phi_s"] * m1["mp"] / w1**2
             ep[13], ep[14], ep[15] = _offaxis_frequency(mech) * k["f_f"], k["zeta"], k["ratio"] * g1
             self.info = {"f": ep[13] / (2 * math.pi), "static_gain": ep[15]}
 
@@ -326,7 +365,7 @@ def _rhs(y, u, md, fl, ep, dy):
         acc = md[i, 2] * u - 2.0 * z * w * v - w * w * q + md[i, 4] * F
         if i == 0:
             if fl[2] == 1:
-                acc -= ep[0] * q ** 3 + ep[1] * q ** 5
+                acc -= ep[0] * q**3 + ep[1] * q**5
             elif fl[2] == 2:
                 acc += w * w * ep[2] * y[8] / ep[4] * q
             if fl[3] == 1:

@@ -16,11 +16,28 @@ tolerance analysis, on one machine or a cluster (the ``dask`` extra: ``pip insta
   ``scheduler=ADDRESS`` for an existing cluster);
 * what runs on a worker: :mod:`~bondgraph.batch.jobs` (compiled models reused per worker).
 """
+
 from .cluster import connect
 from .runs import diagnose, fit, read_sets, simulate
-from .sampling import loguniform, linspace, logspace, normal, parse_space, parse_spec, uniform, values
+from .sampling import linspace, logspace, loguniform, normal, parse_space, parse_spec, uniform, values
 from .sweep import SweepResult, sweep
 from .table import Table
 
-__all__ = ["connect", "diagnose", "fit", "read_sets", "simulate", "loguniform", "linspace", "logspace", "normal",
-           "parse_space", "parse_spec", "uniform", "values", "SweepResult", "sweep", "Table"]
+__all__ = [
+    "connect",
+    "diagnose",
+    "fit",
+    "read_sets",
+    "simulate",
+    "loguniform",
+    "linspace",
+    "logspace",
+    "normal",
+    "parse_space",
+    "parse_spec",
+    "uniform",
+    "values",
+    "SweepResult",
+    "sweep",
+    "Table",
+]

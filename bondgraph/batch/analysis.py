@@ -15,6 +15,7 @@ the tornado bars reach from ``baseline``):
 
 Failed runs (no value) are left out and counted.
 """
+
 from __future__ import annotations
 
 import math
@@ -35,8 +36,15 @@ def summary(table: Table, metrics: Sequence[str]) -> list[dict]:
         row = {"metric": m, "n": int(ok.size), "failed": int(y.size - ok.size)}
         if ok.size:
             p5, p50, p95 = np.percentile(ok, [5, 50, 95])
-            row.update(mean=float(np.mean(ok)), std=float(np.std(ok, ddof=1)) if ok.size > 1 else 0.0,
-                       min=float(np.min(ok)), p5=float(p5), median=float(p50), p95=float(p95), max=float(np.max(ok)))
+            row.update(
+                mean=float(np.mean(ok)),
+                std=float(np.std(ok, ddof=1)) if ok.size > 1 else 0.0,
+                min=float(np.min(ok)),
+                p5=float(p5),
+                median=float(p50),
+                p95=float(p95),
+                max=float(np.max(ok)),
+            )
         out.append(row)
     return out
 
@@ -47,8 +55,9 @@ def sensitivity(table: Table, params: Sequence[str], metric: str, design: str) -
     y = table.column(metric)
     if design == "oat":
         base = float(y[0])
-        ranking = [{"parameter": p, "low": float(y[1 + 2 * i]), "high": float(y[2 + 2 * i])}
-                   for i, p in enumerate(params)]
+        ranking = [
+            {"parameter": p, "low": float(y[1 + 2 * i]), "high": float(y[2 + 2 * i])} for i, p in enumerate(params)
+        ]
         for r in ranking:
             r["swing"] = abs(r["high"] - r["low"])
         extra = {}
@@ -60,8 +69,14 @@ def sensitivity(table: Table, params: Sequence[str], metric: str, design: str) -
             levels = list(dict.fromkeys(cells))
             means = [_mean(y[[c == lv for c in cells]]) for lv in levels]
             finite = [v for v in means if math.isfinite(v)]
-            ranking.append({"parameter": p, "low": means[0], "high": means[-1],
-                            "swing": (max(finite) - min(finite)) if finite else math.nan})
+            ranking.append(
+                {
+                    "parameter": p,
+                    "low": means[0],
+                    "high": means[-1],
+                    "swing": (max(finite) - min(finite)) if finite else math.nan,
+                }
+            )
         extra = {}
     else:
         ranking, extra = _regression(table, params, y)
@@ -79,8 +94,10 @@ def _regression(table: Table, params: Sequence[str], y: np.ndarray) -> tuple[lis
     X = np.column_stack([table.column(p) for p in params])
     ok = np.isfinite(y) & np.all(np.isfinite(X), axis=1)
     X, y = X[ok], y[ok]
-    nan = [{"parameter": p, "low": math.nan, "high": math.nan, "swing": math.nan, "src": math.nan,
-            "spearman": math.nan} for p in params]
+    nan = [
+        {"parameter": p, "low": math.nan, "high": math.nan, "swing": math.nan, "src": math.nan, "spearman": math.nan}
+        for p in params
+    ]
     if y.size < len(params) + 2:
         return nan, {"mean": _mean(y), "r2": math.nan}
     xm, ym = X.mean(axis=0), float(y.mean())
@@ -89,13 +106,20 @@ def _regression(table: Table, params: Sequence[str], y: np.ndarray) -> tuple[lis
     b = coef[1:]
     resid = y - ym - A @ coef
     sy = float(np.std(y))
-    r2 = 1.0 - float(np.sum(resid ** 2)) / float(np.sum((y - ym) ** 2)) if sy > 0 else math.nan
+    r2 = 1.0 - float(np.sum(resid**2)) / float(np.sum((y - ym) ** 2)) if sy > 0 else math.nan
     q5, q95 = np.percentile(X, [5, 95], axis=0)
     ranking = []
     for j, p in enumerate(params):
         low, high = ym + b[j] * (q5[j] - xm[j]), ym + b[j] * (q95[j] - xm[j])
         rho = stats.spearmanr(X[:, j], y).statistic if sy > 0 and np.std(X[:, j]) > 0 else math.nan
-        ranking.append({"parameter": p, "low": float(low), "high": float(high), "swing": float(abs(high - low)),
-                        "src": float(b[j] * np.std(X[:, j]) / sy) if sy > 0 else math.nan,
-                        "spearman": float(rho)})
+        ranking.append(
+            {
+                "parameter": p,
+                "low": float(low),
+                "high": float(high),
+                "swing": float(abs(high - low)),
+                "src": float(b[j] * np.std(X[:, j]) / sy) if sy > 0 else math.nan,
+                "spearman": float(rho),
+            }
+        )
     return ranking, {"mean": ym, "r2": r2}

@@ -11,6 +11,7 @@ Jobs are submitted as tasks; a task that fails on its worker (or whose worker di
 an error for its jobs, never stopping the others.  Ctrl-C (``KeyboardInterrupt``) cancels
 every task, shuts the embedded cluster down and propagates.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -44,8 +45,9 @@ def default_workers() -> int:
 
 
 @contextlib.contextmanager
-def connect(scheduler: Any = None, workers: int | None = None,
-            say: Callable[[str], None] | None = None) -> Iterator[Any]:
+def connect(
+    scheduler: Any = None, workers: int | None = None, say: Callable[[str], None] | None = None
+) -> Iterator[Any]:
     """A ``distributed.Client`` for the duration of a ``with`` block (see the module docstring);
     ``say`` receives one line on where the jobs run and the dashboard address, if any."""
     distributed = require_dask()
@@ -60,22 +62,33 @@ def connect(scheduler: Any = None, workers: int | None = None,
             n = default_workers() if workers is None else int(workers)
             if n < 1:
                 raise UsageError(f"--workers must be at least 1, got {workers}")
-            cluster = stack.enter_context(distributed.LocalCluster(
-                n_workers=n, threads_per_worker=1, processes=True, dashboard_address=_dashboard_address(),
-                silence_logs=logging.CRITICAL))
+            cluster = stack.enter_context(
+                distributed.LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=_dashboard_address(),
+                    silence_logs=logging.CRITICAL,
+                )
+            )
             client = stack.enter_context(distributed.Client(cluster))
             client.run(ignore_interrupts)  # Ctrl-C is the client's to handle: it cancels, then closes
             where = f"a local Dask cluster of {n} worker process{'es' if n != 1 else ''}"
         else:
             if workers is not None:
-                raise UsageError("--workers sizes the local cluster; with --scheduler the cluster's own workers "
-                                 "run the jobs (drop --workers)")
+                raise UsageError(
+                    "--workers sizes the local cluster; with --scheduler the cluster's own workers "
+                    "run the jobs (drop --workers)"
+                )
             try:
-                client = stack.enter_context(distributed.Client(str(scheduler),
-                                                                timeout=f"{config.get('batch.connect_timeout')}s"))
+                client = stack.enter_context(
+                    distributed.Client(str(scheduler), timeout=f"{config.get('batch.connect_timeout')}s")
+                )
             except (OSError, TimeoutError, ValueError) as exc:
-                raise UsageError(f"cannot reach the Dask scheduler at {scheduler} ({exc}); start one with "
-                                 f"'dask scheduler' and 'dask worker ADDRESS', or check the address") from None
+                raise UsageError(
+                    f"cannot reach the Dask scheduler at {scheduler} ({exc}); start one with "
+                    f"'dask scheduler' and 'dask worker ADDRESS', or check the address"
+                ) from None
             n = len(client.scheduler_info()["workers"])
             where = f"the Dask cluster at {scheduler} ({n} worker{'s' if n != 1 else ''} now)"
         link = dashboard(client)
@@ -117,9 +130,14 @@ def worker_count(client) -> int:
     return max(1, len(client.scheduler_info()["workers"]))
 
 
-def run_tasks(client, fn: Callable, chunks: Sequence[list], kwargs: dict | None = None,
-              on_result: Callable[[int, list], None] | None = None,
-              failed: Callable[[list, BaseException], list] | None = None) -> list[list]:
+def run_tasks(
+    client,
+    fn: Callable,
+    chunks: Sequence[list],
+    kwargs: dict | None = None,
+    on_result: Callable[[int, list], None] | None = None,
+    failed: Callable[[list, BaseException], list] | None = None,
+) -> list[list]:
     """Run ``fn(chunk, **kwargs)`` for every chunk on the cluster; the results in chunk order.
 
     ``on_result(index, result)`` is called as each task completes.  A task that raises on its
@@ -156,7 +174,7 @@ def _task_exception(fut) -> BaseException:
 
 
 def chunked(items: Sequence, size: int) -> list[list]:
-    return [list(items[i:i + size]) for i in range(0, len(items), size)]
+    return [list(items[i : i + size]) for i in range(0, len(items), size)]
 
 
 def chunk_size(n_jobs: int, n_workers: int) -> int:

@@ -10,6 +10,7 @@ values; real parameters the equations keep symbolic only change the parameter ve
 worker derives and loads each model structure once (the machine code itself comes from the
 on-disk cache of :mod:`bondgraph.numerics.codegen`, compiled at most once per machine).
 """
+
 from __future__ import annotations
 
 import functools
@@ -40,18 +41,18 @@ class Job:
 class Options:
     """What every job of a batch shares."""
 
-    kind: str                                   # "diagnose", "fit" or "simulate"
-    model: str                                  # absolute path of the model file
-    base: tuple = ()                            # parameter values applied to every job
-    input: str | None = None                    # model input (driven by the data's column)
-    output: str | None = None                   # model output (compared with the data's column)
-    data_input: str | None = None               # data column names, when they differ
+    kind: str  # "diagnose", "fit" or "simulate"
+    model: str  # absolute path of the model file
+    base: tuple = ()  # parameter values applied to every job
+    input: str | None = None  # model input (driven by the data's column)
+    output: str | None = None  # model output (compared with the data's column)
+    data_input: str | None = None  # data column names, when they differ
     data_output: str | None = None
-    validation: float = 0.3                     # diagnose/fit: held-out share
-    names: tuple = ()                           # fit: parameters to fit
-    fit: dict = field(default_factory=dict)     # fit: split, loss, starts
-    metrics: tuple = ()                         # simulate: Metric objects
-    times: tuple = (1.0, 1e-3)                  # simulate without data: (t_end, dt)
+    validation: float = 0.3  # diagnose/fit: held-out share
+    names: tuple = ()  # fit: parameters to fit
+    fit: dict = field(default_factory=dict)  # fit: split, loss, starts
+    metrics: tuple = ()  # simulate: Metric objects
+    times: tuple = (1.0, 1e-3)  # simulate without data: (t_end, dt)
     inputs: dict = field(default_factory=dict)  # simulate: input signals by name
     method: str = "auto"
     rtol: float = 1e-6
@@ -119,13 +120,24 @@ def diagnosis_row(loaded, data, opts: Options) -> dict:
     causes, gain, RMS before and after, and the best gain of each candidate cause."""
     from ..diagnosis import diagnose, model_file_options
 
-    report = diagnose(loaded.model, data, **model_file_options(loaded.module),
-                      input=opts.input, output=opts.output, validation=opts.validation, workers=1,
-                      source=str(loaded.path)).as_json()
+    report = diagnose(
+        loaded.model,
+        data,
+        **model_file_options(loaded.module),
+        input=opts.input,
+        output=opts.output,
+        validation=opts.validation,
+        workers=1,
+        source=str(loaded.path),
+    ).as_json()
     causes = report.get("causes", [report["cause"]] if report["cause"] != "none" else [])
-    row = {"cause": report["cause"],
-           "causes": ";".join(c if isinstance(c, str) else str(c.get("cause")) for c in causes) or "none",
-           "gain": report["gain"], "baseline_rms": report["baseline_rms"], "extended_rms": report["extended_rms"]}
+    row = {
+        "cause": report["cause"],
+        "causes": ";".join(c if isinstance(c, str) else str(c.get("cause")) for c in causes) or "none",
+        "gain": report["gain"],
+        "baseline_rms": report["baseline_rms"],
+        "extended_rms": report["extended_rms"],
+    }
     for cand in report.get("candidates", []):
         if isinstance(cand, dict) and "cause" in cand and "gain" in cand:
             key = f"gain:{cand['cause']}"
@@ -138,8 +150,15 @@ def _fit(job: Job, opts: Options) -> dict:
     from ..model.modelfile import load_model
 
     loaded = load_model(opts.model, _values(job, opts))
-    fit = fit_parameters(loaded, _read(job, opts, need_output=True), list(opts.names), input=opts.input,
-                         output=opts.output, validation=opts.validation, **opts.fit)
+    fit = fit_parameters(
+        loaded,
+        _read(job, opts, need_output=True),
+        list(opts.names),
+        input=opts.input,
+        output=opts.output,
+        validation=opts.validation,
+        **opts.fit,
+    )
     res = fit.result
     row: dict[str, Any] = {}
     for n in opts.names:

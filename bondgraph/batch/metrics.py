@@ -15,6 +15,7 @@ Linear metrics come from the linearisation at the initial state (``bondgraph.lin
 Values are in the unit of the signal.  A metric a run cannot give (a model without an
 oscillatory mode) is left empty in that run's row, with the reason in its ``warnings``.
 """
+
 from __future__ import annotations
 
 import re
@@ -63,8 +64,9 @@ class Metric:
             y = result[self.arg] if y is None else y
         except KeyError:
             known = [*result.outputs, *result.inputs, *result.states]
-            raise UsageError(f"metric {self.text}: the model has no signal {self.arg!r}; "
-                             f"known: {', '.join(known)}") from None
+            raise UsageError(
+                f"metric {self.text}: the model has no signal {self.arg!r}; known: {', '.join(known)}"
+            ) from None
         return _SIGNAL[self.kind](result.t, y)
 
 

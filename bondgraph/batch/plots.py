@@ -1,4 +1,5 @@
 """Plots of a sweep (matplotlib, the ``plot`` extra): histograms and tornado plots."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -14,6 +14,7 @@ the model's first declared input and output),
 ``workers`` (see :func:`~bondgraph.batch.cluster.connect`), ``progress(done, total)`` and
 ``say(line)`` callbacks.
 """
+
 from __future__ import annotations
 
 import csv
@@ -31,24 +32,60 @@ from .table import Table
 OnProgress = Callable[[int, int], None]  # progress(done, total)
 
 
-def diagnose(model, data: Sequence, *, sets: Sequence[Mapping] | None = None, params: Mapping | None = None,
-             input: str | None = None, output: str | None = None, data_input: str | None = None, data_output: str | None = None,
-             validation: float = 0.3, scheduler=None, workers: int | None = None,
-             progress: OnProgress | None = None, say=None) -> Table:
+def diagnose(
+    model,
+    data: Sequence,
+    *,
+    sets: Sequence[Mapping] | None = None,
+    params: Mapping | None = None,
+    input: str | None = None,
+    output: str | None = None,
+    data_input: str | None = None,
+    data_output: str | None = None,
+    validation: float = 0.3,
+    scheduler=None,
+    workers: int | None = None,
+    progress: OnProgress | None = None,
+    say=None,
+) -> Table:
     """Diagnose every data file (× parameter set): ``cause``, ``causes``, ``gain``,
     ``baseline_rms``, ``extended_rms`` and the best gain of each candidate cause (``gain:CAUSE``)."""
     lm = checked_model(model, params, sets)
     input, output = model_io(lm, input, output)
-    opts = Options("diagnose", str(lm.path.resolve()), _items(params), input, output, data_input, data_output,
-                   validation, settings=config.snapshot())
+    opts = Options(
+        "diagnose",
+        str(lm.path.resolve()),
+        _items(params),
+        input,
+        output,
+        data_input,
+        data_output,
+        validation,
+        settings=config.snapshot(),
+    )
     return execute(opts, data_jobs(data, sets), scheduler, workers, progress, say, per_task=1)
 
 
-def fit(model, data: Sequence, names: Sequence[str], *, sets: Sequence[Mapping] | None = None,
-        params: Mapping | None = None, input: str | None = None, output: str | None = None, data_input: str | None = None,
-        data_output: str | None = None, validation: float = 0.3, split: str = "blocks", loss: str = "linear",
-        starts: int = 1, scheduler=None, workers: int | None = None, progress: OnProgress | None = None,
-        say=None) -> Table:
+def fit(
+    model,
+    data: Sequence,
+    names: Sequence[str],
+    *,
+    sets: Sequence[Mapping] | None = None,
+    params: Mapping | None = None,
+    input: str | None = None,
+    output: str | None = None,
+    data_input: str | None = None,
+    data_output: str | None = None,
+    validation: float = 0.3,
+    split: str = "blocks",
+    loss: str = "linear",
+    starts: int = 1,
+    scheduler=None,
+    workers: int | None = None,
+    progress: OnProgress | None = None,
+    say=None,
+) -> Table:
     """Fit ``names`` to every data file (× parameter set): ``fit:NAME``, ``sd:NAME`` (standard
     error), ``rms_fit``, ``rms_validation``, ``simulations``, ``converged``."""
     names = list(names)
@@ -56,33 +93,59 @@ def fit(model, data: Sequence, names: Sequence[str], *, sets: Sequence[Mapping] 
         raise UsageError("batch fit: give the parameters to fit, e.g. --params a,c,K")
     lm = checked_model(model, params, sets, names)
     input, output = model_io(lm, input, output)
-    opts = Options("fit", str(lm.path.resolve()), _items(params), input, output, data_input, data_output,
-                   validation, tuple(names), {"split": split, "loss": loss, "starts": starts},
-                   settings=config.snapshot())
+    opts = Options(
+        "fit",
+        str(lm.path.resolve()),
+        _items(params),
+        input,
+        output,
+        data_input,
+        data_output,
+        validation,
+        tuple(names),
+        {"split": split, "loss": loss, "starts": starts},
+        settings=config.snapshot(),
+    )
     return execute(opts, data_jobs(data, sets), scheduler, workers, progress, say, per_task=1)
 
 
-def simulate(model, data: Sequence = (), *, sets: Sequence[Mapping] | None = None, params: Mapping | None = None,
-             metrics: Sequence[str] = (), inputs: Mapping | None = None, t_end: float | None = None,
-             dt: float | None = None, method: str | None = None, rtol: float | None = None,
-             input: str | None = None, output: str | None = None, data_input: str | None = None, data_output: str | None = None,
-             scheduler=None, workers: int | None = None, progress: OnProgress | None = None, say=None,
-             per_task: int | None = None) -> Table:
+def simulate(
+    model,
+    data: Sequence = (),
+    *,
+    sets: Sequence[Mapping] | None = None,
+    params: Mapping | None = None,
+    metrics: Sequence[str] = (),
+    inputs: Mapping | None = None,
+    t_end: float | None = None,
+    dt: float | None = None,
+    method: str | None = None,
+    rtol: float | None = None,
+    input: str | None = None,
+    output: str | None = None,
+    data_input: str | None = None,
+    data_output: str | None = None,
+    scheduler=None,
+    workers: int | None = None,
+    progress: OnProgress | None = None,
+    say=None,
+    per_task: int | None = None,
+) -> Table:
     """Simulate every data file (its ``input`` column drives the model; ``rms`` of the model's
     ``output`` against the data's) or, without data, the model's experiment (``inputs``,
     ``t_end``, ``dt`` override it), for every parameter set; one column per metric
     (:mod:`bondgraph.batch.metrics`)."""
     lm = checked_model(model, params, sets)
     input, output = model_io(lm, input, output, required=bool(data))
-    opts = simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol, input, output,
-                              data_input, data_output)
+    opts = simulation_options(
+        lm, params, metrics, inputs, t_end, dt, method, rtol, input, output, data_input, data_output
+    )
     jobs = data_jobs(data, sets) if data else [Job(i, _items(s)) for i, s in enumerate(sets or [{}])]
     return execute(opts, jobs, scheduler, workers, progress, say, per_task=per_task)
 
 
 # ---- shared by the batch kinds -------------------------------------------------------------------
-def checked_model(model, params: Mapping | None, sets: Sequence[Mapping] | None = None,
-                  names: Iterable[str] = ()):
+def checked_model(model, params: Mapping | None, sets: Sequence[Mapping] | None = None, names: Iterable[str] = ()):
     """The model file built with ``params`` (errors now, not in every job), after checking that
     every parameter named by the sets (and ``names``) exists."""
     from ..model.modelfile import load_model
@@ -110,8 +173,9 @@ def model_io(lm, input: str | None, output: str | None, required: bool = True) -
     return tuple(names)
 
 
-def simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol, input=None, output=None,
-                       data_input=None, data_output=None) -> Options:
+def simulation_options(
+    lm, params, metrics, inputs, t_end, dt, method, rtol, input=None, output=None, data_input=None, data_output=None
+) -> Options:
     """Options of simulation jobs: the model's experiment with the given overrides, checked."""
     from ..numerics.simulate import METHODS
 
@@ -120,6 +184,7 @@ def simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol, inp
     unknown = [m for m in parsed if not m.linear and m.arg not in signals]
     if unknown:
         from ..equations.derivation import derive
+
         states = {str(s) for s in derive(lm.model).state_symbols}
         for m in unknown:
             if m.arg not in states:
@@ -133,9 +198,21 @@ def simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol, inp
     method = method or exp.method
     if method not in METHODS:
         raise UsageError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    return Options("simulate", str(lm.path.resolve()), _items(params), input, output, data_input, data_output,
-                   metrics=tuple(parsed), times=(exp.t_end if t_end is None else t_end, exp.dt if dt is None else dt),
-                   inputs=sig, method=method, rtol=exp.rtol if rtol is None else rtol, settings=config.snapshot())
+    return Options(
+        "simulate",
+        str(lm.path.resolve()),
+        _items(params),
+        input,
+        output,
+        data_input,
+        data_output,
+        metrics=tuple(parsed),
+        times=(exp.t_end if t_end is None else t_end, exp.dt if dt is None else dt),
+        inputs=sig,
+        method=method,
+        rtol=exp.rtol if rtol is None else rtol,
+        settings=config.snapshot(),
+    )
 
 
 def data_jobs(data: Sequence, sets: Sequence[Mapping] | None) -> list[Job]:
@@ -153,8 +230,15 @@ def _items(values: Mapping | None) -> tuple:
     return tuple((dict(values or {})).items())
 
 
-def execute(opts: Options, jobs: Sequence[Job], scheduler=None, workers: int | None = None,
-            progress: OnProgress | None = None, say=None, per_task: int | None = None) -> Table:
+def execute(
+    opts: Options,
+    jobs: Sequence[Job],
+    scheduler=None,
+    workers: int | None = None,
+    progress: OnProgress | None = None,
+    say=None,
+    per_task: int | None = None,
+) -> Table:
     """Run ``jobs`` on the cluster, ``per_task`` jobs per Dask task (default: sized to the
     number of jobs and workers); the table in job order."""
     rows: list[dict] = []
@@ -166,13 +250,19 @@ def execute(opts: Options, jobs: Sequence[Job], scheduler=None, workers: int | N
             progress(done[0], len(jobs))
 
     def failed(chunk, exc):  # the task itself failed (its worker died): every job of it
-        return [{"job": j.index, **({"data": j.label} if j.data else {}), **dict(j.params),
-                 "error": f"worker failed: {describe(exc)}"} for j in chunk]
+        return [
+            {
+                "job": j.index,
+                **({"data": j.label} if j.data else {}),
+                **dict(j.params),
+                "error": f"worker failed: {describe(exc)}",
+            }
+            for j in chunk
+        ]
 
     with connect(scheduler, workers, say) as client:
         size = per_task or chunk_size(len(jobs), worker_count(client))
-        for chunk_rows in run_tasks(client, run_chunk, chunked(list(jobs), size), {"opts": opts},
-                                    finished, failed):
+        for chunk_rows in run_tasks(client, run_chunk, chunked(list(jobs), size), {"opts": opts}, finished, failed):
             rows += chunk_rows
     leading = ["data", *dict.fromkeys(k for j in jobs for k, _ in j.params)]
     return Table(rows, leading)
@@ -183,8 +273,7 @@ def read_sets(path: str | os.PathLike) -> list[dict]:
     p = Path(path)
     try:
         with open(p, newline="", encoding="utf-8") as fh:
-            rows = [(k, r) for k, r in enumerate(csv.reader(fh), start=1)
-                    if r and not r[0].lstrip().startswith("#")]
+            rows = [(k, r) for k, r in enumerate(csv.reader(fh), start=1) if r and not r[0].lstrip().startswith("#")]
     except (OSError, UnicodeDecodeError) as exc:
         raise UsageError(f"parameter sets {path}: cannot read ({getattr(exc, 'strerror', None) or exc})") from None
     if len(rows) < 2:
@@ -196,4 +285,3 @@ def read_sets(path: str | os.PathLike) -> list[dict]:
             raise UsageError(f"{path}:{k}: {len(r)} values for {len(header)} parameters")
         out.append({h: v.strip() for h, v in zip(header, r)})
     return out
-

@@ -21,6 +21,7 @@ Designs (each returns one dict of parameter values per run, in a fixed order):
 
 The same space, design, count and seed always give the same runs.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -127,8 +128,13 @@ def _levels(n, what):
 
 
 _SPEC = re.compile(r"^\s*([a-z]+)\s*\((.*)\)\s*$", re.S)
-_KINDS = {"uniform": (uniform, 2, 2), "normal": (normal, 2, 4), "loguniform": (loguniform, 2, 2),
-          "linspace": (linspace, 3, 3), "logspace": (logspace, 3, 3)}
+_KINDS = {
+    "uniform": (uniform, 2, 2),
+    "normal": (normal, 2, 4),
+    "loguniform": (loguniform, 2, 2),
+    "linspace": (linspace, 3, 3),
+    "logspace": (logspace, 3, 3),
+}
 
 
 def parse_spec(text: str) -> Distribution | Grid:
@@ -144,8 +150,9 @@ def parse_spec(text: str) -> Distribution | Grid:
         raise UsageError(f"unknown spec kind '{kind}' in {text!r}; kinds: {kinds}")
     factory, lo, hi = _KINDS[kind]
     if not lo <= len(args) <= hi:
-        raise UsageError(f"bad parameter spec {text!r}: {kind} takes {lo}" + (f" to {hi}" if hi > lo else "")
-                         + " numbers")
+        raise UsageError(
+            f"bad parameter spec {text!r}: {kind} takes {lo}" + (f" to {hi}" if hi > lo else "") + " numbers"
+        )
     nums = []
     for i, a in enumerate(args):
         if a.endswith("%") and kind == "normal" and i == 1:  # sd as a share of the mean
@@ -191,8 +198,13 @@ def default_design(space: Mapping[str, Distribution | Grid]) -> str:
     return "grid" if space and all(isinstance(s, Grid) for s in space.values()) else "random"
 
 
-def design_points(space: Mapping[str, Distribution | Grid], design: str, draws: int | None = None,
-                  seed: int | None = None, nominal: Mapping[str, Any] | None = None) -> list[dict]:
+def design_points(
+    space: Mapping[str, Distribution | Grid],
+    design: str,
+    draws: int | None = None,
+    seed: int | None = None,
+    nominal: Mapping[str, Any] | None = None,
+) -> list[dict]:
     """The runs of ``design`` over ``space`` (see the module docstring); ``nominal`` holds the
     model's values, needed by ``oat``."""
     if not space:
@@ -203,8 +215,10 @@ def design_points(space: Mapping[str, Distribution | Grid], design: str, draws: 
     if design == "grid":
         loose = [n for n in names if not isinstance(space[n], Grid)]
         if loose:
-            raise UsageError(f"a grid needs levels for every parameter; {loose[0]} has {space[loose[0]]} "
-                             f"(use linspace/logspace/values, or --design random)")
+            raise UsageError(
+                f"a grid needs levels for every parameter; {loose[0]} has {space[loose[0]]} "
+                f"(use linspace/logspace/values, or --design random)"
+            )
         return [dict(zip(names, combo)) for combo in itertools.product(*(space[n].levels for n in names))]
     if design == "oat":
         nominal = dict(nominal or {})
@@ -218,8 +232,10 @@ def design_points(space: Mapping[str, Distribution | Grid], design: str, draws: 
         return runs
     grids = [n for n in names if isinstance(space[n], Grid)]
     if grids:
-        raise UsageError(f"{design} sampling needs a distribution for every parameter; {grids[0]} has grid "
-                         f"levels {space[grids[0]]} (use uniform/normal/loguniform, or --design grid)")
+        raise UsageError(
+            f"{design} sampling needs a distribution for every parameter; {grids[0]} has grid "
+            f"levels {space[grids[0]]} (use uniform/normal/loguniform, or --design grid)"
+        )
     if draws is None or int(draws) != draws or draws < 1:
         raise UsageError(f"give the number of draws (a positive integer), got {draws}")
     draws = int(draws)

@@ -9,6 +9,7 @@ The runs come from :mod:`~bondgraph.batch.sampling` (reproducible with ``seed``)
 simulation of the model's experiment (or ``inputs``/``t_end``/``dt``) with the scalar outputs of
 :mod:`~bondgraph.batch.metrics`; statistics and sensitivities from :mod:`~bondgraph.batch.analysis`.
 """
+
 from __future__ import annotations
 
 import math
@@ -17,9 +18,9 @@ from typing import Mapping, Sequence
 
 from ..support.errors import UsageError
 from . import analysis
+from .jobs import Job
 from .runs import OnProgress, checked_model, execute, model_io, simulation_options
 from .sampling import Distribution, Grid, default_design, design_points, parse_spec
-from .jobs import Job
 from .table import Table
 
 
@@ -48,43 +49,82 @@ class SweepResult:
 
     def as_json(self) -> dict:
         """Statistics and sensitivities as strict JSON (a missing or non-finite number is null)."""
-        return _finite({"design": self.design, "runs": len(self.table), "failed": len(self.table.failed), "seed": self.seed,
-                "space": {k: str(v) for k, v in self.space.items()}, "nominal": self.nominal,
-                "summary": self.summary(), "sensitivity": self.sensitivity()})
+        return _finite(
+            {
+                "design": self.design,
+                "runs": len(self.table),
+                "failed": len(self.table.failed),
+                "seed": self.seed,
+                "space": {k: str(v) for k, v in self.space.items()},
+                "nominal": self.nominal,
+                "summary": self.summary(),
+                "sensitivity": self.sensitivity(),
+            }
+        )
 
     def text(self) -> str:
-        lines = [f"{self.design} sweep: {len(self.table)} runs, {len(self.table.failed)} failed"
-                 + (f", seed {self.seed}" if self.seed is not None and self.design in ("random", "lhs") else "")]
+        lines = [
+            f"{self.design} sweep: {len(self.table)} runs, {len(self.table.failed)} failed"
+            + (f", seed {self.seed}" if self.seed is not None and self.design in ("random", "lhs") else "")
+        ]
         lines += [f"  {k} = {v}" for k, v in self.space.items()]
-        lines += ["", f"  {'metric':<16} {'n':>5} {'mean':>12} {'std':>11} {'min':>12} {'p5':>12} {'median':>12} "
-                      f"{'p95':>12} {'max':>12}"]
+        lines += [
+            "",
+            f"  {'metric':<16} {'n':>5} {'mean':>12} {'std':>11} {'min':>12} {'p5':>12} {'median':>12} "
+            f"{'p95':>12} {'max':>12}",
+        ]
         for s in self.summary():
             if s["n"]:
-                lines.append(f"  {s['metric']:<16} {s['n']:>5} {s['mean']:>12.5g} {s['std']:>11.4g} {s['min']:>12.5g} "
-                             f"{s['p5']:>12.5g} {s['median']:>12.5g} {s['p95']:>12.5g} {s['max']:>12.5g}")
+                lines.append(
+                    f"  {s['metric']:<16} {s['n']:>5} {s['mean']:>12.5g} {s['std']:>11.4g} {s['min']:>12.5g} "
+                    f"{s['p5']:>12.5g} {s['median']:>12.5g} {s['p95']:>12.5g} {s['max']:>12.5g}"
+                )
             else:
                 lines.append(f"  {s['metric']:<16} {0:>5}  (every run failed)")
         for sens in self.sensitivity():
-            lines += ["", f"  sensitivity of {sens['metric']} (baseline {sens['baseline']:.5g}"
-                          + (f", linear fit R² {sens['r2']:.3f}" if "r2" in sens else "") + "):"]
+            lines += [
+                "",
+                f"  sensitivity of {sens['metric']} (baseline {sens['baseline']:.5g}"
+                + (f", linear fit R² {sens['r2']:.3f}" if "r2" in sens else "")
+                + "):",
+            ]
             for r in sens["ranking"]:
-                extra = (f"  SRC {r['src']:+.3f}  Spearman {r['spearman']:+.3f}" if "src" in r else "")
-                lines.append(f"    {r['parameter']:<14} swing {r['swing']:<11.4g} low {r['low']:<12.5g} "
-                             f"high {r['high']:<12.5g}{extra}")
+                extra = f"  SRC {r['src']:+.3f}  Spearman {r['spearman']:+.3f}" if "src" in r else ""
+                lines.append(
+                    f"    {r['parameter']:<14} swing {r['swing']:<11.4g} low {r['low']:<12.5g} "
+                    f"high {r['high']:<12.5g}{extra}"
+                )
         return "\n".join(lines) + "\n"
 
     def plot(self, path: str) -> None:
         """Histograms of the metrics (top) and tornado plots of their sensitivities (bottom)."""
         from .plots import plot_sweep
+
         plot_sweep(self, path)
 
 
-def sweep(model, space: Mapping[str, str | Distribution | Grid], *, metrics: Sequence[str],
-          design: str | None = None, draws: int | None = None, seed: int | None = None,
-          params: Mapping | None = None, inputs: Mapping | None = None, t_end: float | None = None,
-          dt: float | None = None, method: str | None = None, rtol: float | None = None,
-          input: str | None = None, output: str | None = None, scheduler=None, workers: int | None = None,
-          progress: OnProgress | None = None, say=None, per_task: int | None = None) -> SweepResult:
+def sweep(
+    model,
+    space: Mapping[str, str | Distribution | Grid],
+    *,
+    metrics: Sequence[str],
+    design: str | None = None,
+    draws: int | None = None,
+    seed: int | None = None,
+    params: Mapping | None = None,
+    inputs: Mapping | None = None,
+    t_end: float | None = None,
+    dt: float | None = None,
+    method: str | None = None,
+    rtol: float | None = None,
+    input: str | None = None,
+    output: str | None = None,
+    scheduler=None,
+    workers: int | None = None,
+    progress: OnProgress | None = None,
+    say=None,
+    per_task: int | None = None,
+) -> SweepResult:
     """Simulate the model at every point of ``design`` over ``space`` (default: ``grid`` when
     every parameter has grid levels, else ``random`` with ``draws`` draws) and evaluate
     ``metrics`` on each run."""
@@ -95,10 +135,12 @@ def sweep(model, space: Mapping[str, str | Distribution | Grid], *, metrics: Seq
     lm = checked_model(model, params, [space])
     nominal = {n: _nominal(lm.model, n) for n in space}
     points = design_points(space, design, draws, seed, nominal)
-    opts = simulation_options(lm, params, metrics, inputs, t_end, dt, method, rtol,
-                              *model_io(lm, input, output, required=False))
-    table = execute(opts, [Job(i, tuple(p.items())) for i, p in enumerate(points)], scheduler, workers,
-                    progress, say, per_task)
+    opts = simulation_options(
+        lm, params, metrics, inputs, t_end, dt, method, rtol, *model_io(lm, input, output, required=False)
+    )
+    table = execute(
+        opts, [Job(i, tuple(p.items())) for i, p in enumerate(points)], scheduler, workers, progress, say, per_task
+    )
     return SweepResult(table, space, design, [m.text for m in opts.metrics], seed, nominal)
 
 

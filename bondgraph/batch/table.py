@@ -5,6 +5,7 @@ its results, then ``warnings``, ``seconds`` (wall time of the job on its worker)
 ``error`` (empty when the job succeeded; a failed job keeps its inputs and leaves its
 results empty).  Files are written atomically: complete or not at all.
 """
+
 from __future__ import annotations
 
 import csv
@@ -75,6 +76,7 @@ class Table:
     def to_pandas(self):
         """A pandas DataFrame of the rows (needs pandas)."""
         import pandas as pd
+
         return pd.DataFrame([[r.get(c) for c in self.columns] for r in self.rows], columns=self.columns)
 
     def write(self, path: str | Path) -> None:

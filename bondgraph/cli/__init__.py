@@ -6,6 +6,7 @@ stderr, no traceback), 1 internal failure (``--debug`` shows the traceback), 130
 by Ctrl-C and 143 by SIGTERM (one line; temporary files removed, worker processes killed,
 existing files untouched: see :mod:`bondgraph.support.interrupt`).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -15,19 +16,32 @@ import sys
 import traceback
 import warnings
 
-from ..support.errors import BondGraphError, UsageError
-from . import batch, causality, compensate, diagnose, equations, fit, linearize, params, simulate
 from ..support import interrupt
+from ..support.errors import BondGraphError, UsageError
+from . import (  # noqa: F401 - importing a command's module registers it
+    batch,
+    causality,
+    compensate,
+    diagnose,
+    equations,
+    fit,
+    linearize,
+    params,
+    simulate,
+)
 from .registry import COMMANDS, Parser
 
 DEBUG_HELP = "show the traceback of an error"
 
 
 def build_parser() -> Parser:
-    parser = Parser(prog="bondgraph", description="Acausal bond-graph modelling: equations, simulation, "
-                    "fitting and diagnosis of model files (.py) against measured data (.csv).",
-                    epilog="Exit status: 0 success, 2 bad input (one line on stderr), 1 internal failure, "
-                           "130 interrupted (Ctrl-C). 'bondgraph COMMAND --help' describes a command.")
+    parser = Parser(
+        prog="bondgraph",
+        description="Acausal bond-graph modelling: equations, simulation, "
+        "fitting and diagnosis of model files (.py) against measured data (.csv).",
+        epilog="Exit status: 0 success, 2 bad input (one line on stderr), 1 internal failure, "
+        "130 interrupted (Ctrl-C). 'bondgraph COMMAND --help' describes a command.",
+    )
     parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     for cmd in COMMANDS.values():
@@ -70,16 +84,20 @@ def main(argv: list[str] | None = None) -> int:
             print("bondgraph: interrupted; no output file was changed", file=sys.stderr)
             return 130
         except SystemExit as exc:  # the command (a library it calls) called sys.exit: report it, do not obey it
-            print(f"bondgraph: internal error: unexpected exit (status {exc.code}) "
-                  f"(run with --debug for the traceback)", file=sys.stderr)
+            print(
+                f"bondgraph: internal error: unexpected exit (status {exc.code}) (run with --debug for the traceback)",
+                file=sys.stderr,
+            )
             if debug:
                 traceback.print_exception(exc)
             return 1
         except Exception as exc:  # noqa: BLE001 - internal failure: one line unless --debug
             if debug:
                 traceback.print_exception(exc)
-            print(f"bondgraph: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)",
-                  file=sys.stderr)
+            print(
+                f"bondgraph: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)",
+                file=sys.stderr,
+            )
             return 1
 
 

@@ -1,5 +1,6 @@
 """``bondgraph compensate``: the feedforward drive that makes a model follow a desired output
 (wraps :func:`bondgraph.fit.compensate.feedforward`)."""
+
 from __future__ import annotations
 
 import json
@@ -10,28 +11,49 @@ from ..support.errors import UsageError
 from .registry import MODEL_ARGS, PLOT_SUFFIXES, arg, command, counter, load, outputs
 
 
-@command("compensate", "feedforward drive that makes the model's output follow a desired trajectory "
-         "(hysteresis inverted), with the predicted tracking error with and without compensation",
-         MODEL_ARGS + [
-             arg("reference", metavar="REFERENCE", help="desired trajectory (CSV with t and the output column)"),
-             arg("--column", metavar="COL", help="reference column (default: the model output name)"),
-             arg("--model-input", metavar="NAME", help="model input to compute (default: the model's first input)"),
-             arg("--model-output", metavar="NAME", help="model output to follow (default: the model's first output)"),
-             arg("--input", metavar="NAME=SIGNAL", action="append", default=[],
-                 help="drive another model input during the run, as for simulate (default 0)"),
-             arg("--iterations", type=int, default=10,
-                 help="at most this many model simulations refining the drive (default 10)"),
-             arg("--tol", type=float, default=1e-4,
-                 help="stop when the largest error is below this fraction of the reference's range"),
-             arg("--out", metavar="FILE.csv", help="write t, the compensated drive, the reference, the "
-                 "predicted output, the linear-inverse drive and its predicted output (default: stdout)"),
-             arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="plot reference, predicted outputs and drives"),
-             arg("--json", action="store_true", help="print the summary as JSON on stdout"),
-             arg("--quiet", action="store_true", help="no progress or summary on stderr"),
-         ])
+@command(
+    "compensate",
+    "feedforward drive that makes the model's output follow a desired trajectory "
+    "(hysteresis inverted), with the predicted tracking error with and without compensation",
+    MODEL_ARGS
+    + [
+        arg("reference", metavar="REFERENCE", help="desired trajectory (CSV with t and the output column)"),
+        arg("--column", metavar="COL", help="reference column (default: the model output name)"),
+        arg("--model-input", metavar="NAME", help="model input to compute (default: the model's first input)"),
+        arg("--model-output", metavar="NAME", help="model output to follow (default: the model's first output)"),
+        arg(
+            "--input",
+            metavar="NAME=SIGNAL",
+            action="append",
+            default=[],
+            help="drive another model input during the run, as for simulate (default 0)",
+        ),
+        arg(
+            "--iterations",
+            type=int,
+            default=10,
+            help="at most this many model simulations refining the drive (default 10)",
+        ),
+        arg(
+            "--tol",
+            type=float,
+            default=1e-4,
+            help="stop when the largest error is below this fraction of the reference's range",
+        ),
+        arg(
+            "--out",
+            metavar="FILE.csv",
+            help="write t, the compensated drive, the reference, the "
+            "predicted output, the linear-inverse drive and its predicted output (default: stdout)",
+        ),
+        arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="plot reference, predicted outputs and drives"),
+        arg("--json", action="store_true", help="print the summary as JSON on stdout"),
+        arg("--quiet", action="store_true", help="no progress or summary on stderr"),
+    ],
+)
 def run(args):
-    from ..fit.compensate import feedforward
     from ..data import read_csv, write_csv
+    from ..fit.compensate import feedforward
     from ..model.signals import parse_signal
 
     if args.iterations < 1:
@@ -48,16 +70,33 @@ def run(args):
             if not sep:
                 raise UsageError(f"bad --input {item!r}: expected NAME=SIGNAL, e.g. F=0")
             others[name.strip()] = parse_signal(spec, base_dir=str(Path(args.model).parent))
-        res = feedforward(lm.model, ref.t, ref.columns[col], input=args.model_input, output=args.model_output,
-                          inputs=others, iterations=args.iterations, tol=args.tol,
-                          progress=None if args.quiet else counter("compensating"))
+        res = feedforward(
+            lm.model,
+            ref.t,
+            ref.columns[col],
+            input=args.model_input,
+            output=args.model_output,
+            inputs=others,
+            iterations=args.iterations,
+            tol=args.tol,
+            progress=None if args.quiet else counter("compensating"),
+        )
         u, y = args.model_input, args.model_output
-        columns = {u: res.drive, f"{y}_ref": res.reference, f"{y}_pred": res.predicted,
-                   f"{u}_linear": res.linear_drive, f"{y}_pred_linear": res.linear_predicted}
+        columns = {
+            u: res.drive,
+            f"{y}_ref": res.reference,
+            f"{y}_pred": res.predicted,
+            f"{u}_linear": res.linear_drive,
+            f"{y}_pred_linear": res.linear_predicted,
+        }
         summary = res.summary()
-        meta = {"model": str(args.model), "reference": str(args.reference), "method": summary["method"],
-                "max_error": repr(summary["max_error"]),
-                "max_error_uncompensated": repr(summary["max_error_uncompensated"])}
+        meta = {
+            "model": str(args.model),
+            "reference": str(args.reference),
+            "method": summary["method"],
+            "max_error": repr(summary["max_error"]),
+            "max_error_uncompensated": repr(summary["max_error_uncompensated"]),
+        }
         if args.out:
             with out.path(args.out) as tmp:
                 write_csv(tmp, res.t, columns, meta)
@@ -71,12 +110,15 @@ def run(args):
     if args.json:
         print(json.dumps(summary, indent=1))
     if not args.quiet:
-        print(f"{summary['method']}: largest tracking error {summary['max_error']:.4g} "
-              f"({100 * summary['relative_error']:.3g} % of the reference's range) with compensation, "
-              f"{summary['max_error_uncompensated']:.4g} ({100 * summary['relative_error_uncompensated']:.3g} %) "
-              f"with the linear inverse: {summary['improvement']:.3g}x less"
-              + (f"; wrote {args.out}" if args.out else "") + (f", {args.plot}" if args.plot else ""),
-              file=sys.stderr)
+        print(
+            f"{summary['method']}: largest tracking error {summary['max_error']:.4g} "
+            f"({100 * summary['relative_error']:.3g} % of the reference's range) with compensation, "
+            f"{summary['max_error_uncompensated']:.4g} ({100 * summary['relative_error_uncompensated']:.3g} %) "
+            f"with the linear inverse: {summary['improvement']:.3g}x less"
+            + (f"; wrote {args.out}" if args.out else "")
+            + (f", {args.plot}" if args.plot else ""),
+            file=sys.stderr,
+        )
 
 
 def _plot(res, path: str, u: str, y: str, title: str) -> None:

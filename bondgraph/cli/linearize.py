@@ -1,5 +1,6 @@
 """``bondgraph linearize``: poles, zeros and natural frequencies at the initial state; the
 state-space model as JSON or as a python-control script."""
+
 from __future__ import annotations
 
 import json
@@ -10,20 +11,28 @@ from .registry import MODEL_ARGS, PLOT_SUFFIXES, arg, command, load, outputs, wr
 FORMATS = ("text", "json", "python-control")
 
 
-@command("linearize", "linearise at the initial state: poles, zeros, natural frequencies; the state-space "
-                      "model as JSON or for python-control",
-         MODEL_ARGS + [
-             arg("--input", metavar="NAME", help="model input (default: the model's first input)"),
-             arg("--output", metavar="NAME", help="model output (default: the model's first output)"),
-             arg("--format", choices=FORMATS, default="text",
-                 help="text (default); json: one object with natural frequencies, poles, zeros, right-half-plane "
-                      "zeros, damping, static gain and A, B, C, D; python-control: a Python script that builds "
-                      "the model as control.StateSpace named 'model' (needs the 'control' extra)"),
-             arg("--json", action="store_true", help="same as --format json"),
-             arg("--out", metavar="FILE", help="write the result to a file instead of stdout"),
-             arg("--bode", metavar="FILE.csv", help="write the frequency response (magnitude, phase)"),
-             arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="Bode plot (needs matplotlib)"),
-         ])
+@command(
+    "linearize",
+    "linearise at the initial state: poles, zeros, natural frequencies; the state-space "
+    "model as JSON or for python-control",
+    MODEL_ARGS
+    + [
+        arg("--input", metavar="NAME", help="model input (default: the model's first input)"),
+        arg("--output", metavar="NAME", help="model output (default: the model's first output)"),
+        arg(
+            "--format",
+            choices=FORMATS,
+            default="text",
+            help="text (default); json: one object with natural frequencies, poles, zeros, right-half-plane "
+            "zeros, damping, static gain and A, B, C, D; python-control: a Python script that builds "
+            "the model as control.StateSpace named 'model' (needs the 'control' extra)",
+        ),
+        arg("--json", action="store_true", help="same as --format json"),
+        arg("--out", metavar="FILE", help="write the result to a file instead of stdout"),
+        arg("--bode", metavar="FILE.csv", help="write the frequency response (magnitude, phase)"),
+        arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="Bode plot (needs matplotlib)"),
+    ],
+)
 def run(args):
     from ..equations.derivation import derive
     from ..linear.linearize import linearize
@@ -33,6 +42,7 @@ def run(args):
         raise UsageError(f"--json and --format {args.format} contradict each other; give one")
     if fmt == "python-control":
         import importlib.util
+
         if importlib.util.find_spec("control") is None:
             raise UsageError("--format python-control needs python-control: pip install 'bondgraph[control]'")
     with outputs(args, "out", "bode", "plot") as out:
@@ -41,51 +51,76 @@ def run(args):
         inp = args.input or next(iter(model.inputs), None)
         outp = args.output or next(iter(model.outputs), None)
         if inp is None or outp is None:
-            raise UsageError(f"model {args.model} declares no {'input' if inp is None else 'output'}; "
-                             f"linearize needs one of each")
+            raise UsageError(
+                f"model {args.model} declares no {'input' if inp is None else 'output'}; linearize needs one of each"
+            )
         lin = linearize(derive(model), inp, outp)
         summary = lin.summary()
         if fmt == "json":
             text = json.dumps(summary) + "\n"
         elif fmt == "python-control":
             lin.to_control(model.name)  # the script's model, built once here so a problem shows now
-            text = lin.python_control_script(model.name, f"{model.name}: {outp}/{inp} linearised at the initial "
-                                                         f"state by bondgraph from {args.model}")
+            text = lin.python_control_script(
+                model.name, f"{model.name}: {outp}/{inp} linearised at the initial state by bondgraph from {args.model}"
+            )
         else:
             text = _text(model, lin, summary, inp, outp)
         write_text(args.out, text, out)
         if args.bode or args.plot:
             import numpy as np
+
             w = _bode_grid(lin)
             H = lin.frequency_response(w)
             if args.bode:
                 from ..data import write_csv
+
                 with out.path(args.bode) as tmp:
-                    write_csv(tmp, w, {"magnitude": np.abs(H), "phase_deg": np.degrees(np.unwrap(np.angle(H)))},
-                              {"model": str(args.model), "input": inp, "output": outp,
-                               "note": "first column t holds the angular frequency in rad/s"})
+                    write_csv(
+                        tmp,
+                        w,
+                        {"magnitude": np.abs(H), "phase_deg": np.degrees(np.unwrap(np.angle(H)))},
+                        {
+                            "model": str(args.model),
+                            "input": inp,
+                            "output": outp,
+                            "note": "first column t holds the angular frequency in rad/s",
+                        },
+                    )
             if args.plot:
                 from ..plotting import plot_bode
+
                 with out.path(args.plot) as tmp:
-                    plot_bode(w, H, tmp, title=f"{model.name}: {outp}/{inp}",
-                              input=(inp, model.inputs[inp].unit), output=(outp, model.outputs[outp].unit))
+                    plot_bode(
+                        w,
+                        H,
+                        tmp,
+                        title=f"{model.name}: {outp}/{inp}",
+                        input=(inp, model.inputs[inp].unit),
+                        output=(outp, model.outputs[outp].unit),
+                    )
 
 
 def _text(model, lin, summary, inp, outp) -> str:
     yu, uu = model.outputs[outp].unit, model.inputs[inp].unit
     gain_unit = f" {yu or '1'}/{uu}" if uu else (f" {yu}" if yu else "")
-    return "\n".join([
-        f"{model.name}: {outp}/{inp}, {len(lin.states)} states",
-        "natural frequencies (rad/s): " + ", ".join(f"{w:.6g}" for w in summary["natural_frequencies_rad_s"]),
-        "damping ratios:              " + ", ".join(f"{d:.4g}" for d in summary["damping_ratios"]),
-        "poles (rad/s): " + ", ".join(_complex(p) for p in summary["poles"]),
-        "zeros (rad/s): " + (", ".join(_complex(z) for z in summary["zeros"]) or "none")
-        + f"   ({summary['rhp_zeros']} in the right half-plane)",
-        f"static gain: {summary['dc_gain']:.6g}{gain_unit}", ""])
+    return "\n".join(
+        [
+            f"{model.name}: {outp}/{inp}, {len(lin.states)} states",
+            "natural frequencies (rad/s): " + ", ".join(f"{w:.6g}" for w in summary["natural_frequencies_rad_s"]),
+            "damping ratios:              " + ", ".join(f"{d:.4g}" for d in summary["damping_ratios"]),
+            "poles (rad/s): " + ", ".join(_complex(p) for p in summary["poles"]),
+            "zeros (rad/s): "
+            + (", ".join(_complex(z) for z in summary["zeros"]) or "none")
+            + f"   ({summary['rhp_zeros']} in the right half-plane)",
+            f"static gain: {summary['dc_gain']:.6g}{gain_unit}",
+            "",
+        ]
+    )
 
 
 def _bode_grid(lin):
     import numpy as np
+
     wn = lin.natural_frequencies
     lo = (wn.min() if wn.size else 1.0) / 100
     hi = (wn.max() if wn.size else 1.0) * 100

@@ -4,6 +4,7 @@ arguments (``@command``), and shares the argument groups and helpers defined her
 Command modules import only the standard library at import time, so ``bondgraph --help``
 stays fast; the framework is imported inside the command functions.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -34,29 +35,47 @@ def arg(*flags, **kw) -> tuple:
 
 def command(name: str, help: str, args: list):
     """Register ``fn(args)`` as subcommand ``name`` with the argument declarations ``args``."""
+
     def deco(fn):
         COMMANDS[name] = Command(name, fn, help, list(args))
         return fn
+
     return deco
 
 
 MODEL_ARGS = [
     arg("model", metavar="MODEL", help="model file (.py)"),
-    arg("--set", metavar="NAME=VALUE", action="append", default=[],
-        help="override a parameter (repeatable; each name at most once)"),
-    arg("--params-file", metavar="FILE.json", help="parameter values, e.g. the fit file of 'bondgraph fit' "
-                                                   "(its output offset is applied too); --set overrides it"),
+    arg(
+        "--set",
+        metavar="NAME=VALUE",
+        action="append",
+        default=[],
+        help="override a parameter (repeatable; each name at most once)",
+    ),
+    arg(
+        "--params-file",
+        metavar="FILE.json",
+        help="parameter values, e.g. the fit file of 'bondgraph fit' "
+        "(its output offset is applied too); --set overrides it",
+    ),
 ]
 
 DATA_ARGS = [
     arg("data", metavar="DATA", help="measured data: CSV with a header line, time column t in s"),
-    arg("--input", metavar="COL", help="data column that drives the model (default: the column named like "
-                                       "the model input)"),
-    arg("--output", metavar="COL", help="data column to compare with the model output (default: the column "
-                                        "named like the model output)"),
+    arg(
+        "--input",
+        metavar="COL",
+        help="data column that drives the model (default: the column named like the model input)",
+    ),
+    arg(
+        "--output",
+        metavar="COL",
+        help="data column to compare with the model output (default: the column named like the model output)",
+    ),
     arg("--model-input", metavar="NAME", help="model input driven by the data (default: the model's first input)"),
-    arg("--model-output", metavar="NAME", help="model output compared with the data (default: the model's "
-                                               "first output)"),
+    arg(
+        "--model-output", metavar="NAME", help="model output compared with the data (default: the model's first output)"
+    ),
     arg("--validation", type=float, default=0.3, help="share of the data held out (default 0.3)"),
 ]
 
@@ -80,8 +99,10 @@ def load(args):
     overrides.update(parse_assignments(args.set))
     lm = load_model(args.model, overrides)
     lm.offsets = offsets
-    for attr, declared, what in (("model_input", lm.model.inputs, "input"),
-                                 ("model_output", lm.model.outputs, "output")):
+    for attr, declared, what in (
+        ("model_input", lm.model.inputs, "input"),
+        ("model_output", lm.model.outputs, "output"),
+    ):
         if hasattr(args, attr) and getattr(args, attr) is None:
             if not declared:
                 raise UsageError(f"model {args.model} declares no {what}; a command on measured data needs one")
@@ -110,8 +131,14 @@ def outputs(args, *dests: str, inputs=()):
     from ..support.atomic import Outputs
 
     data = getattr(args, "data", None)
-    out = Outputs([getattr(args, "model", None), *(data if isinstance(data, list) else [data]),
-                   getattr(args, "params_file", None), *inputs])
+    out = Outputs(
+        [
+            getattr(args, "model", None),
+            *(data if isinstance(data, list) else [data]),
+            getattr(args, "params_file", None),
+            *inputs,
+        ]
+    )
     try:
         for dest in dests:
             path = getattr(args, dest, None)
@@ -147,6 +174,7 @@ def write_text(path: str | None, text: str, out=None):
             fh.write(text)
     else:
         from ..support.atomic import atomic_write
+
         with atomic_write(path, "w", encoding="utf-8") as fh:
             fh.write(text)
 
@@ -155,6 +183,7 @@ def progress(label: str, quiet: bool = False):
     """A :class:`~bondgraph.support.progress.Progress` for a fraction done (0..1), e.g. for
     ``Simulator.run(progress=...)``; silent with ``quiet``."""
     from ..support.progress import Progress
+
     return Progress(label, total=1.0, mode="quiet" if quiet else "auto")
 
 
@@ -162,6 +191,7 @@ def counter(label: str, unit: str = "simulations", quiet: bool = False):
     """A :class:`~bondgraph.support.progress.Progress` for a count with no known end, e.g. for
     ``Identification.fit(progress=...)``; silent with ``quiet``."""
     from ..support.progress import Progress
+
     return Progress(label, unit=unit, mode="quiet" if quiet else "auto")
 
 

@@ -6,6 +6,7 @@ data's first time stamp, ends at its last and samples at its time stamps (``--dt
 a ``--t-end`` beyond the data's end is refused, because the input would be held constant
 after it.  An output offset from a fit file (``--params-file``) is added to its output.
 """
+
 from __future__ import annotations
 
 import re
@@ -14,37 +15,60 @@ import time
 from pathlib import Path
 
 from ..support.errors import UsageError
-from .registry import (MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, command, load, module_constant, outputs,
-    progress)
+from .registry import MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, command, load, module_constant, outputs, progress
 
 _CSV_FILE = re.compile(r"^\s*csv\s*\(.*?\bfile\s*=\s*([^,)]+)", re.S)
 
 
-@command("simulate", "simulate the model; write t, inputs and outputs as CSV (stdout or --out) and a plot (--plot)",
-         MODEL_ARGS + [
-             arg("--input", metavar="NAME=SIGNAL", action="append", default=[],
-                 help="drive an input: sine(amplitude=A, frequency=F, offset=O), step(...), ramp(...), "
-                      "chirp(...), triangle(...), pwl(t:v, ...), csv(file=F, column=C), or a number; "
-                      "with csv the run spans the data's time stamps"),
-             arg("--t-end", type=float, help="end time (s); default from the model file's EXPERIMENT, or the "
-                                              "end of a csv input"),
-             arg("--dt", type=float, help="output sample interval (s); default from the EXPERIMENT, or the "
-                                          "time stamps of a csv input"),
-             arg("--method", choices=module_constant("bondgraph.numerics.simulate", "METHODS"),
-                 help="integration method (default from the EXPERIMENT, usually auto)"),
-             arg("--rtol", type=float, help="relative tolerance (default from the EXPERIMENT, 1e-6 unless set)"),
-             arg("--atol", type=float, help="absolute tolerance floor (default 1e-20; the error is otherwise "
-                                             "relative to each state's peak)"),
-             arg("--out", metavar="FILE.csv", help="write the result CSV (default: stdout)"),
-             arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0],
-                 help="plot the inputs and outputs that vary, with units (needs matplotlib; .png, .pdf or .svg)"),
-             arg("--states", action="store_true", help="include the states in the CSV"),
-             QUIET_ARG,
-         ])
+@command(
+    "simulate",
+    "simulate the model; write t, inputs and outputs as CSV (stdout or --out) and a plot (--plot)",
+    MODEL_ARGS
+    + [
+        arg(
+            "--input",
+            metavar="NAME=SIGNAL",
+            action="append",
+            default=[],
+            help="drive an input: sine(amplitude=A, frequency=F, offset=O), step(...), ramp(...), "
+            "chirp(...), triangle(...), pwl(t:v, ...), csv(file=F, column=C), or a number; "
+            "with csv the run spans the data's time stamps",
+        ),
+        arg(
+            "--t-end",
+            type=float,
+            help="end time (s); default from the model file's EXPERIMENT, or the end of a csv input",
+        ),
+        arg(
+            "--dt",
+            type=float,
+            help="output sample interval (s); default from the EXPERIMENT, or the time stamps of a csv input",
+        ),
+        arg(
+            "--method",
+            choices=module_constant("bondgraph.numerics.simulate", "METHODS"),
+            help="integration method (default from the EXPERIMENT, usually auto)",
+        ),
+        arg("--rtol", type=float, help="relative tolerance (default from the EXPERIMENT, 1e-6 unless set)"),
+        arg(
+            "--atol",
+            type=float,
+            help="absolute tolerance floor (default 1e-20; the error is otherwise relative to each state's peak)",
+        ),
+        arg("--out", metavar="FILE.csv", help="write the result CSV (default: stdout)"),
+        arg(
+            "--plot",
+            metavar="FILE" + PLOT_SUFFIXES[0],
+            help="plot the inputs and outputs that vary, with units (needs matplotlib; .png, .pdf or .svg)",
+        ),
+        arg("--states", action="store_true", help="include the states in the CSV"),
+        QUIET_ARG,
+    ],
+)
 def run(args):
-    from ..numerics.checks import check_start
     from ..data import write_csv
     from ..model.signals import parse_signal
+    from ..numerics.checks import check_start
     from ..numerics.simulate import Simulator
 
     csv_files = [m.group(1).strip() for m in map(_CSV_FILE.match, (i.partition("=")[2] for i in args.input)) if m]
@@ -55,7 +79,9 @@ def run(args):
         for item in args.input:
             name, sep, spec = item.partition("=")
             if not sep or not name.strip():
-                raise UsageError(f"bad --input {item!r}: expected NAME=SIGNAL, e.g. V='sine(amplitude=10, frequency=5)'")
+                raise UsageError(
+                    f"bad --input {item!r}: expected NAME=SIGNAL, e.g. V='sine(amplitude=10, frequency=5)'"
+                )
             name = name.strip()
             if name in given:
                 raise UsageError(f"--input {name} given twice; give each input once")
@@ -69,8 +95,7 @@ def run(args):
         check_start(sim, inputs=inputs, t0=float(t[0]))
         rtol = exp.rtol if args.rtol is None else args.rtol
         with progress("simulating", quiet=args.quiet) as bar:
-            res = sim.run(t, inputs, method=args.method or exp.method, rtol=rtol,
-                          atol=args.atol, progress=bar)
+            res = sim.run(t, inputs, method=args.method or exp.method, rtol=rtol, atol=args.atol, progress=bar)
         cols = res.columns(args.states)
         meta = {"model": str(args.model), "method": res.stats["method"], "rtol": str(rtol)}
         for name, sig in inputs.items():
@@ -89,17 +114,20 @@ def run(args):
             _print_csv(res.t, cols)
         if args.plot:
             from ..plotting import plot_signals
+
             units = {n: v.unit for n, v in lm.model.inputs.items()}
             units.update({n: v.unit for n, v in lm.model.outputs.items()})
             with out.path(args.plot) as tmp:
-                plot_signals(res.t, {n: cols[n] for n in [*res.inputs, *res.outputs]}, units, tmp,
-                             title=lm.model.name)
+                plot_signals(res.t, {n: cols[n] for n in [*res.inputs, *res.outputs]}, units, tmp, title=lm.model.name)
     if not args.quiet:
         wrote = [p for p in (args.out, args.plot) if p]
-        print(f"simulated {res.t[-1] - res.t[0]:g} s of {lm.model.name} in {time.time() - started:.2f} s "
-              f"({res.stats['method']}, {res.stats['steps']} steps)"
-              + (f"; wrote {', '.join(wrote)}" if wrote else "") + "".join(f"; {n}" for n in notes),
-              file=sys.stderr)
+        print(
+            f"simulated {res.t[-1] - res.t[0]:g} s of {lm.model.name} in {time.time() - started:.2f} s "
+            f"({res.stats['method']}, {res.stats['steps']} steps)"
+            + (f"; wrote {', '.join(wrote)}" if wrote else "")
+            + "".join(f"; {n}" for n in notes),
+            file=sys.stderr,
+        )
 
 
 def _times(args, exp, tables):
@@ -108,20 +136,22 @@ def _times(args, exp, tables):
 
     if not tables:
         return exp.times(args.t_end, args.dt)
-    name, sig = min(tables.items(), key=lambda kv: kv[1].table_t[-1])   # the one that ends first
+    name, sig = min(tables.items(), key=lambda kv: kv[1].table_t[-1])  # the one that ends first
     stamps = np.asarray(sig.table_t)
     start = max(s.table_t[0] for s in tables.values())
     end = float(stamps[-1])
     if start >= end:
-        raise UsageError(f"the csv inputs do not overlap in time ({', '.join(tables)}); give inputs that cover "
-                         f"a common time span")
+        raise UsageError(
+            f"the csv inputs do not overlap in time ({', '.join(tables)}); give inputs that cover a common time span"
+        )
     if args.t_end is not None:
         if not (args.t_end > start):
-            raise UsageError(f"--t-end {args.t_end:g} is not after the start of the input data of {name} "
-                             f"({start:g} s)")
+            raise UsageError(f"--t-end {args.t_end:g} is not after the start of the input data of {name} ({start:g} s)")
         if args.t_end > end * (1 + 1e-9) + 1e-12:
-            raise UsageError(f"--t-end {args.t_end:g} is beyond the end of the input data of {name} ({end:g} s): "
-                             f"the input would be held at its last value; shorten --t-end or extend the data")
+            raise UsageError(
+                f"--t-end {args.t_end:g} is beyond the end of the input data of {name} ({end:g} s): "
+                f"the input would be held at its last value; shorten --t-end or extend the data"
+            )
         end = args.t_end
     if args.dt is None:
         t = stamps[(stamps >= start) & (stamps <= end * (1 + 1e-12))]
@@ -142,8 +172,10 @@ def _offsets(lm, res) -> dict:
         if name in res.outputs:
             out[name] = offset
         elif name is not None:
-            raise UsageError(f"the parameter file's offset is for output {name!r}, which the model does not have "
-                             f"(outputs: {', '.join(res.outputs)})")
+            raise UsageError(
+                f"the parameter file's offset is for output {name!r}, which the model does not have "
+                f"(outputs: {', '.join(res.outputs)})"
+            )
     return out
 
 
@@ -156,5 +188,5 @@ def _print_csv(t, cols):
     write = sys.stdout.write
     write("t," + ",".join(cols) + "\n")
     for start in range(0, table.shape[0], 65536):
-        block = table[start:start + 65536]
+        block = table[start : start + 65536]
         write((fmt * len(block)) % tuple(block.ravel().tolist()))

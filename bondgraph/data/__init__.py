@@ -12,6 +12,7 @@ Modules:
 
 The file format is described in :mod:`bondgraph.data.csv_format` and in ``docs/data-format.md``.
 """
+
 from .checks import DataWarning, check_units
 from .csv_reader import read_csv
 from .csv_writer import write_csv

@@ -9,6 +9,7 @@ In ``pyproject.toml``::
     [project.entry-points."bondgraph.data_checks"]
     mylib = "mylib.checks:check_columns"
 """
+
 from __future__ import annotations
 
 import warnings
@@ -33,9 +34,11 @@ def check_time_axis(ds: Dataset) -> list[str]:
         return []
     step = ds.dt
     if step >= 1.0 and ds.duration >= config.get("data.suspicious_time_span"):
-        return [f"{ds.path or 'dataset'}: time step {step:g} s over {ds.duration:g} s "
-                f"({ds.duration / 3600:.3g} h) looks like 't' is in milliseconds or sample numbers, not "
-                f"seconds: if so scale it by 1e-3 (ms); ignore this for long slow records such as creep tests"]
+        return [
+            f"{ds.path or 'dataset'}: time step {step:g} s over {ds.duration:g} s "
+            f"({ds.duration / 3600:.3g} h) looks like 't' is in milliseconds or sample numbers, not "
+            f"seconds: if so scale it by 1e-3 (ms); ignore this for long slow records such as creep tests"
+        ]
     return []
 
 

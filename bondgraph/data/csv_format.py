@@ -26,6 +26,7 @@ Every problem in a file is a :class:`~bondgraph.support.errors.DataError` whose 
 ``FILE:LINE: problem; fix`` (``LINE`` 1-based, as an editor counts, with CR, LF and CRLF
 each ending one line).  ``docs/data-format.md`` is the user-facing description.
 """
+
 from __future__ import annotations
 
 import re

@@ -4,6 +4,7 @@ Reading is fast: the text is read once and the data block is parsed by numpy's C
 (:func:`numpy.loadtxt` on the in-memory text).  Only when that fails is the block walked
 line by line in Python, to name the first bad line exactly.
 """
+
 from __future__ import annotations
 
 import io
@@ -55,8 +56,7 @@ def _read_text(src: str) -> str:
         line = raw.count(b"\n", 0, exc.start) + 1
         col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
         raise DataError(
-            f"{src}:{line}: not valid UTF-8 (byte 0x{raw[exc.start]:02x} at column {col}); "
-            f"save the file as UTF-8"
+            f"{src}:{line}: not valid UTF-8 (byte 0x{raw[exc.start]:02x} at column {col}); save the file as UTF-8"
         ) from None
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
@@ -102,10 +102,7 @@ def _parse_header(src: str, line: str, lineno: int, last_comment) -> list[str]:
     for j, n in enumerate(names):
         if not n:
             fix = "remove the trailing comma" if j == len(names) - 1 else "name every column"
-            raise DataError(
-                f"{src}:{lineno}: column {j + 1} of the header {_q(line.strip())} has no name; "
-                f"{fix}"
-            )
+            raise DataError(f"{src}:{lineno}: column {j + 1} of the header {_q(line.strip())} has no name; {fix}")
     seen: dict[str, int] = {}
     for j, n in enumerate(names):
         if n in seen:
@@ -169,9 +166,7 @@ def _loadtxt(block) -> np.ndarray | None:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return np.loadtxt(
-                block, delimiter=",", comments=None, dtype=np.float64, ndmin=2, quotechar=None
-            )
+            return np.loadtxt(block, delimiter=",", comments=None, dtype=np.float64, ndmin=2, quotechar=None)
     except (ValueError, TypeError):
         return None
 
@@ -193,15 +188,11 @@ def _cell_error(src, lineno, line, names) -> DataError | None:
     for j, c in enumerate(cells):
         if not NUMBER.fullmatch(c):
             if not c.strip():
-                return DataError(
-                    f"{src}:{lineno}: empty cell in column {names[j]!r}; every cell needs a number"
-                )
+                return DataError(f"{src}:{lineno}: empty cell in column {names[j]!r}; every cell needs a number")
             fix = "use a plain number such as 1.5e-3"
             if "," in c or re.fullmatch(r"\s*[+-]?\d+,\d+\s*", c):
                 fix = "use '.' as decimal separator"
-            return DataError(
-                f"{src}:{lineno}: non-numeric cell {_q(c.strip())} in column {names[j]!r}; {fix}"
-            )
+            return DataError(f"{src}:{lineno}: non-numeric cell {_q(c.strip())} in column {names[j]!r}; {fix}")
     return None
 
 
@@ -326,8 +317,7 @@ def read_csv(
     if header is None:
         if last_comment is None:
             raise DataError(
-                f"{src}:1: the file is empty; expected a header line such as 't,V,x' "
-                f"followed by numeric rows"
+                f"{src}:1: the file is empty; expected a header line such as 't,V,x' followed by numeric rows"
             )
         raise DataError(
             f"{src}:{lineno}: no header line, the file holds only comments; add a header "
@@ -371,8 +361,7 @@ def read_csv(
     nrows = data.shape[0]
     if nrows == 0:
         raise DataError(
-            f"{src}:{header_line}: no data rows after the header; add numeric rows such as "
-            f"{','.join(['0'] * ncol)!r}"
+            f"{src}:{header_line}: no data rows after the header; add numeric rows such as {','.join(['0'] * ncol)!r}"
         )
     finite = np.isfinite(data)
     if not finite.all():
@@ -386,9 +375,7 @@ def read_csv(
             f"measured data must be finite: remove or interpolate the bad samples"
         )
     if nrows < 2:
-        raise DataError(
-            f"{src}:{line_of(0)}: only 1 data row; at least 2 rows are needed"
-        )
+        raise DataError(f"{src}:{line_of(0)}: only 1 data row; at least 2 rows are needed")
     t = data[:, keep[names.index("t")]]
     increasing = t[1:] > t[:-1]
     if not increasing.all():
@@ -400,9 +387,7 @@ def read_csv(
             f"at line {b_} follows t = {cell_text(i, jt)} at line {a_}; "
             f"sort the rows by time and remove repeated samples"
         )
-    columns = {
-        name: np.ascontiguousarray(data[:, j]) for name, j in zip(names, keep) if name != "t"
-    }
+    columns = {name: np.ascontiguousarray(data[:, j]) for name, j in zip(names, keep) if name != "t"}
     ds = Dataset(t, columns, metadata, src)
     if check_units:
         _check_units(ds, stacklevel=2)

@@ -3,6 +3,7 @@
 Every number is written with ``repr`` (the shortest text that reads back to the identical
 float64), so ``read_csv(write_csv(...))`` reproduces arrays bit for bit.
 """
+
 from __future__ import annotations
 
 import os
@@ -79,6 +80,5 @@ def write_csv(
                 f.write((row_fmt * len(block)) % tuple(block.ravel().tolist()))
     except OSError as exc:
         raise DataError(
-            f"{dst}: cannot write the file ({exc.strerror or exc}); check that the directory "
-            f"exists and is writable"
+            f"{dst}: cannot write the file ({exc.strerror or exc}); check that the directory exists and is writable"
         ) from None

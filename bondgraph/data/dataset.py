@@ -1,4 +1,5 @@
 """The :class:`Dataset`: a validated, read-only time series of measured (or simulated) signals."""
+
 from __future__ import annotations
 
 import os
@@ -59,20 +60,24 @@ class Dataset:
                 raise DataError(f"{where}: 't' is the time axis; do not repeat it in columns")
             a = _as_vector(values, f"column {name!r}", where)
             if len(a) != len(t):
-                raise DataError(f"{where}: column {name!r} has {len(a)} values but t has {len(t)}; "
-                                f"all columns must have the same length")
+                raise DataError(
+                    f"{where}: column {name!r} has {len(a)} values but t has {len(t)}; "
+                    f"all columns must have the same length"
+                )
             cols[name] = a
         for name, a in (("t", t), *cols.items()):
             bad = ~np.isfinite(a)
             if bad.any():
                 i = int(np.argmax(bad))
-                raise DataError(f"{where}: column {name!r} has a non-finite value ({a[i]}) at row {i}; "
-                                f"data must be finite")
+                raise DataError(
+                    f"{where}: column {name!r} has a non-finite value ({a[i]}) at row {i}; data must be finite"
+                )
         increasing = t[1:] > t[:-1]  # (no overflow, unlike np.diff on huge values)
         if not increasing.all():
             i = int(np.argmin(increasing))
-            raise DataError(f"{where}: time not strictly increasing: t[{i + 1}] = {t[i + 1]!r} "
-                            f"follows t[{i}] = {t[i]!r}")
+            raise DataError(
+                f"{where}: time not strictly increasing: t[{i + 1}] = {t[i + 1]!r} follows t[{i}] = {t[i]!r}"
+            )
         meta = {str(k): str(v) for k, v in dict(self.metadata).items()}
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "columns", cols)
@@ -84,8 +89,10 @@ class Dataset:
         return len(self.t)
 
     def __repr__(self) -> str:
-        return (f"Dataset(path={self.path!r}, rows={len(self)}, columns={list(self.columns)}, "
-                f"t=[{self.t[0]:g} .. {self.t[-1]:g}] s, metadata={self.metadata!r})")
+        return (
+            f"Dataset(path={self.path!r}, rows={len(self)}, columns={list(self.columns)}, "
+            f"t=[{self.t[0]:g} .. {self.t[-1]:g}] s, metadata={self.metadata!r})"
+        )
 
     @property
     def _where(self) -> str:
@@ -146,8 +153,10 @@ class Dataset:
         lo = 0 if t0 is None else int(np.searchsorted(self.t, t0, "left"))
         hi = len(self) if t1 is None else int(np.searchsorted(self.t, t1, "right"))
         if hi - lo < 2:
-            raise DataError(f"{self._where}: the time window [{t0}, {t1}] s holds {max(hi - lo, 0)} sample(s); "
-                            f"at least 2 are needed (data spans {self.t[0]:g} .. {self.t[-1]:g} s)")
+            raise DataError(
+                f"{self._where}: the time window [{t0}, {t1}] s holds {max(hi - lo, 0)} sample(s); "
+                f"at least 2 are needed (data spans {self.t[0]:g} .. {self.t[-1]:g} s)"
+            )
         return self._take(slice(lo, hi))
 
     def split(self, fraction: float = 0.7) -> tuple[Dataset, Dataset]:
@@ -158,8 +167,10 @@ class Dataset:
         t_split = self.t[0] + fraction * (self.t[-1] - self.t[0])
         k = int(np.searchsorted(self.t, t_split, "left"))
         if k < 2 or len(self) - k < 2:
-            raise DataError(f"{self._where}: splitting {len(self)} samples at {fraction:g} of the time span "
-                            f"leaves fewer than 2 samples in one part; use more data or another fraction")
+            raise DataError(
+                f"{self._where}: splitting {len(self)} samples at {fraction:g} of the time span "
+                f"leaves fewer than 2 samples in one part; use more data or another fraction"
+            )
         return self._take(slice(0, k)), self._take(slice(k, None))
 
     def decimate(self, factor: int, ftype: str = "iir") -> Dataset:
@@ -182,8 +193,9 @@ class Dataset:
         if factor == 1:
             return self
         if not self.is_uniform:
-            raise DataError(f"{self._where}: decimate needs uniform sampling; resample first, "
-                            f"e.g. dataset.resample({self.dt:.6g})")
+            raise DataError(
+                f"{self._where}: decimate needs uniform sampling; resample first, e.g. dataset.resample({self.dt:.6g})"
+            )
         if len(self) // factor < 2:
             raise DataError(f"{self._where}: {len(self)} samples are too few to decimate by {factor}")
         cols = sampling.decimate_columns(self.columns, factor, ftype, self._where, len(self))

@@ -3,6 +3,7 @@
 Functions work on plain arrays (times in seconds, strictly increasing); :class:`Dataset`
 methods wrap them.
 """
+
 from __future__ import annotations
 
 import math
@@ -79,8 +80,9 @@ def decimate_columns(columns: dict, factor: int, ftype: str, where: str, n: int)
                 y = signal.decimate(y, q, ftype=ftype, zero_phase=True)
             out[name] = y
     except ValueError as exc:
-        raise DataError(f"{where}: cannot decimate {n} samples by {factor} ({exc}); "
-                        f"use more data or a smaller factor") from None
+        raise DataError(
+            f"{where}: cannot decimate {n} samples by {factor} ({exc}); use more data or a smaller factor"
+        ) from None
     return out
 
 
@@ -102,11 +104,11 @@ def interpolation_compensated(x: np.ndarray, delay: float = 0.0, taps: int = 31,
     if x.size <= taps + 8:
         return x.copy()
     n_fft = 1024
-    f = np.fft.rfftfreq(n_fft)                          # cycles per sample, 0 ... 0.5
+    f = np.fft.rfftfreq(n_fft)  # cycles per sample, 0 ... 0.5
     half = taps // 2
     H = np.exp(-2j * np.pi * f * (half + delay)) / np.sinc(np.minimum(f, edge)) ** 2
     h = np.fft.irfft(H, n_fft)[:taps] * signal.windows.kaiser(taps, 8.0)
-    h /= h.sum()                                        # unit gain at DC, exactly
+    h /= h.sum()  # unit gain at DC, exactly
     pad = half + 1
     y = np.convolve(np.pad(x, pad, mode="reflect", reflect_type="odd"), h, mode="full")
-    return y[pad + half:pad + half + x.size]
+    return y[pad + half : pad + half + x.size]

@@ -46,6 +46,7 @@ provides the piezoelectric ones) or passed as ``candidates=``; they use only thi
 public names (:class:`Candidate`, :class:`Extension`, :class:`View`, :mod:`.filters`,
 :mod:`.rewrite`) and the framework's public API.
 """
+
 from . import filters, rewrite
 from .additive import AdditiveDrive, Term
 from .candidate import LINEAR, NONLINEAR, Candidate, Extension
@@ -53,5 +54,21 @@ from .engine import diagnose, load_candidates, model_file_options
 from .report import CandidateResult, Report, Step
 from .view import DriveFit, View
 
-__all__ = ["AdditiveDrive", "Term", "diagnose", "load_candidates", "model_file_options", "Candidate", "Extension", "View", "DriveFit", "Report", "Step",
-           "CandidateResult", "LINEAR", "NONLINEAR", "filters", "rewrite"]
+__all__ = [
+    "AdditiveDrive",
+    "Term",
+    "diagnose",
+    "load_candidates",
+    "model_file_options",
+    "Candidate",
+    "Extension",
+    "View",
+    "DriveFit",
+    "Report",
+    "Step",
+    "CandidateResult",
+    "LINEAR",
+    "NONLINEAR",
+    "filters",
+    "rewrite",
+]

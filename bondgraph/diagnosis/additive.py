@@ -15,6 +15,7 @@ forward stepwise regression of the effects, each step credited only with what it
 effect whose weights are not linear (an RC stage on the drive) ends the sum: the drive it
 produces is the base of whatever comes after.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass

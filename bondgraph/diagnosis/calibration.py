@@ -30,6 +30,7 @@
    structural causes must explain what the implausible values explain (an input stage or a
    missing mode can hide behind a 7× capacitance).
 """
+
 from __future__ import annotations
 
 import fnmatch
@@ -79,12 +80,24 @@ class Calibration:
     notes: list[str] = field(default_factory=list)
 
     def as_json(self) -> dict:
-        return {"params": {k: self.values[k] for k in self.free}, "held": self.held,
-                "nominal": {k: self.nominal[k] for k in self.free}, "bounds": self.bounds,
-                "at_bounds": self.at_bounds, "sensor_gain": self.gain, "offset": self.offset,
-                "rms_fit": self.rms_fit, "rms_validation": self.rms_validation, "success": self.success,
-                "message": self.message, "route": self.route, "outside_tolerance": self.outside,
-                "rms_plausible": self.rms_plausible, "delay": self.delay, "drift": self.drift}
+        return {
+            "params": {k: self.values[k] for k in self.free},
+            "held": self.held,
+            "nominal": {k: self.nominal[k] for k in self.free},
+            "bounds": self.bounds,
+            "at_bounds": self.at_bounds,
+            "sensor_gain": self.gain,
+            "offset": self.offset,
+            "rms_fit": self.rms_fit,
+            "rms_validation": self.rms_validation,
+            "success": self.success,
+            "message": self.message,
+            "route": self.route,
+            "outside_tolerance": self.outside,
+            "rms_plausible": self.rms_plausible,
+            "delay": self.delay,
+            "drift": self.drift,
+        }
 
 
 def patterns(names: Sequence[str], pats: Sequence[str] | None) -> list[str]:
@@ -98,6 +111,7 @@ def patterns(names: Sequence[str], pats: Sequence[str] | None) -> list[str]:
 def linear_parameters(ctx: Context) -> list[str]:
     """Parameters of the working model's linear dynamics (nonzero, not the sensor gain)."""
     from ..linear.lti import LTI
+
     lti = ctx.lti or LTI(ctx.eqs, ctx.input, ctx.output)
     return [n for n in lti.parameters if n != SENSOR_GAIN and ctx.ident.current(n) != 0.0]
 
@@ -147,16 +161,20 @@ def select(S: np.ndarray, names: Sequence[str], priority: Sequence[str], tol: fl
             held[names[j]] = NO_EFFECT
         elif nr < tol * ref or nr < 1e-6 * scale:
             corr = [names[k] for k in kept if abs(S[:, k] @ S[:, j]) > 0.5 * norms[k] * norms[j]]
-            held[names[j]] = ("its effect is a pure output scale (the sensor gain)" if not corr else
-                              f"not separable from {', '.join(corr)} and the sensor gain")
+            held[names[j]] = (
+                "its effect is a pure output scale (the sensor gain)"
+                if not corr
+                else f"not separable from {', '.join(corr)} and the sensor gain"
+            )
         else:
             kept.append(j)
             basis.append(r / nr)
     return [names[k] for k in kept], held
 
 
-def residual_asks(ctx: Context, names: Sequence[str], free: Sequence[str], held: Mapping[str, str],
-                  values: dict, sol) -> dict[str, float]:
+def residual_asks(
+    ctx: Context, names: Sequence[str], free: Sequence[str], held: Mapping[str, str], values: dict, sol
+) -> dict[str, float]:
     """Held parameters the calibrated model's residual asks for, each with the factor one
     Gauss-Newton step would move it by: greedily, the held parameter whose sensitivity (at the
     calibrated values, beside the kept ones', the sensor gain and offset) alone explains at
@@ -181,16 +199,16 @@ def residual_asks(ctx: Context, names: Sequence[str], free: Sequence[str], held:
     movable = [i for i in range(len(free)) if i not in sol.at_bounds]
     Q, _ = np.linalg.qr(np.column_stack([sol.columns[idx], S[:, movable]]))
     r = r - Q @ (Q.T @ r)
-    C = S[:, len(free):]
+    C = S[:, len(free) :]
     full = np.linalg.norm(C, axis=0)
     C = C - Q @ (Q.T @ C)
     limit = math.log(config.get("diagnosis.spread"))
     asked: dict[str, float] = {}
-    while True:    # ends: each round asks for one more parameter or stops
+    while True:  # ends: each round asks for one more parameter or stops
         nc = np.linalg.norm(C, axis=0)
         proj = C.T @ r
-        step = proj / np.maximum(nc ** 2, 1e-300)
-        gain = proj ** 2 / np.maximum(nc ** 2, 1e-300) / energy
+        step = proj / np.maximum(nc**2, 1e-300)
+        gain = proj**2 / np.maximum(nc**2, 1e-300) / energy
         ok = (nc >= 0.1 * full) & (np.abs(step) <= limit) & (gain >= share)
         ok[[cands.index(n) for n in asked]] = False
         if not ok.any():
@@ -203,13 +221,20 @@ def residual_asks(ctx: Context, names: Sequence[str], free: Sequence[str], held:
     return asked
 
 
-def _delay_identifiable(ctx: Context, S: np.ndarray, names: Sequence[str], free: Sequence[str], nominal: dict,
-                        raw0: np.ndarray, scale: float) -> bool:
+def _delay_identifiable(
+    ctx: Context,
+    S: np.ndarray,
+    names: Sequence[str],
+    free: Sequence[str],
+    nominal: dict,
+    raw0: np.ndarray,
+    scale: float,
+) -> bool:
     """Whether the output's delay behind the drive (per sample of the recorded rate) does
     something to the output that the calibrated parameters and the sensor gain do not (the
     pivot rule of :func:`select`, the delay taken last)."""
     idx = ctx.ident.fit_idx
-    step = 0.1                                   # recorded samples
+    step = 0.1  # recorded samples
     shifted = ctx.ident.predict(nominal, drive=ctx.drive_with_delay(step * ctx.fs / ctx.source_rate))
     col = ((shifted - raw0)[idx] / step)[:, None]
     Q, _ = np.linalg.qr(np.column_stack([raw0[idx], np.ones(idx.size)]))
@@ -259,22 +284,32 @@ def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
     return 2 * np.pi * f[1:][keep], (Puy[1:] / np.maximum(Puu[1:], 1e-300))[keep], coh[keep]
 
 
-def fit_frf(frf_of, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, w: np.ndarray, H: np.ndarray,
-            coh: np.ndarray, starts: Sequence[np.ndarray] = (), random: int = 12, max_nfev: int = 60,
-            workers: int = 1):
+def fit_frf(
+    frf_of,
+    z0: np.ndarray,
+    lb: np.ndarray,
+    ub: np.ndarray,
+    w: np.ndarray,
+    H: np.ndarray,
+    coh: np.ndarray,
+    starts: Sequence[np.ndarray] = (),
+    random: int = 12,
+    max_nfev: int = 60,
+    workers: int = 1,
+):
     """Multi-start fit of ``frf_of(z)`` (complex, at ``w``) to the measured ``H``: log-magnitude
     (its coherence-weighted mean removed: the sensor gain is solved later) and wrapped phase,
     weighted by √coherence.  Starts: ``z0``, ``starts``, and ``random`` perturbations of z0
     (σ = 0.5 in z), fitted in ``workers`` processes (the same result as one).  Returns the
     best (z, cost) or None."""
     wt = np.sqrt(coh)
-    share = coh / np.sum(coh)            # the weights of the mean log-magnitude
+    share = coh / np.sum(coh)  # the weights of the mean log-magnitude
     log_mag, phase = np.log(np.abs(H) + 1e-300), np.angle(H)
 
-    def fres(z):                         # log|·| and angle: the complex log's parts, 3x cheaper
+    def fres(z):  # log|·| and angle: the complex log's parts, 3x cheaper
         Hm = frf_of(z)
         re = np.log(np.abs(Hm) + 1e-300) - log_mag
-        im = (np.angle(Hm) - phase + np.pi) % (2 * np.pi) - np.pi     # wrapped to [-π, π)
+        im = (np.angle(Hm) - phase + np.pi) % (2 * np.pi) - np.pi  # wrapped to [-π, π)
         r = np.concatenate([wt * (re - share @ re), wt * im])
         return r if np.all(np.isfinite(r)) else np.full(r.size, 1e3)
 
@@ -321,8 +356,11 @@ def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, 
         return Hm * np.exp(-1j * w * z[-1] * ctx.dt) if delay else Hm
 
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
-    fits = [f for f in (fit_frf(frf_of, z0, lb, ub, w, sign * H, coh, workers=workers) for sign in (1.0, -1.0))
-            if f is not None]
+    fits = [
+        f
+        for f in (fit_frf(frf_of, z0, lb, ub, w, sign * H, coh, workers=workers) for sign in (1.0, -1.0))
+        if f is not None
+    ]
     return min(fits, key=lambda f: f[1])[0] if fits else None
 
 
@@ -332,8 +370,17 @@ def _z_bounds(specs: list[Param], delay: float | None):
     return np.array(lb, float), np.array(ub, float)
 
 
-def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts=(),
-         delay: bool = False, drift: bool = False, resample: bool = True, workers: int = 1):
+def _fit(
+    ctx: Context,
+    specs: list[Param],
+    nominal: dict,
+    z0: np.ndarray,
+    starts=(),
+    delay: bool = False,
+    drift: bool = False,
+    resample: bool = True,
+    workers: int = 1,
+):
     """Frequency response first when the data allow, then the time series by variable projection
     (sensor gain and offset solved exactly, and with ``drift`` a linear drift, its coefficient
     the solution's third, per half the record's span from its middle); with ``delay``, the
@@ -362,29 +409,70 @@ def _fit(ctx: Context, specs: list[Param], nominal: dict, z0: np.ndarray, starts
     lin = 3 if drift else 2
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
     first = z0 if z_frf is None else z_frf
-    if z_frf is None and z0.size:   # no frequency response to start from: the best of a random sample
+    if z_frf is None and z0.size:  # no frequency response to start from: the best of a random sample
         starts = list(starts) + _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
-    sol = projected_fit(columns, ctx.y, idx, first, lb, ub, [-np.inf] * lin, [np.inf] * lin, max_nfev=40,
-                        starts=([] if z_frf is None else [z0]) + list(starts), threads=workers)
+    sol = projected_fit(
+        columns,
+        ctx.y,
+        idx,
+        first,
+        lb,
+        ub,
+        [-np.inf] * lin,
+        [np.inf] * lin,
+        max_nfev=40,
+        starts=([] if z_frf is None else [z0]) + list(starts),
+        threads=workers,
+    )
     if resample and z_frf is not None and [i for i in sol.at_bounds if i < len(specs)]:
         # the frequency response's start led to a search bound: that may be a local minimum
         # (a lightly damped mode driven by a tone near its resonance, the free sensor gain
         # matching the tone's amplitude), so the best of a random sample is tried too
         sampled = _sampled_starts(columns, ctx.y, idx, z0, lb, ub)
-        other = projected_fit(columns, ctx.y, idx, sampled[0], lb, ub, [-np.inf] * lin, [np.inf] * lin,
-                              max_nfev=40, starts=sampled[1:], threads=workers)
+        other = projected_fit(
+            columns,
+            ctx.y,
+            idx,
+            sampled[0],
+            lb,
+            ub,
+            [-np.inf] * lin,
+            [np.inf] * lin,
+            max_nfev=40,
+            starts=sampled[1:],
+            threads=workers,
+        )
         sol = other if other.cost < sol.cost else sol
-    if not sol.success:   # the baseline must be the best linear explanation: go on from the best point
-        more = projected_fit(columns, ctx.y, idx, sol.z, lb, ub, [-np.inf] * lin, [np.inf] * lin,
-                             max_nfev=int(40 * config.get("diagnosis.polish_effort")), threads=workers)
+    if not sol.success:  # the baseline must be the best linear explanation: go on from the best point
+        more = projected_fit(
+            columns,
+            ctx.y,
+            idx,
+            sol.z,
+            lb,
+            ub,
+            [-np.inf] * lin,
+            [np.inf] * lin,
+            max_nfev=int(40 * config.get("diagnosis.polish_effort")),
+            threads=workers,
+        )
         sol = more if more.cost <= sol.cost else sol
     values = dict(nominal)
     values.update({s.name: s.from_z(zi) for s, zi in zip(specs, sol.z)})
     return values, (float(sol.z[-1]) if delay else 0.0), sol.columns[:, 0], sol, route
 
 
-def _sampled_starts(columns, y: np.ndarray, idx: np.ndarray, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray,
-                    n: int = 48, keep: int = 3, width: float = math.log(2.0)) -> list[np.ndarray]:
+def _sampled_starts(
+    columns,
+    y: np.ndarray,
+    idx: np.ndarray,
+    z0: np.ndarray,
+    lb: np.ndarray,
+    ub: np.ndarray,
+    n: int = 48,
+    keep: int = 3,
+    width: float = math.log(2.0),
+) -> list[np.ndarray]:
     """The ``keep`` best of ``n`` points drawn uniformly within ×/÷2 of ``z0`` (in the bounds),
     by the projected cost (gain and offset solved): starts for a time-domain fit whose cost has
     many local minima (a lightly damped mode driven near resonance)."""
@@ -412,8 +500,13 @@ def tolerances(names: Sequence[str], tolerance: Mapping[str, float] | None) -> d
     return out
 
 
-def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
-              tolerance: Mapping[str, float] | None = None, workers: int = 1) -> tuple[State, Calibration, State]:
+def calibrate(
+    ctx: Context,
+    priority: Sequence[str] | None = None,
+    say=None,
+    tolerance: Mapping[str, float] | None = None,
+    workers: int = 1,
+) -> tuple[State, Calibration, State]:
     """Calibrate every identifiable linear parameter (see the module docstring): the best linear
     explanation within ×/÷ ``diagnosis.spread`` (the null), and the plausible device within each
     parameter's tolerance (:func:`tolerances`), which linear structural causes must beat.
@@ -436,22 +529,28 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     free, held = select(S, names, patterns(names, priority), config.get("diagnosis.identifiable"), scale)
     bounds = {n: param_bounds(ctx, n, nominal[n]) for n in free}
     specs = [Param(n, nominal[n], *bounds[n]) for n in free]
-    say(f"calibrating {', '.join(free) or 'the sensor gain and offset only'}"
-        + (f" (held: {', '.join(held)})" if held else ""))
+    say(
+        f"calibrating {', '.join(free) or 'the sensor gain and offset only'}"
+        + (f" (held: {', '.join(held)})" if held else "")
+    )
     z0 = np.array([s.to_z(s.start) for s in specs])
     with_delay = ctx.lti is not None and _delay_identifiable(ctx, S, names, free, nominal, raw0, scale)
     if ctx.lti is not None and not with_delay:
         held["output delay"] = "not separable from the calibrated parameters"
     drift = bool(config.get("diagnosis.drift"))
     values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, delay=with_delay, drift=drift, workers=workers)
-    if with_delay and abs(delay) >= 0.99 * max_delay(ctx):   # a model error the delay mimics: not a delay
-        held["output delay"] = f"it went to its search bound (±{MAX_DELAY:g} recorded samples): a model error, not a delay"
+    if with_delay and abs(delay) >= 0.99 * max_delay(ctx):  # a model error the delay mimics: not a delay
+        held["output delay"] = (
+            f"it went to its search bound (±{MAX_DELAY:g} recorded samples): a model error, not a delay"
+        )
         values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, drift=drift, workers=workers)
     ctx.set_delay(delay)
     asked = residual_asks(ctx, names, free, held, values, sol)
-    if asked:    # the delay stays at its solved value (ctx); the fit goes on from this one
-        what = f"{', '.join(asked)} calibrated after all: the first calibration's residual asks for " \
-               f"{'it' if len(asked) == 1 else 'them'} ({', '.join(f'a step ×{f:.3g}' for f in asked.values())})"
+    if asked:  # the delay stays at its solved value (ctx); the fit goes on from this one
+        what = (
+            f"{', '.join(asked)} calibrated after all: the first calibration's residual asks for "
+            f"{'it' if len(asked) == 1 else 'them'} ({', '.join(f'a step ×{f:.3g}' for f in asked.values())})"
+        )
         say(what)
         ctx.notes.append(what)
         for n in asked:
@@ -461,8 +560,9 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
         specs = [Param(n, nominal[n], *bounds[n]) for n in free]
         start = {**values, **{n: values[n] * f for n, f in asked.items()}}
         z1 = np.array([s.to_z(start[s.name]) for s in specs])
-        values, _, raw, sol, route = _fit(ctx, specs, nominal, z1, starts=[np.array([s.to_z(s.start) for s in specs])],
-                                          drift=drift, workers=workers)
+        values, _, raw, sol, route = _fit(
+            ctx, specs, nominal, z1, starts=[np.array([s.to_z(s.start) for s in specs])], drift=drift, workers=workers
+        )
     if drift:
         rate = float(sol.coef[2]) / max(0.5 * ctx.span, 1e-300)
         ctx.remove_drift(rate)
@@ -470,23 +570,63 @@ def calibrate(ctx: Context, priority: Sequence[str] | None = None, say=None,
     gain, offset, rf, rv = score(ctx, raw)
     factors = tolerances(free, tolerance)
     plausible = {n: param_bounds(ctx, n, nominal[n], factors[n]) for n in free}
-    outside = {n: values[n] / nominal[n] for n in free
-               if not plausible[n][0] * (1 - 1e-9) <= abs(values[n]) <= plausible[n][1] * (1 + 1e-9)}
-    cal = Calibration(values, nominal, free, held, {k: tuple(v) for k, v in bounds.items()},
-                      [(specs[i].name if i < len(specs) else "delay") for i in sol.at_bounds], gain, offset, rf, rv,
-                      sol.success, sol.message, route, plausible=plausible, outside=outside, delay=delay * ctx.dt,
-                      drift=ctx.drift if drift else None)
-    state = State(ctx.model, values, raw, gain, offset, ctx.u if ctx.lti is not None else None,
-                  ctx.model.inputs[ctx.input].symbol if ctx.lti is not None else None, [], ctx.lti is not None)
+    outside = {
+        n: values[n] / nominal[n]
+        for n in free
+        if not plausible[n][0] * (1 - 1e-9) <= abs(values[n]) <= plausible[n][1] * (1 + 1e-9)
+    }
+    cal = Calibration(
+        values,
+        nominal,
+        free,
+        held,
+        {k: tuple(v) for k, v in bounds.items()},
+        [(specs[i].name if i < len(specs) else "delay") for i in sol.at_bounds],
+        gain,
+        offset,
+        rf,
+        rv,
+        sol.success,
+        sol.message,
+        route,
+        plausible=plausible,
+        outside=outside,
+        delay=delay * ctx.dt,
+        drift=ctx.drift if drift else None,
+    )
+    state = State(
+        ctx.model,
+        values,
+        raw,
+        gain,
+        offset,
+        ctx.u if ctx.lti is not None else None,
+        ctx.model.inputs[ctx.input].symbol if ctx.lti is not None else None,
+        [],
+        ctx.lti is not None,
+    )
     if not outside:
         return state, cal, state
-    say(f"outside their tolerance: {', '.join(f'{n} ×{r:.3g}' for n, r in outside.items())}; "
-        f"calibrating the plausible device too")
-    pspecs = [Param(n, min(max(abs(values[n]), plausible[n][0]), plausible[n][1]) * (1 if values[n] > 0 else -1),
-                    *plausible[n]) for n in free]
+    say(
+        f"outside their tolerance: {', '.join(f'{n} ×{r:.3g}' for n, r in outside.items())}; "
+        f"calibrating the plausible device too"
+    )
+    pspecs = [
+        Param(
+            n, min(max(abs(values[n]), plausible[n][0]), plausible[n][1]) * (1 if values[n] > 0 else -1), *plausible[n]
+        )
+        for n in free
+    ]
     pz0 = np.array([s.to_z(s.start) for s in pspecs])
-    pvalues, _, praw, psol, _ = _fit(ctx, pspecs, nominal, pz0, resample=False,
-                                  starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])], workers=workers)
+    pvalues, _, praw, psol, _ = _fit(
+        ctx,
+        pspecs,
+        nominal,
+        pz0,
+        resample=False,
+        starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])],
+        workers=workers,
+    )
     pgain, poffset, _, prv = score(ctx, praw)
     cal.rms_plausible = prv
     pstate = State(ctx.model, pvalues, praw, pgain, poffset, state.drive, state.drive_expr, [], state.linear)
@@ -505,4 +645,4 @@ def score(ctx: Context, raw: np.ndarray) -> tuple[float, float, float, float]:
 
 
 def rms(r: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(r ** 2))) if r.size else float("nan")
+    return float(np.sqrt(np.mean(r**2))) if r.size else float("nan")

@@ -7,6 +7,7 @@ it on the way, its prediction).  It changes nothing else; the engine scores, com
 decides.  Candidates are found through the entry point group ``bondgraph.diagnosis`` (each
 entry a callable returning a list of candidates) or passed explicitly.
 """
+
 from __future__ import annotations
 
 from abc import ABC, abstractmethod

@@ -1,6 +1,7 @@
 """What stays fixed through one diagnosis: the prepared data, the split, the working model
 (the nominal model with a sensor gain on its output), its linear route and time-scale cut,
 the drive's band and the noise floor; and the :class:`State` a chain step starts from."""
+
 from __future__ import annotations
 
 import copy
@@ -11,15 +12,14 @@ import numpy as np
 import sympy as sp
 from scipy import ndimage, signal, stats
 
-from ..support import config
-from ..data import Dataset
-from ..equations.derivation import derive
-from ..model.graph import Model
-from ..data import uniform_step
+from ..data import Dataset, uniform_step
 from ..data.sampling import interpolation_compensated
+from ..equations.derivation import derive
 from ..fit.identify import Identification, check_varies
 from ..linear.lti import LTI, first_input, first_output
+from ..model.graph import Model
 from ..numerics.simulate import Simulator
+from ..support import config
 
 SENSOR_GAIN = "sensor.gain"
 
@@ -68,9 +68,18 @@ class State:
 class Context:
     """Data, split, working model and linear route of one diagnosis (see the module doc)."""
 
-    def __init__(self, model: Model, data: Dataset, input: str | None = None, output: str | None = None,
-                 data_input: str | None = None, data_output: str | None = None, validation: float = 0.3,
-                 say=None, reading: str = "band-limited"):
+    def __init__(
+        self,
+        model: Model,
+        data: Dataset,
+        input: str | None = None,
+        output: str | None = None,
+        data_input: str | None = None,
+        data_output: str | None = None,
+        validation: float = 0.3,
+        say=None,
+        reading: str = "band-limited",
+    ):
         say = say or (lambda s: None)
         if reading not in READINGS:
             raise ValueError(f"unknown drive reading {reading!r}: one of {', '.join(READINGS)}")
@@ -114,21 +123,26 @@ class Context:
             self.cut = config.get("diagnosis.fast_factor") * math.pi * fs
             ss = lti.state_space(th0, self.cut)
             self.slow_hz = sorted({round(abs(p) / (2 * math.pi), 6) for p in ss.poles()})
-            self.resonance_hz = sorted({round(abs(p) / (2 * math.pi), 6) for p in ss.poles()
-                                        if p.imag != 0 and abs(p.real) < 0.5 * abs(p)})
+            self.resonance_hz = sorted(
+                {round(abs(p) / (2 * math.pi), 6) for p in ss.poles() if p.imag != 0 and abs(p.real) < 0.5 * abs(p)}
+            )
             self.n_states, self.n_fast = lti.n, ss.fast
             if ss.fast:
                 fastest_kept = max(self.slow_hz, default=0.0)
-                what = (f"the model reduces to its static gain (the static route): every one of its {lti.n} "
-                        f"states is faster than the data resolve" if ss.n == 0 else
-                        f"{ss.fast} of {lti.n} states residualised (quasi-static), {ss.n} kept exactly "
-                        f"(slowest removed mode above {self.cut / (2 * math.pi):.4g} Hz, fastest kept "
-                        f"{fastest_kept:.4g} Hz)")
+                what = (
+                    f"the model reduces to its static gain (the static route): every one of its {lti.n} "
+                    f"states is faster than the data resolve"
+                    if ss.n == 0
+                    else f"{ss.fast} of {lti.n} states residualised (quasi-static), {ss.n} kept exactly "
+                    f"(slowest removed mode above {self.cut / (2 * math.pi):.4g} Hz, fastest kept "
+                    f"{fastest_kept:.4g} Hz)"
+                )
                 self.notes.append(f"time-scale separation: data at {fs:.4g} Hz (Nyquist {fs / 2:.4g} Hz); {what}")
         else:
             self.n_states, self.n_fast = lti.n, 0
-            self.notes.append("the model is not linear in its states: calibration and candidates use the "
-                              "compiled integrator")
+            self.notes.append(
+                "the model is not linear in its states: calibration and candidates use the compiled integrator"
+            )
         self.fs = fs
         #: white-noise equivalent of the measurement noise in the (decimated) record
         self.noise_psd = noise_density
@@ -138,11 +152,15 @@ class Context:
         sweep = drive_sweep(data.column(self.data_input), fs, blocks)
         self.n_blocks = blocks if sweep is None else int(config.get("diagnosis.sweep_blocks"))
         if sweep is not None:
-            self.notes.append(f"the drive sweeps from {sweep[0]:.4g} to {sweep[1]:.4g} Hz: the record is split into "
-                              f"{self.n_blocks} blocks instead of {blocks}, so that the fit part brackets every "
-                              f"frequency the validation part holds")
-        say(f"{len(data)} samples at {fs:.6g} Hz, drive band {self.band_hz:.4g} Hz"
-            + (f", {self.n_fast} fast states residualised" if self.n_fast else ""))
+            self.notes.append(
+                f"the drive sweeps from {sweep[0]:.4g} to {sweep[1]:.4g} Hz: the record is split into "
+                f"{self.n_blocks} blocks instead of {blocks}, so that the fit part brackets every "
+                f"frequency the validation part holds"
+            )
+        say(
+            f"{len(data)} samples at {fs:.6g} Hz, drive band {self.band_hz:.4g} Hz"
+            + (f", {self.n_fast} fast states residualised" if self.n_fast else "")
+        )
         self.validation = validation
         #: the drive as recorded (after resampling and decimation)
         self.u_recorded = data.column(self.data_input)
@@ -185,7 +203,7 @@ class Context:
         raw = self.ident.predict(values)
         alt = self.ident.predict(values, drive=self.drive_with_delay(self.delay, other))
         d = gain * (alt - raw)[self.ident.val_mask]
-        return float(np.sqrt(np.mean(d ** 2)))
+        return float(np.sqrt(np.mean(d**2)))
 
     def set_delay(self, delay: float) -> None:
         """Use the drive delayed by ``delay`` samples from now on (data, identification, u)."""
@@ -193,10 +211,20 @@ class Context:
         cols = {k: self._data.column(k) for k in self._data.names if k != "t"}
         cols[self.data_input] = self.drive_with_delay(delay)
         self.data = Dataset(self._data.t, cols, self._data.metadata, self._data.path)
-        self.ident = Identification(self._sim, self.data, self.input, self.output, self.data_input,
-                                    self.data_output, self.validation,
-                                    max_fit_points=config.get("diagnosis.max_fit_points"), lti=self._lti, cut=self.cut,
-                                    blocks=self.n_blocks, shift=self.shift)
+        self.ident = Identification(
+            self._sim,
+            self.data,
+            self.input,
+            self.output,
+            self.data_input,
+            self.data_output,
+            self.validation,
+            max_fit_points=config.get("diagnosis.max_fit_points"),
+            lti=self._lti,
+            cut=self.cut,
+            blocks=self.n_blocks,
+            shift=self.shift,
+        )
         self.u, self.y, self.t = self.ident.u, self.ident.y, self.ident.t
         self.dt = self.ident.dt
         self.lti = self.ident.lti
@@ -245,8 +273,10 @@ class Context:
         if q < 2:
             return data, fs
         out = data.decimate(q)
-        self.notes.append(f"decimated by {q} ({fs:.6g} → {fs / q:.6g} Hz): the drive's band ends near "
-                          f"{self.band_hz:.4g} Hz" + (f" and {why}" if why else ""))
+        self.notes.append(
+            f"decimated by {q} ({fs:.6g} → {fs / q:.6g} Hz): the drive's band ends near "
+            f"{self.band_hz:.4g} Hz" + (f" and {why}" if why else "")
+        )
         return out, fs / q
 
     @property
@@ -256,6 +286,7 @@ class Context:
 
 def _theta(eqs) -> np.ndarray:
     from ..numerics.codegen import parameter_vector
+
     return parameter_vector(eqs)
 
 
@@ -320,12 +351,12 @@ def drive_held_share(u: np.ndarray, fs: float, length: float, band: float = 0.01
     """Share of the record (0-1) lying in holds of the drive: stretches of ``length`` s or
     longer over which it stays within ``band`` of its range (steps, holds, rests between
     bursts; about 0 for sines, triangles, chirps and noise)."""
-    w = 2 * int(round(length * fs / 2)) + 1                  # odd: windows centred on a sample
+    w = 2 * int(round(length * fs / 2)) + 1  # odd: windows centred on a sample
     if w >= len(u):
         return 0.0
     tol = band * float(np.ptp(u))
     still = (ndimage.maximum_filter1d(u, w) - ndimage.minimum_filter1d(u, w)) <= tol
-    still[:w // 2] = still[len(u) - w // 2:] = False       # windows that reach past the record
+    still[: w // 2] = still[len(u) - w // 2 :] = False  # windows that reach past the record
     return float(ndimage.maximum_filter1d(still.astype(np.uint8), w, mode="constant").mean())
 
 

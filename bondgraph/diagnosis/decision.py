@@ -45,6 +45,7 @@ allowed too (its gain over the reference) is named, then the one with the larger
 linear cause gains little over the reference, so an effect beyond any linear one is named
 first and the linear remainder is left to the next step of the chain.
 """
+
 from __future__ import annotations
 
 import math
@@ -70,7 +71,7 @@ def batch_length(d: np.ndarray, blocks: list[slice], offsets: list[int]) -> int:
     longest = max(s.stop - s.start for s in blocks)
     acf = np.zeros(longest)
     for s, o in zip(blocks, offsets):
-        seg = d[o:o + (s.stop - s.start)]
+        seg = d[o : o + (s.stop - s.start)]
         seg = seg - seg.mean()
         m = seg.size
         f = np.fft.rfft(seg, 2 * m)
@@ -108,8 +109,8 @@ def _batch_means(x: np.ndarray, start: int, m: int, L: int) -> np.ndarray:
     """Means of the consecutive length-``L`` batches of ``x[start:start + m]`` (the remainder
     dropped); a block shorter than ``L`` is one batch if it holds at least ``L // 2`` samples."""
     if m >= L:
-        return x[start:start + m // L * L].reshape(-1, L).mean(axis=1)
-    return x[start:start + m].mean(keepdims=True) if m >= L // 2 else np.zeros(0)
+        return x[start : start + m // L * L].reshape(-1, L).mean(axis=1)
+    return x[start : start + m].mean(keepdims=True) if m >= L // 2 else np.zeros(0)
 
 
 def _serial_inflation(d: np.ndarray) -> float:
@@ -154,9 +155,17 @@ class Verdict:
     reason: str
 
 
-def judge(kind: str, base: Comparison, versus_reference: Comparison | None, share: float | None,
-          at_bounds: list[str], implausible: str, later: bool = False, recalibration: str = "",
-          need_share: float | None = None) -> Verdict:
+def judge(
+    kind: str,
+    base: Comparison,
+    versus_reference: Comparison | None,
+    share: float | None,
+    at_bounds: list[str],
+    implausible: str,
+    later: bool = False,
+    recalibration: str = "",
+    need_share: float | None = None,
+) -> Verdict:
     """Apply the rules of the module docstring to one candidate (``later``: in a chain step
     after the first, where ``diagnosis.min_gain_chain`` replaces ``diagnosis.min_gain``;
     ``recalibration``: why a linear cause may be the model's own structure recalibrated;
@@ -182,13 +191,17 @@ def judge(kind: str, base: Comparison, versus_reference: Comparison | None, shar
         if implausible:
             return Verdict(False, f"implausible: {implausible}")
         if recalibration and not beyond:
-            return Verdict(False, f"{recalibration} and does not beat the linear reference"
-                                  + (f" (gain {vr.gain:.3g}, z = {vr.z:.2g})" if vr is not None else ""))
+            return Verdict(
+                False,
+                f"{recalibration} and does not beat the linear reference"
+                + (f" (gain {vr.gain:.3g}, z = {vr.z:.2g})" if vr is not None else ""),
+            )
     return Verdict(True, "passes")
 
 
-def reference_prediction(view_respond, drive: np.ndarray, raw: np.ndarray, y: np.ndarray, idx: np.ndarray,
-                         dt: float, span: float) -> tuple[np.ndarray, np.ndarray]:
+def reference_prediction(
+    view_respond, drive: np.ndarray, raw: np.ndarray, y: np.ndarray, idx: np.ndarray, dt: float, span: float
+) -> tuple[np.ndarray, np.ndarray]:
     """(reference columns, the reference's prediction): ``raw`` plus the linear core driven by
     lags of ``drive``, fitted on ``idx``."""
     lags = [lowpass(drive, tau, dt) for tau in reference_taus(dt, span)]

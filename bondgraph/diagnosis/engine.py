@@ -1,5 +1,6 @@
 """The diagnosis as a chain: calibrate, try every candidate, name the best that passes,
 extend the model with it and try the others again on the extended model, until none passes."""
+
 from __future__ import annotations
 
 import functools
@@ -10,11 +11,11 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..support import config
 from ..data import Dataset
-from ..support.errors import BondGraphError, UsageError
 from ..model.graph import Model
 from ..numerics.simulate import SimulationError
+from ..support import config
+from ..support.errors import BondGraphError, UsageError
 from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State, residual_floor
@@ -38,8 +39,14 @@ class Outcome:
     static: np.ndarray | None = None
 
 
-def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate,
-                  plausible: tuple[State, dict] | None = None, effort: float = 1.0) -> Outcome:
+def run_candidate(
+    ctx: Context,
+    state: State,
+    calibrated: Sequence[str],
+    cand: Candidate,
+    plausible: tuple[State, dict] | None = None,
+    effort: float = 1.0,
+) -> Outcome:
     """Fit one candidate on the chain state (in a worker or in the calling process).  A linear
     structural candidate starts from the plausible device instead, when one is given
     (``(state, bounds)``: the calibration within tolerance), and refits within its bounds.
@@ -54,7 +61,7 @@ def run_candidate(ctx: Context, state: State, calibrated: Sequence[str], cand: C
     try:
         with time_budget(config.get("diagnosis.candidate_seconds"), config.get("diagnosis.candidate_limit")):
             return _fit_candidate(cand, view, res)
-    except Exception as exc:   # noqa: BLE001 - one candidate's defect (a third party's too) is its FAILED line
+    except Exception as exc:  # noqa: BLE001 - one candidate's defect (a third party's too) is its FAILED line
         res.error = f"{type(exc).__name__}: {exc}"
         return Outcome(res)
     finally:
@@ -85,8 +92,9 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
     return Outcome(res, ext, np.asarray(raw, float), refit, None if static is None else np.asarray(static, float))
 
 
-def effect_errors(ctx: Context, oc: Outcome, e_state: np.ndarray,
-                  e_plaus: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+def effect_errors(
+    ctx: Context, oc: Outcome, e_state: np.ndarray, e_plaus: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
     """(errors before, errors after) of an outcome on every sample: after, its prediction with
     sensor gain and offset solved on ``ctx``'s fit part; before, the state's (or the plausible
     device's, for a candidate fitted on it), or the current model refitted from where the
@@ -101,9 +109,15 @@ def effect_errors(ctx: Context, oc: Outcome, e_state: np.ndarray,
     return before, y - (g * oc.raw + b)
 
 
-def second_fold(ctx: Context, state: State, calibrated: Sequence[str], cand: Candidate,
-                plausible: tuple[State, dict] | None, e_plaus: np.ndarray | None,
-                effort: float = 1.0) -> Comparison | None:
+def second_fold(
+    ctx: Context,
+    state: State,
+    calibrated: Sequence[str],
+    cand: Candidate,
+    plausible: tuple[State, dict] | None,
+    e_plaus: np.ndarray | None,
+    effort: float = 1.0,
+) -> Comparison | None:
     """The candidate fitted again with other validation blocks (``ctx`` refolded) and compared
     there as on the first fold; None when it fails."""
     oc = run_candidate(ctx, state, calibrated, cand, plausible, effort)
@@ -116,8 +130,9 @@ def effect_comparison(ctx: Context, state: State, oc: Outcome, e_plaus: np.ndarr
     return compare(*effect_errors(ctx, oc, ctx.y - state.prediction, e_plaus), ctx.blocks)
 
 
-def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
-           plausible: State | None = None, confirm=None) -> tuple[Step, Outcome | None]:
+def assess(
+    ctx: Context, state: State, view: View, outcomes: list[Outcome], plausible: State | None = None, confirm=None
+) -> tuple[Step, Outcome | None]:
     """Score every outcome against the state and the flexible linear reference; pick the winner.
     Linear structural candidates fitted on the ``plausible`` device are compared with it, and
     must explain ``linear_share`` of what the best linear explanation (the null or the flexible
@@ -152,27 +167,43 @@ def assess(ctx: Context, state: State, view: View, outcomes: list[Outcome],
         vr = compare(e_ref, e_both, ctx.blocks)
         r.gain_reference, r.z_reference = vr.gain, vr.z
         before = rms(before[val])
-        explained_ref = before ** 2 - min(rms_ref, rms_state) ** 2
-        r.share = (before ** 2 - r.rms_validation ** 2) / explained_ref if explained_ref > 0 else None
-        v = judge(r.kind, base, vr, r.share, [n for n in r.at_bounds if n in r.params], r.implausible,
-                  later=bool(state.causes), recalibration=r.recalibration, need_share=r.need_share)
+        explained_ref = before**2 - min(rms_ref, rms_state) ** 2
+        r.share = (before**2 - r.rms_validation**2) / explained_ref if explained_ref > 0 else None
+        v = judge(
+            r.kind,
+            base,
+            vr,
+            r.share,
+            [n for n in r.at_bounds if n in r.params],
+            r.implausible,
+            later=bool(state.causes),
+            recalibration=r.recalibration,
+            need_share=r.need_share,
+        )
         if v.passed and oc.static is not None and np.all(np.isfinite(oc.static)):
             # both with the reference's freedom: loops that only mimic a linear lag are no memory
             e_static = y - regress(np.column_stack([oc.static, ref_cols]), y, idx)
             vs = compare(e_static, e_both, ctx.blocks)
             r.gain_static = vs.gain
             if vs.gain < config.get("diagnosis.min_gain_reference") or vs.z < config.get("diagnosis.min_z_reference"):
-                v = Verdict(False, f"its loops explain no more than a static curve (gain {vs.gain:.3g}, "
-                                   f"z = {vs.z:.2g})")
+                v = Verdict(
+                    False, f"its loops explain no more than a static curve (gain {vs.gain:.3g}, z = {vs.z:.2g})"
+                )
         r.passed, r.verdict = v.passed, v.reason
         if not r.success and r.passed:
             r.verdict += " (optimiser not converged)"
     winner = _simplest_of_best([oc for oc in outcomes if oc.result.passed])
     why = _why(winner, outcomes, rms_state, rms_ref, ctx.noise)
     before = rms_plaus if winner is not None and winner.result.against == "plausible" else rms_state
-    step = Step(winner.result.cause if winner else "none", winner.result.gain if winner else 1.0, before,
-                winner.result.rms_validation if winner else rms_state, rms_ref,
-                [oc.result for oc in outcomes], why)
+    step = Step(
+        winner.result.cause if winner else "none",
+        winner.result.gain if winner else 1.0,
+        before,
+        winner.result.rms_validation if winner else rms_state,
+        rms_ref,
+        [oc.result for oc in outcomes],
+        why,
+    )
     return step, winner
 
 
@@ -183,17 +214,25 @@ def _confirm_borderline(outcomes: list[Outcome], scored: dict, confirm, e_plaus,
     min_z = config.get("diagnosis.min_z")
     min_gain = config.get("diagnosis.min_gain_chain" if later else "diagnosis.min_gain")
     margin = config.get("diagnosis.confirm_margin")
-    near = [oc for oc in outcomes if id(oc) in scored and scored[id(oc)][2].gain >= min_gain
-            and min_z - margin <= scored[id(oc)][2].z < min_z
-            and not [n for n in oc.result.at_bounds if n in oc.result.params]]
-    for oc in sorted(near, key=lambda oc: -scored[id(oc)][2].gain)[:int(config.get("diagnosis.confirm_max"))]:
+    near = [
+        oc
+        for oc in outcomes
+        if id(oc) in scored
+        and scored[id(oc)][2].gain >= min_gain
+        and min_z - margin <= scored[id(oc)][2].z < min_z
+        and not [n for n in oc.result.at_bounds if n in oc.result.params]
+    ]
+    for oc in sorted(near, key=lambda oc: -scored[id(oc)][2].gain)[: int(config.get("diagnosis.confirm_max"))]:
         second = confirm(oc, e_plaus)
         if second is None:
             continue
         before, e, first = scored[id(oc)]
         oc.result.z_second = second.z
-        scored[id(oc)] = (before, e, Comparison(first.gain, (first.z + second.z) / math.sqrt(2),
-                                                first.n_eff + second.n_eff))
+        scored[id(oc)] = (
+            before,
+            e,
+            Comparison(first.gain, (first.z + second.z) / math.sqrt(2), first.n_eff + second.n_eff),
+        )
 
 
 def near_the_bar(ctx: Context, state: State, oc: Outcome) -> bool:
@@ -231,24 +270,36 @@ def _simplest_of_best(passing: list[Outcome]) -> Outcome | None:
         return None
     best = max(passing, key=lambda oc: (round(oc.result.gain_reference, 2), oc.result.gain))
     margin = config.get("diagnosis.equivalent")
-    tied = [oc for oc in passing
-            if oc is best or (oc.result.gain_reference * margin >= best.result.gain_reference
-                              and oc.result.rms_validation <= margin * best.result.rms_validation)]
+    tied = [
+        oc
+        for oc in passing
+        if oc is best
+        or (
+            oc.result.gain_reference * margin >= best.result.gain_reference
+            and oc.result.rms_validation <= margin * best.result.rms_validation
+        )
+    ]
     return min(tied, key=lambda oc: (oc.result.n_params, -oc.result.gain))
 
 
 def _why(winner, outcomes, rms_state, rms_ref, noise) -> str:
     if winner is not None:
         r = winner.result
-        extra = (f", {r.gain_reference:.3g}× over the flexible linear reference" if r.kind != LINEAR
-                 else f", {r.share:.0%} of what a linear correction explains" if r.share is not None else "")
+        extra = (
+            f", {r.gain_reference:.3g}× over the flexible linear reference"
+            if r.kind != LINEAR
+            else f", {r.share:.0%} of what a linear correction explains"
+            if r.share is not None
+            else ""
+        )
         others = [oc.result for oc in outcomes if oc.result.passed and oc.result.cause != r.cause]
-        if others:   # what the data could not rule out: the strongest other cause that passes too
+        if others:  # what the data could not rule out: the strongest other cause that passes too
             o = max(others, key=lambda o: o.gain)
-            extra += (f"; {o.cause} passes too (×{o.gain:.3g}, validation RMS "
-                      f"{o.rms_validation / max(r.rms_validation, 1e-300):.3g}× the named one's)")
-        return (f"named: validation RMS {r.gain:.3g}× lower (z = {r.z:.1f}, {r.n_eff:.0f} effective samples)"
-                f"{extra}")
+            extra += (
+                f"; {o.cause} passes too (×{o.gain:.3g}, validation RMS "
+                f"{o.rms_validation / max(r.rms_validation, 1e-300):.3g}× the named one's)"
+            )
+        return f"named: validation RMS {r.gain:.3g}× lower (z = {r.z:.1f}, {r.n_eff:.0f} effective samples){extra}"
     parts = []
     if noise:
         parts.append(f"the residual is {rms_state / noise:.2g}× the noise floor")
@@ -276,20 +327,36 @@ def advance(ctx: Context, state: State, oc: Outcome, view: View) -> State:
     core = ext.drive if ext.drive is not None else before if ext.terms and before is not None else None
     terms = tuple(state.terms) + tuple(ext.terms) if core is not None else ()
     extra = (state.core_extra if state.terms else view.extra) if terms else None
-    return State(ext.model, dict(ext.values), oc.raw, g, b, ext.drive, ext.drive_expr,
-                 state.causes + [oc.result.cause], state.linear and ext.drive is not None, terms, core, extra,
-                 additive=ext.additive if ext.drive is not None else None, core_model=core_model if terms else None)
+    return State(
+        ext.model,
+        dict(ext.values),
+        oc.raw,
+        g,
+        b,
+        ext.drive,
+        ext.drive_expr,
+        state.causes + [oc.result.cause],
+        state.linear and ext.drive is not None,
+        terms,
+        core,
+        extra,
+        additive=ext.additive if ext.drive is not None else None,
+        core_model=core_model if terms else None,
+    )
 
 
 def load_candidates() -> list[Candidate]:
     """Candidates from the ``bondgraph.diagnosis`` entry points (each a callable returning a list)."""
     from importlib.metadata import entry_points
+
     out: list[Candidate] = []
     for ep in entry_points(group="bondgraph.diagnosis"):
         out += list(ep.load()())
     if not out:
-        raise UsageError("no diagnosis candidates are installed (entry point group 'bondgraph.diagnosis'); "
-                         "reinstall with pip install -e .")
+        raise UsageError(
+            "no diagnosis candidates are installed (entry point group 'bondgraph.diagnosis'); "
+            "reinstall with pip install -e ."
+        )
     return out
 
 
@@ -299,12 +366,25 @@ def model_file_options(module) -> dict:
     return {"calibrate_first": getattr(module, "CALIBRATE", None), "tolerance": getattr(module, "TOLERANCE", None)}
 
 
-def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | None = None,
-             calibrate_first: Sequence[str] | None = None, input: str | None = None, output: str | None = None,
-             data_input: str | None = None, data_output: str | None = None, validation: float = 0.3,
-             workers: int = 2, chain: bool = True, progress=None, source: str = "",
-             equations: bool = True, tolerance: Mapping[str, float] | None = None,
-             drift: bool | None = None) -> Report:
+def diagnose(
+    model: Model,
+    data: Dataset,
+    *,
+    candidates: Sequence[Candidate] | None = None,
+    calibrate_first: Sequence[str] | None = None,
+    input: str | None = None,
+    output: str | None = None,
+    data_input: str | None = None,
+    data_output: str | None = None,
+    validation: float = 0.3,
+    workers: int = 2,
+    chain: bool = True,
+    progress=None,
+    source: str = "",
+    equations: bool = True,
+    tolerance: Mapping[str, float] | None = None,
+    drift: bool | None = None,
+) -> Report:
     """Diagnose what ``model`` misses in ``data`` (see the package docstring).
 
     ``candidates``: the causes to try (default: the installed entry points);
@@ -321,9 +401,26 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
     settings = {} if drift is None else {"diagnosis.drift": bool(drift)}
 
     def run(reading: str, chain: bool = chain, decide=None):
-        return _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output,
-                         validation, workers, chain, progress, source, equations, tolerance, reading, decide,
-                         started)
+        return _diagnose(
+            model,
+            data,
+            candidates,
+            calibrate_first,
+            input,
+            output,
+            data_input,
+            data_output,
+            validation,
+            workers,
+            chain,
+            progress,
+            source,
+            equations,
+            tolerance,
+            reading,
+            decide,
+            started,
+        )
 
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     started = time.time()
@@ -335,8 +432,10 @@ def diagnose(model: Model, data: Dataset, *, candidates: Sequence[Candidate] | N
         too, and its chain goes on instead when its first step is the better one."""
         if gap <= config.get("diagnosis.reading_gap") * floor:
             return True
-        say(f"the two readings of the drive between its samples change the calibrated model's output by "
-            f"{gap / floor:.2g}× the noise floor: its first step with the drive read as linear between samples")
+        say(
+            f"the two readings of the drive between its samples change the calibrated model's output by "
+            f"{gap / floor:.2g}× the noise floor: its first step with the drive read as linear between samples"
+        )
 
         def linear_goes_on(_gap, _floor, linear_step) -> bool:
             chosen["keep"], chosen["why"] = _better_reading(step, linear_step)
@@ -378,13 +477,32 @@ def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float]) -> tup
     else:
         k, why = (0 if a[2] <= b[2] else 1), "fits the validation part better"
     best, other = (a, b) if k == 0 else (b, a)
-    return k, (f"its first step {why} (validation RMS {best[2]:.4g}, {best[1]}) than under the {other[0]} "
-               f"reading ({other[2]:.4g}, {other[1]})")
+    return k, (
+        f"its first step {why} (validation RMS {best[2]:.4g}, {best[1]}) than under the {other[0]} "
+        f"reading ({other[2]:.4g}, {other[1]})"
+    )
 
 
-def _diagnose(model, data, candidates, calibrate_first, input, output, data_input, data_output, validation,
-              workers, chain, progress, source, equations, tolerance, reading, decide=None,
-              since: float | None = None) -> Report | str:
+def _diagnose(
+    model,
+    data,
+    candidates,
+    calibrate_first,
+    input,
+    output,
+    data_input,
+    data_output,
+    validation,
+    workers,
+    chain,
+    progress,
+    source,
+    equations,
+    tolerance,
+    reading,
+    decide=None,
+    since: float | None = None,
+) -> Report | str:
     """The diagnosis (see :func:`diagnose`) with the drive read as ``reading`` between its
     samples, or the note to add when a sensor drift explains the record as well as the first
     cause found (the caller then runs it with the drift solved).  ``decide(gap, floor,
@@ -402,15 +520,17 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
     floor = ctx.noise or residual_floor(ctx.y - state.prediction, ctx.fs)
     say(f"calibrated in {time.time() - started:.1f} s: validation RMS {cal.rms_validation:.4g}")
     steps: list[Step] = []
-    folds: list[Context] = []   # the second fold's context, made when first needed
+    folds: list[Context] = []  # the second fold's context, made when first needed
     baseline, from_plausible = state, False
     with Pool(run_candidate, ctx, cal.free, cands, workers) as pool:
         for k in range(int(config.get("diagnosis.max_chain")) if chain else 1):
             spent = time.time() - (started if since is None else since)
             if k and spent > config.get("diagnosis.chain_seconds"):
-                note = (f"the chain stopped after step {k}: {spent:.0f} s spent, past the diagnosis' time budget "
-                        f"(setting diagnosis.chain_seconds, {config.get('diagnosis.chain_seconds'):g} s); "
-                        f"further causes were not examined")
+                note = (
+                    f"the chain stopped after step {k}: {spent:.0f} s spent, past the diagnosis' time budget "
+                    f"(setting diagnosis.chain_seconds, {config.get('diagnosis.chain_seconds'):g} s); "
+                    f"further causes were not examined"
+                )
                 say(note)
                 ctx.notes.append(note)
                 break
@@ -428,8 +548,10 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                     say(_line(k + 1, n, len(pending), oc.result))
             redo = [i for i in pending if screen != 1.0 and near_the_bar(ctx, state, outcomes[i])]
             if redo:
-                say(f"step {k + 1}: {len(redo)} of {len(pending)} candidates screened with {screen:g}× the "
-                    f"evaluations come near the bar: fitted with the full budget")
+                say(
+                    f"step {k + 1}: {len(redo)} of {len(pending)} candidates screened with {screen:g}× the "
+                    f"evaluations come near the bar: fitted with the full budget"
+                )
                 outcomes.update(pool.run(state, redo, first))
             ordered = [outcomes[i] for i in pending]
             view = View(ctx, state, cal.free)
@@ -441,7 +563,7 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
                 if not folds:
                     say("a second fold (other validation blocks) for borderline candidates")
                     folds.append(ctx.refold(2))
-                key = (id(of[id(oc)]), efforts.get(id(oc), 1.0))   # (the candidate, the effort)
+                key = (id(of[id(oc)]), efforts.get(id(oc), 1.0))  # (the candidate, the effort)
                 if key not in seconds:
                     seconds[key] = second_fold(folds[0], state, cal.free, of[id(oc)], first, e_plaus, key[1])
                 return seconds[key]
@@ -450,21 +572,30 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
             again = {id(oc) for oc in polish_race(ordered)}
             if again:
                 effort = config.get("diagnosis.polish_effort")
-                say(f"step {k + 1}: {len(again)} candidates in the race stopped before converging: "
-                    f"fitted again with {effort:g}× the evaluations")
+                say(
+                    f"step {k + 1}: {len(again)} candidates in the race stopped before converging: "
+                    f"fitted again with {effort:g}× the evaluations"
+                )
                 redo = [i for i in pending if id(outcomes[i]) in again]
                 outcomes.update(pool.run(state, redo, first, effort))
                 ordered = [outcomes[i] for i in pending]
                 of = {id(outcomes[i]): cands[i] for i in pending}
                 efforts = {id(outcomes[i]): effort for i in redo}
                 step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
-            if k == 0 and winner is not None and not config.get("diagnosis.drift") and _drift_explains(ctx, state, winner):
+            if (
+                k == 0
+                and winner is not None
+                and not config.get("diagnosis.drift")
+                and _drift_explains(ctx, state, winner)
+            ):
                 say("a linear drift explains the record as well as the best candidate: solved as a sensor drift")
-                return (f"a linear drift of the output explained the record as well as {winner.result.cause} "
-                        f"(gain {winner.result.gain:.3g}): solved with the calibration as a sensor drift")
+                return (
+                    f"a linear drift of the output explained the record as well as {winner.result.cause} "
+                    f"(gain {winner.result.gain:.3g}): solved with the calibration as a sensor drift"
+                )
             steps.append(step)
             if k == 0 and winner is not None and winner.result.against == "plausible":
-                baseline, from_plausible = pstate, True   # a linear structural cause fitted on it
+                baseline, from_plausible = pstate, True  # a linear structural cause fitted on it
             say(f"step {k + 1}: {step.why}")
             if k == 0 and decide is not None and not decide(gap, floor, (ctx.reading, step.cause, step.rms)):
                 break
@@ -474,14 +605,33 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
     causes = [s.cause for s in steps if s.cause != "none"]
     final_rms = rms((ctx.y - state.prediction)[ctx.ident.val_mask])
     base_rms = cal.rms_plausible if from_plausible and cal.rms_plausible is not None else cal.rms_validation
-    report = Report(causes, base_rms / max(final_rms, 1e-300) if causes else 1.0, base_rms,
-                    final_rms if causes else base_rms, steps, cal.as_json(),
-                    {"file": data.path or "", "model": source, "samples": len(ctx.t), "rate_hz": ctx.fs,
-                     "source_samples": ctx.source_samples, "source_rate_hz": ctx.source_rate,
-                     "validation_share": validation, "blocks": ctx.n_blocks, "input": ctx.input, "output": ctx.output,
-                     "drive_band_hz": ctx.band_hz, "drive_reading": ctx.reading, "reading_gap_rms": gap,
-                     "reading_floor_rms": floor},
-                    list(ctx.notes), noise=ctx.noise, baseline="plausible" if from_plausible else "calibrated")
+    report = Report(
+        causes,
+        base_rms / max(final_rms, 1e-300) if causes else 1.0,
+        base_rms,
+        final_rms if causes else base_rms,
+        steps,
+        cal.as_json(),
+        {
+            "file": data.path or "",
+            "model": source,
+            "samples": len(ctx.t),
+            "rate_hz": ctx.fs,
+            "source_samples": ctx.source_samples,
+            "source_rate_hz": ctx.source_rate,
+            "validation_share": validation,
+            "blocks": ctx.n_blocks,
+            "input": ctx.input,
+            "output": ctx.output,
+            "drive_band_hz": ctx.band_hz,
+            "drive_reading": ctx.reading,
+            "reading_gap_rms": gap,
+            "reading_floor_rms": floor,
+        },
+        list(ctx.notes),
+        noise=ctx.noise,
+        baseline="plausible" if from_plausible else "calibrated",
+    )
     report.predictions = {"t": ctx.t, "u": ctx.u_recorded, "y": ctx.y, "baseline": baseline.prediction}
     if causes:
         ext_model = state.model.copy()
@@ -492,6 +642,7 @@ def _diagnose(model, data, candidates, calibrate_first, input, output, data_inpu
         if equations:
             from ..equations.derivation import derive
             from ..equations.printing import render
+
             report.equations = render(derive(ext_model), "text")
         if not ctx.n_fast and len(ctx.t) <= 200_000:
             report.extended_rms_integrated = _integrated(ctx, ext_model, state)
@@ -530,6 +681,11 @@ def _integrated(ctx: Context, model: Model, state: State) -> float | None:
 
 
 def _line(step: int, k: int, n: int, r: CandidateResult) -> str:
-    state = (f"not tried ({r.skipped})" if r.skipped else f"failed ({r.error[:70]})" if r.error
-             else f"fitted ({r.n_params} new parameters)")
+    state = (
+        f"not tried ({r.skipped})"
+        if r.skipped
+        else f"failed ({r.error[:70]})"
+        if r.error
+        else f"fitted ({r.n_params} new parameters)"
+    )
     return f"step {step} [{k}/{n}] {r.cause} ({r.label}): {state}, {r.seconds:.1f} s"

@@ -1,5 +1,6 @@
 """Exact responses of small linear filters to sampled signals (linear between samples):
 the bases that drive-side candidates and the flexible linear reference are built from."""
+
 from __future__ import annotations
 
 import math
@@ -22,6 +23,10 @@ def lowpass(u: np.ndarray, tau: float, dt: float) -> np.ndarray:
 
 def resonator(u: np.ndarray, dt: float, omega: float, zeta: float) -> np.ndarray:
     """Displacement q of q̈ + 2ζω·q̇ + ω²·q = u, from rest (units of u·s²)."""
-    ss = StateSpace(np.array([[0.0, 1.0], [-omega ** 2, -2 * zeta * omega]]), np.array([[0.0], [1.0]]),
-                    np.array([[1.0, 0.0]]), np.zeros((1, 1)))
+    ss = StateSpace(
+        np.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]]),
+        np.array([[0.0], [1.0]]),
+        np.array([[1.0, 0.0]]),
+        np.zeros((1, 1)),
+    )
     return ss.response(dt, u)[:, 0]

@@ -15,6 +15,7 @@ nonlinearity (a softening resonance that jumps between branches included); when 
 not (a term that makes the model unstable), :class:`NotConverged` is raised and the caller
 integrates the rewritten model.
 """
+
 from __future__ import annotations
 
 from typing import Callable, Mapping, Sequence
@@ -23,13 +24,12 @@ import numpy as np
 import sympy as sp
 from numba import njit
 
-from ..model.elements import C, I, R
 from ..equations.derivation import derive
-from ..support.errors import BondGraphError
-from ..model.graph import Model, Quantity
 from ..linear.lti import LTI, foh
+from ..model.elements import C, I, R
+from ..model.graph import Model, Quantity
+from ..support.errors import BondGraphError
 from .rewrite import modify_law
-
 
 #: the partner that names the drive (the Lur'e model's input) instead of an element
 DRIVE = "<drive>"
@@ -54,8 +54,16 @@ class Lure:
     ``fixed``: terms already part of the model being extended, one (element, partner, term,
     c, r2) each, held as they are while the new elements' terms are fitted."""
 
-    def __init__(self, model: Model, input: str, output: str, elements: Sequence[str],
-                 partners: Mapping[str, str | None], dt: float, fixed: Sequence[tuple] = ()):
+    def __init__(
+        self,
+        model: Model,
+        input: str,
+        output: str,
+        elements: Sequence[str],
+        partners: Mapping[str, str | None],
+        dt: float,
+        fixed: Sequence[tuple] = (),
+    ):
         self.fixed = [(el, p, term, float(c), float(r2)) for el, p, term, c, r2 in fixed]
         partners = {**{el: p for el, p, *_ in self.fixed}, **partners}
         elements = [el for el, *_ in self.fixed] + list(elements)
@@ -71,11 +79,13 @@ class Lure:
             modify_law(aug, el, lambda x, old, w=w: old + w)
             aug.output(f"diag.x:{el}", _variable(model, el))
             if partners.get(el):
-                aug.output(f"diag.a:{el}", model.inputs[input].symbol if partners[el] == DRIVE
-                           else Quantity("q", partners[el]))
+                aug.output(
+                    f"diag.a:{el}", model.inputs[input].symbol if partners[el] == DRIVE else Quantity("q", partners[el])
+                )
         eqs = derive(aug)
-        self.outputs = [output] + [f"diag.x:{el}" for el in elements] + \
-            [f"diag.a:{el}" for el in elements if partners.get(el)]
+        self.outputs = (
+            [output] + [f"diag.x:{el}" for el in elements] + [f"diag.a:{el}" for el in elements if partners.get(el)]
+        )
         self.inputs = [input] + ws
         self.lti = {(i, o): LTI(eqs, i, o) for i in self.inputs for o in self.outputs}
         if not all(lti.exact for lti in self.lti.values()):
@@ -85,6 +95,7 @@ class Lure:
 
     def theta(self, values: Mapping[str, float]) -> np.ndarray:
         from ..numerics.codegen import parameter_vector
+
         th = parameter_vector(self.eqs)
         index = {p.name: i for i, p in enumerate(self.eqs.params)}
         for k, v in values.items():
@@ -102,8 +113,9 @@ class Lure:
             raise NotConverged("the model's own nonlinear terms make it diverge")
         return {o: Y[:, r] for r, o in enumerate(self.outputs)}
 
-    def simulate(self, values: Mapping[str, float], u: np.ndarray,
-                 term: Callable, coefs: Sequence[tuple[float, float]]) -> np.ndarray:
+    def simulate(
+        self, values: Mapping[str, float], u: np.ndarray, term: Callable, coefs: Sequence[tuple[float, float]]
+    ) -> np.ndarray:
         """Raw output for the drive samples ``u`` with w_k = term(c_k, r2_k, x_k, a_k),
         ``coefs[k] = (c_k, r2_k)``; ``term`` is written in arithmetic that works on sympy
         symbols and is a polynomial in x and a, plus at most one h·tanh(g·x) (see
@@ -129,18 +141,33 @@ class Lure:
         Dd = D + C @ G1
         u = np.ascontiguousarray(u, float)
         Y = np.empty((u.size, len(self.outputs)))
-        a_rows = np.array([self.outputs.index(f"diag.a:{el}") if self.partners[k] else -1
-                           for k, el in enumerate(self.elements)], np.int64)
-        terms = [(t, c, r2) for _, _, t, c, r2 in self.fixed] + \
-            [(term, (c if active_new else 0.0), r2) for c, r2 in coefs]
+        a_rows = np.array(
+            [self.outputs.index(f"diag.a:{el}") if self.partners[k] else -1 for k, el in enumerate(self.elements)],
+            np.int64,
+        )
+        terms = [(t, c, r2) for _, _, t, c, r2 in self.fixed] + [
+            (term, (c if active_new else 0.0), r2) for c, r2 in coefs
+        ]
         laws = [polynomial_term(t, self.partners[k])(c, r2) for k, (t, c, r2) in enumerate(terms)]
         mats = [m for m, _ in laws]
         P = np.zeros((self.n, max(m.shape[0] for m in mats), max(m.shape[1] for m in mats)))
         for k, m in enumerate(mats):
-            P[k, :m.shape[0], :m.shape[1]] = m
+            P[k, : m.shape[0], : m.shape[1]] = m
         HG = np.array([hg for _, hg in laws], float).reshape(self.n, 2)
-        ok = _step(np.ascontiguousarray(Phi), np.ascontiguousarray(Gam), np.ascontiguousarray(C),
-                   np.ascontiguousarray(Dd), np.ascontiguousarray(G1), u, self.n, a_rows, P, HG, active, Y)
+        ok = _step(
+            np.ascontiguousarray(Phi),
+            np.ascontiguousarray(Gam),
+            np.ascontiguousarray(C),
+            np.ascontiguousarray(Dd),
+            np.ascontiguousarray(G1),
+            u,
+            self.n,
+            a_rows,
+            P,
+            HG,
+            active,
+            Y,
+        )
         return Y, ok
 
 
@@ -157,8 +184,7 @@ def polynomial_term(term: Callable, partner: bool):
     expr = sp.expand(sp.sympify(term(c, r2, x, a if partner else None)))
     key = sp.srepr(expr)
     if key not in _TERMS:
-        refuse = NotConverged(f"the term {expr} is not a polynomial in the element's variables plus one "
-                              f"h·tanh(g·x)")
+        refuse = NotConverged(f"the term {expr} is not a polynomial in the element's variables plus one h·tanh(g·x)")
         h, g = sp.Integer(0), sp.Integer(0)
         sats = list(expr.atoms(sp.tanh))
         if len(sats) > 1:
@@ -177,7 +203,7 @@ def polynomial_term(term: Callable, partner: bool):
             raise refuse
         I, J = poly.degree(x) + 1, poly.degree(a) + 1
         I, J = max(I, 1), max(J, 1)
-        entries = [[poly.coeff_monomial(x ** i * a ** j) for j in range(J)] for i in range(I)]
+        entries = [[poly.coeff_monomial(x**i * a**j) for j in range(J)] for i in range(I)]
         f = sp.lambdify((c, r2), [entries, [h, g]], modules="numpy")
 
         def coefficients(cv, r2v, f=f):
@@ -185,6 +211,7 @@ def polynomial_term(term: Callable, partner: bool):
                 P, hg = f(np.float64(cv), np.float64(r2v))
             hg = np.array(hg, float)
             return np.array(P, float), (hg if hg[0] != 0.0 and np.all(np.isfinite(hg)) else np.zeros(2))
+
         _TERMS[key] = coefficients
     return _TERMS[key]
 
@@ -201,7 +228,7 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     n = Phi.shape[0]
     N = u.shape[0]
     R = C.shape[0]
-    nx, na = P.shape[1], P.shape[2]          # powers of x and of a in the terms
+    nx, na = P.shape[1], P.shape[2]  # powers of x and of a in the terms
     xi = np.zeros(n)
     xn = np.zeros(n)
     w = np.zeros(n_el)
@@ -210,19 +237,19 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     step = np.zeros(n_el)
     trial = np.zeros(n_el)
     row = np.zeros(R)
-    scale = 1e-300                           # largest |w| so far: the convergence test's scale
-    for i in range(n):                       # at rest: x[0] = ξ[0] + Γ1·u_all[0] = 0
+    scale = 1e-300  # largest |w| so far: the convergence test's scale
+    for i in range(n):  # at rest: x[0] = ξ[0] + Γ1·u_all[0] = 0
         xi[i] = -G1[i, 0] * u[0]
     for k in range(N):
-        for r in range(R):                   # every row without the terms' direct part
+        for r in range(R):  # every row without the terms' direct part
             acc = Dd[r, 0] * u[k]
             for i in range(n):
                 acc += C[r, i] * xi[i]
             row[r] = acc
         converged = not active
         if active:
-            full, last, change = False, 0.0, 0.0   # was the last step a full Newton step, its size
-            lam, norm0, halvings, newton = 1.0, -1.0, 0, 0   # norm0 < 0: not in a line search
+            full, last, change = False, 0.0, 0.0  # was the last step a full Newton step, its size
+            lam, norm0, halvings, newton = 1.0, -1.0, 0, 0  # norm0 < 0: not in a line search
             for j in range(n_el):
                 trial[j] = w[j]
             while True:
@@ -260,8 +287,10 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
                     norm += g[j] * g[j]
                     big = max(big, abs(f))
                     for l in range(n_el):
-                        J[j, l] = (1.0 if j == l else 0.0) - fx * Dd[1 + j, 1 + l] - (fa * Dd[ar, 1 + l] if ar >= 0 else 0.0)
-                if norm0 >= 0.0:                 # a trial of the line search (backtracking: a saturating
+                        J[j, l] = (
+                            (1.0 if j == l else 0.0) - fx * Dd[1 + j, 1 + l] - (fa * Dd[ar, 1 + l] if ar >= 0 else 0.0)
+                        )
+                if norm0 >= 0.0:  # a trial of the line search (backtracking: a saturating
                     #                              term can send a full Newton step far past the root)
                     if norm > (1.0 - 1e-4 * lam) * norm0:
                         halvings += 1
@@ -312,7 +341,7 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
                     return False
                 # converged: the step is below the tolerance, or, after a full step, quadratic
                 # convergence (next ≈ change³/last²) puts the step after this one below it
-                if change <= 1e-12 * scale or (full and change ** 3 <= 1e-12 * scale * last * last):
+                if change <= 1e-12 * scale or (full and change**3 <= 1e-12 * scale * last * last):
                     for j in range(n_el):
                         w[j] -= step[j]
                     converged = True
@@ -327,7 +356,7 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
             for l in range(n_el):
                 acc += Dd[r, 1 + l] * w[l]
             Y[k, r] = acc
-        for i in range(n):                   # ξ[k+1] = Φ ξ[k] + Γ u_all[k]
+        for i in range(n):  # ξ[k+1] = Φ ξ[k] + Γ u_all[k]
             acc = Gam[i, 0] * u[k]
             for l in range(n_el):
                 acc += Gam[i, 1 + l] * w[l]

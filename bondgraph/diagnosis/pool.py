@@ -7,6 +7,7 @@ Ctrl-C (or any error) the parent kills them and waits for them, so none outlives
 diagnosis and the interruption takes effect at once.  Without ``fork`` (or with one worker)
 the candidates run in the calling process.
 """
+
 from __future__ import annotations
 
 import multiprocessing as mp
@@ -34,6 +35,7 @@ def single_threaded_blas():
     """One BLAS thread in this process (the diagnosis' matrices are small and its workers share
     the cores: threaded BLAS only oversubscribes them, several times slower)."""
     from threadpoolctl import threadpool_limits
+
     return threadpool_limits(limits=1, user_api="blas")
 
 
@@ -49,8 +51,11 @@ class Pool:
             self._tasks, self._results = mpc.Queue(), mpc.Queue()
             settings = config.snapshot()
             for _ in range(min(workers, len(candidates))):
-                p = mpc.Process(target=_worker, args=(run_candidate, ctx, self.calibrated, self.candidates, settings,
-                                                      self._tasks, self._results), daemon=True)
+                p = mpc.Process(
+                    target=_worker,
+                    args=(run_candidate, ctx, self.calibrated, self.candidates, settings, self._tasks, self._results),
+                    daemon=True,
+                )
                 p.start()
                 self._procs.append(p)
 
@@ -126,7 +131,7 @@ def fork_map(fn: Callable, items: Sequence, workers: int) -> list:
         for i in share:
             try:
                 results.put((i, True, fn(items[i])))
-            except BaseException as exc:   # noqa: BLE001 - handed to the parent, which raises it
+            except BaseException as exc:  # noqa: BLE001 - handed to the parent, which raises it
                 results.put((i, False, exc))
                 return
 

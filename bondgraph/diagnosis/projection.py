@@ -4,6 +4,7 @@ a column matrix A(z) solved exactly (bounded) at every z, min_z min_c ||y − A(
 Parameters live in a transformed space: a :class:`Param` maps a physical value to z (signed
 logarithm for the linear parameters of a model, whose sign is fixed by the model).
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -19,7 +20,6 @@ from scipy.optimize import least_squares
 
 from ..fit.identify import bounded_lstsq
 from ..numerics.simulate import SimulationTimeout
-
 
 #: the time (time.monotonic) after which fits in this context stop at their best point so far
 _DEADLINE: contextvars.ContextVar[float | None] = contextvars.ContextVar("deadline", default=None)
@@ -115,10 +115,19 @@ def jacobian_map(threads: int) -> Iterator[Callable | None]:
         yield lambda f, xs: list(ex.map(lambda x: caller.copy().run(f, x), xs))
 
 
-def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray], y: np.ndarray, idx: np.ndarray,
-                  z0: Sequence[float], lb: Sequence[float], ub: Sequence[float],
-                  lower: Sequence[float], upper: Sequence[float], max_nfev: int = 40,
-                  starts: Sequence[Sequence[float]] = (), threads: int = 1) -> Projected:
+def projected_fit(
+    columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray],
+    y: np.ndarray,
+    idx: np.ndarray,
+    z0: Sequence[float],
+    lb: Sequence[float],
+    ub: Sequence[float],
+    lower: Sequence[float],
+    upper: Sequence[float],
+    max_nfev: int = 40,
+    starts: Sequence[Sequence[float]] = (),
+    threads: int = 1,
+) -> Projected:
     """min over z in [lb, ub] of min over lower ≤ c ≤ upper of ||y[idx] − A(z)[idx]·c||.
 
     ``columns(z, rows)`` returns the rows ``rows`` of A(z) (every sample for None: the optimiser
@@ -139,12 +148,12 @@ def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray]
         try:
             Ai = columns(z, idx)
         except SimulationTimeout:
-            if seen["z"] is None:   # the limit, on the first evaluation: nothing to fall back on
+            if seen["z"] is None:  # the limit, on the first evaluation: nothing to fall back on
                 raise
             raise _OutOfTime from None
         finally:
             _STOP_AT.reset(token)
-        if not np.all(np.isfinite(Ai)):      # never hand LAPACK a NaN (it prints to stdout)
+        if not np.all(np.isfinite(Ai)):  # never hand LAPACK a NaN (it prints to stdout)
             return np.full(idx.size, 1e3)
         c = bounded_lstsq(Ai, yi, lower, upper)
         r = (Ai @ c - yi) / scale
@@ -171,8 +180,15 @@ def projected_fit(columns: Callable[[np.ndarray, np.ndarray | None], np.ndarray]
     with jacobian_map(threads) as jmap:
         for start in [z0, *[np.asarray(s, float) for s in starts]]:
             try:
-                sol = least_squares(resid, np.clip(start, lb, ub), bounds=(lb, ub), max_nfev=max_nfev,
-                                    diff_step=1e-4, x_scale=1.0, workers=jmap)
+                sol = least_squares(
+                    resid,
+                    np.clip(start, lb, ub),
+                    bounds=(lb, ub),
+                    max_nfev=max_nfev,
+                    diff_step=1e-4,
+                    x_scale=1.0,
+                    workers=jmap,
+                )
             except _OutOfTime:
                 out_of_time = True
                 break

@@ -1,5 +1,6 @@
 """The diagnosis report: candidates and verdicts of every chain step, the named causes, and
 how the data were treated (readable text and JSON)."""
+
 from __future__ import annotations
 
 import math
@@ -55,12 +56,28 @@ class CandidateResult:
     effort: float = 1.0
 
     def as_json(self) -> dict:
-        out = {"cause": self.cause, "label": self.label, "kind": self.kind, "gain": self.gain,
-               "rms_fit": self.rms_fit, "rms_validation": self.rms_validation, "z": self.z, "n_eff": self.n_eff,
-               "gain_reference": self.gain_reference, "z_reference": self.z_reference, "share": self.share,
-               "n_params": self.n_params, "params": self.params, "evidence": self.evidence,
-               "at_bounds": self.at_bounds, "success": self.success, "message": self.message,
-               "passed": self.passed, "verdict": self.verdict, "seconds": round(self.seconds, 2)}
+        out = {
+            "cause": self.cause,
+            "label": self.label,
+            "kind": self.kind,
+            "gain": self.gain,
+            "rms_fit": self.rms_fit,
+            "rms_validation": self.rms_validation,
+            "z": self.z,
+            "n_eff": self.n_eff,
+            "gain_reference": self.gain_reference,
+            "z_reference": self.z_reference,
+            "share": self.share,
+            "n_params": self.n_params,
+            "params": self.params,
+            "evidence": self.evidence,
+            "at_bounds": self.at_bounds,
+            "success": self.success,
+            "message": self.message,
+            "passed": self.passed,
+            "verdict": self.verdict,
+            "seconds": round(self.seconds, 2),
+        }
         if self.against:
             out["against"] = self.against
         if self.gain_static is not None:
@@ -89,9 +106,15 @@ class Step:
     why: str
 
     def as_json(self) -> dict:
-        return {"cause": self.cause, "gain": self.gain, "rms": self.rms, "rms_before": self.rms_before,
-                "reference_rms": self.reference_rms, "why": self.why,
-                "candidates": [c.as_json() for c in self.candidates]}
+        return {
+            "cause": self.cause,
+            "gain": self.gain,
+            "rms": self.rms,
+            "rms_before": self.rms_before,
+            "reference_rms": self.reference_rms,
+            "why": self.why,
+            "candidates": [c.as_json() for c in self.candidates],
+        }
 
 
 @dataclass
@@ -131,86 +154,146 @@ class Report:
         when no linear structural cause fitted on the plausible device was named to account for
         them ('' otherwise)."""
         outside = self.calibration.get("outside_tolerance") or {}
-        if not outside or any(c.passed and c.cause == s.cause and c.kind == LINEAR and c.against == "plausible"
-                              for s in self.steps for c in s.candidates):
+        if not outside or any(
+            c.passed and c.cause == s.cause and c.kind == LINEAR and c.against == "plausible"
+            for s in self.steps
+            for c in s.candidates
+        ):
             return ""
-        return ("the calibration needs " + ", ".join(f"{k} ×{v:.3g}" for k, v in outside.items())
-                + " of the model's values, beyond their tolerance, and no structural cause explains it: "
-                  "the model's linear structure may lack something no candidate covers (a mode, a "
-                  "compliance, a sensor stage), or the device is further from the model file than its "
-                  "tolerance says")
+        return (
+            "the calibration needs "
+            + ", ".join(f"{k} ×{v:.3g}" for k, v in outside.items())
+            + " of the model's values, beyond their tolerance, and no structural cause explains it: "
+            "the model's linear structure may lack something no candidate covers (a mode, a "
+            "compliance, a sensor stage), or the device is further from the model file than its "
+            "tolerance says"
+        )
 
     def as_json(self) -> dict:
         steps = [s for s in self.steps if s.cause != "none"]
-        return {"cause": self.cause, "causes": list(self.causes), "gain": self.gain,
-                "baseline_rms": self.baseline_rms, "baseline": self.baseline, "extended_rms": self.extended_rms,
-                "candidates": [c.as_json() for c in self.candidates],
-                "steps": [s.as_json() for s in steps],
-                "why": self.steps[-1].why if self.steps else "",
-                "stop": self.steps[-1].as_json() if self.steps and self.steps[-1].cause == "none" else None,
-                "noise_rms": self.noise,
-                "extended_rms_integrated": self.extended_rms_integrated,
-                "calibration": self.calibration, "unexplained": self.unexplained, "data": self.data,
-                "notes": self.notes,
-                "criterion": {k.split(".", 1)[1]: config.get(k) for k in
-                              ("diagnosis.min_z", "diagnosis.min_gain", "diagnosis.min_gain_chain",
-                               "diagnosis.min_gain_reference",
-                               "diagnosis.min_z_reference",
-                               "diagnosis.linear_share", "diagnosis.spread")},
-                "seconds": round(self.seconds, 1), "equations": self.equations}
+        return {
+            "cause": self.cause,
+            "causes": list(self.causes),
+            "gain": self.gain,
+            "baseline_rms": self.baseline_rms,
+            "baseline": self.baseline,
+            "extended_rms": self.extended_rms,
+            "candidates": [c.as_json() for c in self.candidates],
+            "steps": [s.as_json() for s in steps],
+            "why": self.steps[-1].why if self.steps else "",
+            "stop": self.steps[-1].as_json() if self.steps and self.steps[-1].cause == "none" else None,
+            "noise_rms": self.noise,
+            "extended_rms_integrated": self.extended_rms_integrated,
+            "calibration": self.calibration,
+            "unexplained": self.unexplained,
+            "data": self.data,
+            "notes": self.notes,
+            "criterion": {
+                k.split(".", 1)[1]: config.get(k)
+                for k in (
+                    "diagnosis.min_z",
+                    "diagnosis.min_gain",
+                    "diagnosis.min_gain_chain",
+                    "diagnosis.min_gain_reference",
+                    "diagnosis.min_z_reference",
+                    "diagnosis.linear_share",
+                    "diagnosis.spread",
+                )
+            },
+            "seconds": round(self.seconds, 1),
+            "equations": self.equations,
+        }
 
     def text(self) -> str:
         d, cal = self.data, self.calibration
-        lines = [f"Diagnosis of {d.get('model', '')} against {d.get('file', '')}",
-                 f"  {d['samples']} samples at {d['rate_hz']:.6g} Hz"
-                 + (f" (from {d['source_samples']} at {d['source_rate_hz']:.6g} Hz)"
-                    if d.get("source_samples") != d["samples"] else "")
-                 + f", validation {d['validation_share']:.0%} of "
-                 + (f"{d['blocks']} " if d.get("blocks") else "") + "interleaved time blocks held out"]
+        lines = [
+            f"Diagnosis of {d.get('model', '')} against {d.get('file', '')}",
+            f"  {d['samples']} samples at {d['rate_hz']:.6g} Hz"
+            + (
+                f" (from {d['source_samples']} at {d['source_rate_hz']:.6g} Hz)"
+                if d.get("source_samples") != d["samples"]
+                else ""
+            )
+            + f", validation {d['validation_share']:.0%} of "
+            + (f"{d['blocks']} " if d.get("blocks") else "")
+            + "interleaved time blocks held out",
+        ]
         lines += [f"  note: {n}" for n in self.notes]
-        free = ", ".join(f"{k} = {v:.5g}" + (" (AT BOUND)" if k in cal["at_bounds"] else "")
-                         for k, v in cal["params"].items())
-        lines.append(f"  calibrated ({cal['route']}): {free or 'no model parameter'}; sensor gain "
-                     f"{cal['sensor_gain']:.5g}, offset {cal['offset']:.4g}, output delay {cal.get('delay', 0.0):.3g} s"
-                     + (f"; sensor drift {cal['drift']:.4g} per s (removed from the record)"
-                        if cal.get("drift") is not None else ""))
+        free = ", ".join(
+            f"{k} = {v:.5g}" + (" (AT BOUND)" if k in cal["at_bounds"] else "") for k, v in cal["params"].items()
+        )
+        lines.append(
+            f"  calibrated ({cal['route']}): {free or 'no model parameter'}; sensor gain "
+            f"{cal['sensor_gain']:.5g}, offset {cal['offset']:.4g}, output delay {cal.get('delay', 0.0):.3g} s"
+            + (
+                f"; sensor drift {cal['drift']:.4g} per s (removed from the record)"
+                if cal.get("drift") is not None
+                else ""
+            )
+        )
         if cal.get("outside_tolerance"):
-            lines.append("  outside their tolerance (an implausible device unless a structural cause explains it): "
-                         + ", ".join(f"{k} ×{v:.3g}" for k, v in cal["outside_tolerance"].items())
-                         + (f"; the plausible device's validation RMS {cal['rms_plausible']:.4g}"
-                            if cal.get("rms_plausible") is not None else ""))
+            lines.append(
+                "  outside their tolerance (an implausible device unless a structural cause explains it): "
+                + ", ".join(f"{k} ×{v:.3g}" for k, v in cal["outside_tolerance"].items())
+                + (
+                    f"; the plausible device's validation RMS {cal['rms_plausible']:.4g}"
+                    if cal.get("rms_plausible") is not None
+                    else ""
+                )
+            )
         for k, why in cal["held"].items():
             lines.append(f"  held at the model's value: {k} ({why})")
         if cal["at_bounds"]:
-            lines.append(f"  WARNING: {', '.join(cal['at_bounds'])} ended on the search bound "
-                         f"(×/÷{config.get('diagnosis.spread'):g} of the model's value): the device is "
-                         f"further from the model file than calibration allows")
+            lines.append(
+                f"  WARNING: {', '.join(cal['at_bounds'])} ended on the search bound "
+                f"(×/÷{config.get('diagnosis.spread'):g} of the model's value): the device is "
+                f"further from the model file than calibration allows"
+            )
         if not cal["success"]:
             lines.append(f"  WARNING: calibration did not converge ({cal['message']})")
         noise = f", noise floor {self.noise:.3g}" if self.noise else ""
         lines.append(f"  calibrated model validation RMS: {cal['rms_validation']:.4g}{noise}")
         for k, s in enumerate(self.steps, 1):
-            lines += ["", f"Step {k}: on the model " + (" + ".join(["calibrated"] + self.causes[:k - 1]))
-                      + f" (validation RMS {s.rms_before:.4g}; flexible linear reference {s.reference_rms:.4g})",
-                      f"  {'cause':<18} {'gain':>7} {'val. RMS':>10} {'z':>6} {'vs ref':>7}  verdict / extension"]
+            lines += [
+                "",
+                f"Step {k}: on the model "
+                + (" + ".join(["calibrated"] + self.causes[: k - 1]))
+                + f" (validation RMS {s.rms_before:.4g}; flexible linear reference {s.reference_rms:.4g})",
+                f"  {'cause':<18} {'gain':>7} {'val. RMS':>10} {'z':>6} {'vs ref':>7}  verdict / extension",
+            ]
             for c in sorted(s.candidates, key=lambda c: (bool(c.skipped or c.error), -c.gain)):
                 if c.skipped:
-                    lines.append(f"  {c.cause:<18} {'':>7} {'':>10} {'':>6} {'':>7}  not tried: {c.skipped} ({c.label})")
+                    lines.append(
+                        f"  {c.cause:<18} {'':>7} {'':>10} {'':>6} {'':>7}  not tried: {c.skipped} ({c.label})"
+                    )
                     continue
                 if c.error:
                     lines.append(f"  {c.cause:<18} {'':>7} {'':>10} {'':>6} {'':>7}  FAILED: {c.error} ({c.label})")
                     continue
                 vr = f"{c.gain_reference:.3g}" if c.gain_reference is not None else "-"
-                flag = ("" if c.success else " [optimiser: not converged]") + \
-                    (f" [fitted again, {c.effort:g}× the evaluations]" if c.effort > 1.0 else
-                     f" [screened, {c.effort:g}× the evaluations]" if c.effort < 1.0 else "")
-                lines.append(f"  {c.cause:<18} {c.gain:>7.3g} {c.rms_validation:>10.4g} {c.z:>6.1f} {vr:>7}  "
-                             f"{'NAMED' if c.passed and c.cause == s.cause else c.verdict}; {c.label}{flag}")
+                flag = ("" if c.success else " [optimiser: not converged]") + (
+                    f" [fitted again, {c.effort:g}× the evaluations]"
+                    if c.effort > 1.0
+                    else f" [screened, {c.effort:g}× the evaluations]"
+                    if c.effort < 1.0
+                    else ""
+                )
+                lines.append(
+                    f"  {c.cause:<18} {c.gain:>7.3g} {c.rms_validation:>10.4g} {c.z:>6.1f} {vr:>7}  "
+                    f"{'NAMED' if c.passed and c.cause == s.cause else c.verdict}; {c.label}{flag}"
+                )
             lines.append(f"  → {s.cause}: {s.why}")
         causes = " → ".join(self.causes) if self.causes else "none"
         base = "" if self.baseline == "calibrated" else " of the plausible device"
-        lines += ["", f"Causes: {causes}" + (f" (gain {self.gain:.3g}, validation RMS{base} {self.baseline_rms:.4g} → "
-                                            f"{self.extended_rms:.4g})" if self.causes else "")]
+        lines += [
+            "",
+            f"Causes: {causes}"
+            + (
+                f" (gain {self.gain:.3g}, validation RMS{base} {self.baseline_rms:.4g} → {self.extended_rms:.4g})"
+                if self.causes
+                else ""
+            ),
+        ]
         if self.unexplained:
             lines.append(f"  NOTE: {self.unexplained}")
         if self.extended_rms_integrated is not None:

@@ -1,15 +1,16 @@
 """Public helpers for rewriting a model's elements (what diagnosis candidates use instead of
 the framework's internals): read an element's constitutive law as a function, change it,
 evaluate its small-signal slope, add a term to an output."""
+
 from __future__ import annotations
 
 from typing import Callable, Mapping
 
 import sympy as sp
 
-from ..model.elements import C, E, F, I, J1, P, Q, R, Se
-from ..support.errors import ModelError
+from ..model.elements import J1, C, E, F, I, P, Q, R, Se
 from ..model.graph import Model
+from ..support.errors import ModelError
 
 _VAR = {C: Q, I: P}
 
@@ -96,8 +97,11 @@ def drive_loop(model: Model, input: str) -> tuple[str, list[str]] | None:
         if isinstance(el, Se) and sp.sympify(el.effort) == symbol:
             j = junction_of(model, name)
             if isinstance(model.elements[j], J1):
-                rs = [n for n in neighbours(model, name)
-                      if isinstance(model.elements[n], R) and model.elements[n].form == "resistance"]
+                rs = [
+                    n
+                    for n in neighbours(model, name)
+                    if isinstance(model.elements[n], R) and model.elements[n].form == "resistance"
+                ]
                 return j, rs
     return None
 

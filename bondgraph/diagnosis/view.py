@@ -1,5 +1,6 @@
 """The read-only view a candidate gets of the data, the split and the current model, and the
 fitting services it may use (all exact linear where the model allows)."""
+
 from __future__ import annotations
 
 import math
@@ -10,15 +11,14 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from ..model.graph import Model
 from ..fit.identify import Identification, Spec
-from ..linear.lti import LTI
-from .calibration import RESOLVED_COHERENCE, coherence_spectrum, cross_spectra, empirical_frf, param_bounds, score
-from .additive import AdditiveDrive, Term
-from .context import SENSOR_GAIN, Context, State, drive_held_share
-from .lure import Lure
+from ..model.graph import Model
 from ..support import config
 from ..support.errors import BondGraphError
+from .additive import AdditiveDrive, Term
+from .calibration import RESOLVED_COHERENCE, coherence_spectrum, cross_spectra, empirical_frf, param_bounds, score
+from .context import SENSOR_GAIN, Context, State, drive_held_share
+from .lure import Lure
 from .projection import Param, projected_fit, simulation_deadline
 
 
@@ -55,8 +55,14 @@ class View:
     :meth:`rewrite` for a copy carrying the current values).  ``effort``: a factor on every
     optimiser's evaluation budget (:meth:`fit_drive`, :meth:`fit_model`)."""
 
-    def __init__(self, ctx: Context, state: State, calibrated: Sequence[str],
-                 bounds: Mapping[str, tuple[float, float]] | None = None, effort: float = 1.0):
+    def __init__(
+        self,
+        ctx: Context,
+        state: State,
+        calibrated: Sequence[str],
+        bounds: Mapping[str, tuple[float, float]] | None = None,
+        effort: float = 1.0,
+    ):
         self._ctx, self._state = ctx, state
         self._effort = float(effort)
         self._bounds = dict(bounds or {})
@@ -81,8 +87,13 @@ class View:
         self.drive_expr = state.drive_expr
         #: the drive as a sum of effects of a base drive (:mod:`.additive`); None when the
         #: current model is not a drive transform of its linear core
-        self.additive = state.additive if state.additive is not None else \
-            AdditiveDrive(self.drive, state.drive_expr) if state.drive is not None else None
+        self.additive = (
+            state.additive
+            if state.additive is not None
+            else AdditiveDrive(self.drive, state.drive_expr)
+            if state.drive is not None
+            else None
+        )
         self.structural = not state.linear
         #: nonlinear terms in elements' laws named so far: (element, partner, term, c, r2)
         self.terms = tuple(state.terms)
@@ -103,8 +114,9 @@ class View:
         self.extra = None
         if state.drive is not None and ctx.lti is not None:
             extra = state.raw - self.respond([state.drive])[:, 0]
-            self.extra = _frozen(extra if np.max(np.abs(extra)) > 1e-9 * np.max(np.abs(state.raw)) else
-                                 np.zeros_like(extra))
+            self.extra = _frozen(
+                extra if np.max(np.abs(extra)) > 1e-9 * np.max(np.abs(state.raw)) else np.zeros_like(extra)
+            )
 
     def held_share(self, length: float) -> float:
         """Share of the record (0-1) in which the measured drive holds still (within 1 % of
@@ -171,8 +183,12 @@ class View:
         return self._ctx.ident.sim.theta(vals)
 
     # ---- linear responses -------------------------------------------------------------------
-    def respond(self, columns: Sequence[np.ndarray] | np.ndarray, values: Mapping[str, float] | None = None,
-                rows: np.ndarray | None = None) -> np.ndarray:
+    def respond(
+        self,
+        columns: Sequence[np.ndarray] | np.ndarray,
+        values: Mapping[str, float] | None = None,
+        rows: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Output of the linear core (the calibrated nominal dynamics, fast modes residualised,
         sensor gain 1) driven by each column (a sequence of series, or a 2-D array with one
         per column), from rest; at the sample indices ``rows`` only, if given."""
@@ -188,8 +204,11 @@ class View:
         ctx = self._ctx
         th = self.theta_values(values)
         omega = np.asarray(omega, float)
-        return (ctx.lti.state_space(th, ctx.cut).frequency_response(omega) * ctx.reading_factor(omega)
-                * np.exp(-1j * omega * ctx.delay * ctx.dt))
+        return (
+            ctx.lti.state_space(th, ctx.cut).frequency_response(omega)
+            * ctx.reading_factor(omega)
+            * np.exp(-1j * omega * ctx.delay * ctx.dt)
+        )
 
     def empirical_frf(self):
         """(ω rad/s, H, coherence) of the measured output over the input (Welch)."""
@@ -240,20 +259,33 @@ class View:
         linear calibration went as far as it may to absorb what no linear device explains (a
         resonance that moves with amplitude read as heavy damping), so a fit inside the
         dynamics should not start only from there."""
-        return [p.name for p in self._linear_params()
-                if not p.lower * (1 + 1e-6) < abs(self.values[p.name]) < p.upper * (1 - 1e-6)]
+        return [
+            p.name
+            for p in self._linear_params()
+            if not p.lower * (1 + 1e-6) < abs(self.values[p.name]) < p.upper * (1 - 1e-6)
+        ]
 
     def model_file_values(self) -> dict[str, float]:
         """The model file's values of the calibrated linear parameters."""
         return {n: self.nominal_value(n) for n in self.linear}
 
-    def fit_drive(self, basis: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
-                  lower: Sequence[float] = (), upper: Sequence[float] = (), *,
-                  direct: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
-                  identity: bool = True, z0: Sequence[float] = (), z_bounds: Sequence[tuple[float, float]] = (),
-                  z_names: Sequence[str] = (), refit: bool = True, max_nfev: int = 30,
-                  starts: Sequence[Sequence[float]] = (), start: Mapping[str, float] | None = None,
-                  names: Sequence[str] | None = None) -> DriveFit:
+    def fit_drive(
+        self,
+        basis: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
+        lower: Sequence[float] = (),
+        upper: Sequence[float] = (),
+        *,
+        direct: Callable[[np.ndarray], Sequence[np.ndarray]] | Sequence[np.ndarray] = (),
+        identity: bool = True,
+        z0: Sequence[float] = (),
+        z_bounds: Sequence[tuple[float, float]] = (),
+        z_names: Sequence[str] = (),
+        refit: bool = True,
+        max_nfev: int = 30,
+        starts: Sequence[Sequence[float]] = (),
+        start: Mapping[str, float] | None = None,
+        names: Sequence[str] | None = None,
+    ) -> DriveFit:
         """Fit the drive-side extension u_eff = [d] + Σ θ_k·basis_k (d: the current drive) through
         the linear core, plus ``direct`` columns added to the output, by variable projection:
         the coefficients by bounded linear least squares (``lower``/``upper`` for the basis;
@@ -308,8 +340,11 @@ class View:
             if identity:
                 Y[:, 0] += ex
             n = Y.shape[0]
-            cols = [Y] + ([np.column_stack(dc) if rows is None else np.column_stack(dc)[rows]] if dc else []) \
+            cols = (
+                [Y]
+                + ([np.column_stack(dc) if rows is None else np.column_stack(dc)[rows]] if dc else [])
                 + [np.ones((n, 1))]
+            )
             if has_extra and not identity:
                 cols.insert(-1, ex[:, None])
             return np.column_stack(cols)
@@ -329,19 +364,28 @@ class View:
         zu = [float(b) for _, b in z_bounds] + [p.z_bounds()[1] for p in lin]
         zlin0 = [p.to_z(p.start) for p in lin]
         more_starts = [list(s) + zlin0 for s in starts]
-        sol = projected_fit(columns, self._ctx.y, self._ctx.ident.fit_idx, zb0 + zlin0, zl, zu, lo, hi,
-                            max_nfev=self._budget(max_nfev) if (nz or lin) else 1, starts=more_starts)
+        sol = projected_fit(
+            columns,
+            self._ctx.y,
+            self._ctx.ident.fit_idx,
+            zb0 + zlin0,
+            zl,
+            zu,
+            lo,
+            hi,
+            max_nfev=self._budget(max_nfev) if (nz or lin) else 1,
+            starts=more_starts,
+        )
         vals, b, dc = parts(sol.z)
         c = sol.coef
         gain = c[0] if identity else self.gain
         gain = gain if gain != 0 else 1.0
         weights = c[:n_lead] / gain
-        theta = c[n_lead:n_lead + n_basis] / gain
-        phi = c[n_lead + n_basis:n_lead + n_basis + n_dir] / gain
+        theta = c[n_lead : n_lead + n_basis] / gain
+        phi = c[n_lead + n_basis : n_lead + n_basis + n_dir] / gain
         if identity:
             weights[0] = 1.0
-        drive = sum(w * col for w, col in zip(weights, lead)) + \
-            (sum(t * bk for t, bk in zip(theta, b)) if b else 0.0)
+        drive = sum(w * col for w, col in zip(weights, lead)) + (sum(t * bk for t, bk in zip(theta, b)) if b else 0.0)
         drive = np.asarray(drive, float) * np.ones(len(self.drive))
         raw = self.respond([drive], vals)[:, 0] + (sum(p * dk for p, dk in zip(phi, dc)) if dc else 0.0)
         if has_extra:
@@ -353,8 +397,10 @@ class View:
         if held is not None:
             refitted = weights[1:] if identity else weights
             values.update({t.name: float(w) for t, w in zip(held.terms, refitted)})
-            new = tuple(Term(n, np.asarray(col, float), float(a), float(bb))
-                        for n, col, a, bb in zip(names, b or [], lower, upper))
+            new = tuple(
+                Term(n, np.asarray(col, float), float(a), float(bb))
+                for n, col, a, bb in zip(names, b or [], lower, upper)
+            )
             additive = AdditiveDrive(held.base, held.base_expr, identity, held.terms + new)
         return DriveFit(theta, phi, sol.z[:nz], values, raw, drive, sol.success, sol.message, at, additive)
 
@@ -406,17 +452,23 @@ class View:
         limits (:func:`~bondgraph.diagnosis.projection.simulation_deadline`)."""
         ident = self.identification(model)
         known = {p.name for p in ident.sim.eqs.params}
-        if ident.lti is None:     # the integrator: one slow run must not outlast the fit's budget
+        if ident.lti is None:  # the integrator: one slow run must not outlast the fit's budget
             return (lambda values: ident.predict(values, deadline=simulation_deadline())), known
         if drive is None:
             return ident.predict, known
         extra = 0.0 if self.extra is None else self.extra
         return (lambda values: ident.predict(values, drive=drive) + extra), known
 
-    def fit_model(self, model: Model, new: Sequence[Spec], max_nfev: int = 20, refit: bool = True,
-                  start: Mapping[str, float] | None = None,
-                  predict: Callable[[Mapping[str, float]], np.ndarray] | None = None,
-                  drive: np.ndarray | None = None):
+    def fit_model(
+        self,
+        model: Model,
+        new: Sequence[Spec],
+        max_nfev: int = 20,
+        refit: bool = True,
+        start: Mapping[str, float] | None = None,
+        predict: Callable[[Mapping[str, float]], np.ndarray] | None = None,
+        drive: np.ndarray | None = None,
+    ):
         """Fit the new parameters ``new`` of an extended model (and, with ``refit``, the
         calibrated linear ones, from ``start`` or the current values) by variable projection
         over sensor gain and offset; exact linear route when the extended model stays linear,
@@ -429,8 +481,9 @@ class View:
         else:
             known = set(model.all_parameters())
         base = {k: v for k, v in {**self.values, **(start or {})}.items() if k in known}
-        lin = [Param(p.name, base.get(p.name, p.start), p.lower, p.upper) for p in self._linear_params()] \
-            if refit else []
+        lin = (
+            [Param(p.name, base.get(p.name, p.start), p.lower, p.upper) for p in self._linear_params()] if refit else []
+        )
         held = {s.name: s.start for s in new if s.lower == s.upper}
         new = [s for s in new if s.lower != s.upper]
         base.update(held)
@@ -438,8 +491,8 @@ class View:
 
         def values_of(z):
             vals = dict(base)
-            vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z[:len(specs)])})
-            vals.update({p.name: p.from_z(zi) for p, zi in zip(lin, z[len(specs):])})
+            vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z[: len(specs)])})
+            vals.update({p.name: p.from_z(zi) for p, zi in zip(lin, z[len(specs) :])})
             return vals
 
         def columns(z, rows):
@@ -450,8 +503,17 @@ class View:
         z0 = [s.to_z(s.start) for s in specs] + [p.to_z(p.start) for p in lin]
         lb = [s.z_bounds()[0] for s in specs] + [p.z_bounds()[0] for p in lin]
         ub = [s.z_bounds()[1] for s in specs] + [p.z_bounds()[1] for p in lin]
-        sol = projected_fit(columns, self._ctx.y, self._ctx.ident.fit_idx, z0, lb, ub, [-np.inf] * 2, [np.inf] * 2,
-                            max_nfev=self._budget(max_nfev))
+        sol = projected_fit(
+            columns,
+            self._ctx.y,
+            self._ctx.ident.fit_idx,
+            z0,
+            lb,
+            ub,
+            [-np.inf] * 2,
+            [np.inf] * 2,
+            max_nfev=self._budget(max_nfev),
+        )
         names = [s.name for s in specs] + [p.name for p in lin]
         return (values_of(sol.z), sol.columns[:, 0], sol.success, sol.message, [names[i] for i in sol.at_bounds])
 
@@ -471,7 +533,7 @@ class View:
             elif self.on_core:
                 lure = Lure(self.core(), self.input, self.output, elements, partners, self._ctx.dt)
                 lure.drive, lure.extra = np.asarray(self.drive), self.extra
-            else:   # the model itself, when it is linear (a linear structural extension included)
+            else:  # the model itself, when it is linear (a linear structural extension included)
                 lure = Lure(model, self.input, self.output, elements, partners, self._ctx.dt)
                 lure.drive, lure.extra = np.asarray(self.u), None
         except BondGraphError:
@@ -484,8 +546,9 @@ class View:
         ident = self.identification(self.model, integrate=True)
         known = {p.name for p in ident.sim.eqs.params}
         vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
-        res = ident.sim.run(self._ctx.t, {self.input: ident.signal}, params=vals, rtol=1e-5,
-                            deadline=simulation_deadline())
+        res = ident.sim.run(
+            self._ctx.t, {self.input: ident.signal}, params=vals, rtol=1e-5, deadline=simulation_deadline()
+        )
         out = dict(res.states)
         out["output rate"] = np.gradient(res.outputs[self.output], self._ctx.t)
         return out

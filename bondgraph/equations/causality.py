@@ -18,15 +18,16 @@ reported only when no causal assignment exists, naming the elements where it ari
 Result: for every bond, the element that sets its effort (the causal stroke is drawn at the
 other end, where the effort arrives).
 """
+
 from __future__ import annotations
 
 from collections import Counter, defaultdict, deque
 from dataclasses import dataclass, field
 
-from ..support import config
 from ..model.elements import DISSIPATION, FIXED, STORAGE, CausalConflict, Element
-from ..support.errors import CausalityError
 from ..model.graph import Bond, Model
+from ..support import config
+from ..support.errors import CausalityError
 
 
 @dataclass
@@ -55,8 +56,16 @@ class Causality:
         for b in self.model.bonds:
             setter = self.effort_from[b.index]
             other = b.head if setter == b.tail else b.tail
-            rows.append({"bond": b.index, "from": _ep(b.tail), "to": _ep(b.head),
-                         "effort_by": _ep(setter), "flow_by": _ep(other), "stroke_at": _ep(other)})
+            rows.append(
+                {
+                    "bond": b.index,
+                    "from": _ep(b.tail),
+                    "to": _ep(b.head),
+                    "effort_by": _ep(setter),
+                    "flow_by": _ep(other),
+                    "stroke_at": _ep(other),
+                }
+            )
         return rows
 
 
@@ -86,8 +95,9 @@ class _Assigner:
         self.conflicts: Counter = Counter()
         self.attempts = 0
         #: elements whose causality on one port constrains their others (junctions, TF, GY, ...)
-        self.relays = {n for n, e in self.elements.items()
-                       if type(e).propagate_causality is not Element.propagate_causality}
+        self.relays = {
+            n for n, e in self.elements.items() if type(e).propagate_causality is not Element.propagate_causality
+        }
         self.pending: set = set()
 
     def sets(self, k: int, end) -> bool | None:
@@ -183,13 +193,17 @@ class _Assigner:
         names = [n for n, _ in self.conflicts.most_common(6)] or sorted({d[1][0] for d in decisions})[:6]
         where = ", ".join(repr(n) for n in names)
         if gave_up:
-            return (f"{self.m.name}: no causal assignment found around {where} within "
-                    f"{config.get('causality.max_attempts')} attempts (setting causality.max_attempts); "
-                    f"add storage elements that decouple this part of the graph")
-        return (f"{self.m.name}: causal conflict around {where}: no causal assignment satisfies every junction, "
-                f"transformer and gyrator there and the causality each element accepts (a law that cannot be "
-                f"inverted refuses derivative causality); add a compliance or inertia between rigidly coupled "
-                f"elements, or make their laws invertible")
+            return (
+                f"{self.m.name}: no causal assignment found around {where} within "
+                f"{config.get('causality.max_attempts')} attempts (setting causality.max_attempts); "
+                f"add storage elements that decouple this part of the graph"
+            )
+        return (
+            f"{self.m.name}: causal conflict around {where}: no causal assignment satisfies every junction, "
+            f"transformer and gyrator there and the causality each element accepts (a law that cannot be "
+            f"inverted refuses derivative causality); add a compliance or inertia between rigidly coupled "
+            f"elements, or make their laws invertible"
+        )
 
     def components(self) -> dict[int, int]:
         """Bond → part of the graph: bonds joined by an element with several bonds share a part."""
@@ -222,8 +236,11 @@ def assign_causality(model: Model) -> Causality:
     for name, end, pref in by_class[FIXED]:
         if not a.attempt(a.bond_of[end], end, pref):
             raise CausalityError(_source_conflict(model, a, name))
-    decisions = [(a.bond_of[end], end, pref, True, name)  # (bond, end, preferred value, may flip, label)
-                 for cls in (STORAGE, DISSIPATION) for name, end, pref in by_class[cls]]
+    decisions = [
+        (a.bond_of[end], end, pref, True, name)  # (bond, end, preferred value, may flip, label)
+        for cls in (STORAGE, DISSIPATION)
+        for name, end, pref in by_class[cls]
+    ]
     key = {end: _end_key(end) for b in model.bonds for end in (b.tail, b.head)}
     for b in sorted(model.bonds, key=lambda b: (*sorted((key[b.tail], key[b.head])), b.index)):
         decisions.append((b.index, min((b.tail, b.head), key=key.__getitem__), True, True, f"bond {b.index}"))
@@ -234,10 +251,17 @@ def assign_causality(model: Model) -> Causality:
     chosen = set()
     for group in by_part.values():
         chosen |= {group[j][4] for j in a.search(group)}
-    arbitrary = [d[4] for d in decisions if d[4] in chosen and (d[4].startswith("bond ") or
-                                                                elements[d[4]].causal_class == DISSIPATION)]
-    derivative = [end for cls_ports in by_class.values() for name, end, pref in cls_ports
-                  if elements[name].is_storage and a.sets(a.bond_of[end], end) != pref]
+    arbitrary = [
+        d[4]
+        for d in decisions
+        if d[4] in chosen and (d[4].startswith("bond ") or elements[d[4]].causal_class == DISSIPATION)
+    ]
+    derivative = [
+        end
+        for cls_ports in by_class.values()
+        for name, end, pref in cls_ports
+        if elements[name].is_storage and a.sets(a.bond_of[end], end) != pref
+    ]
     derivative.sort(key=lambda end: (name_key(end[0]), end[1]))
     return Causality(model, dict(a.setter), derivative, arbitrary)
 
@@ -256,5 +280,7 @@ def _source_conflict(model: Model, a: _Assigner, source: str) -> str:
     elem = model.elements[source]
     what = "effort" if elem.preferred_causality(end[1]) else "flow"
     also = f" (so does {', '.join(repr(r) for r in rivals)})" if rivals else ""
-    return (f"{model.name}: causal conflict: {elem.kind} '{source}' imposes the {what} at '{other}'{also}; "
-            f"two sources fix the same variable: remove one or put an R, C or I between them")
+    return (
+        f"{model.name}: causal conflict: {elem.kind} '{source}' imposes the {what} at '{other}'{also}; "
+        f"two sources fix the same variable: remove one or put an R, C or I between them"
+    )

@@ -13,6 +13,7 @@ states and inputs:
   masses rigidly coupled through a TF become one inertia m1 + n²·m2);
 * a topological order of what remains is the straight-line program of :class:`Equations`.
 """
+
 from __future__ import annotations
 
 from collections import defaultdict
@@ -20,11 +21,11 @@ from collections import defaultdict
 import networkx as nx
 import sympy as sp
 
-from .causality import Causality, assign_causality
 from ..model.elements import Port, sympify
-from .system import Equations, State, Statement
-from ..support.errors import CausalityError, ModelError
 from ..model.graph import Model, OperatorBlock, Quantity, input_rate_symbol
+from ..support.errors import CausalityError, ModelError
+from .causality import Causality, assign_causality
+from .system import Equations, State, Statement
 
 
 def _is_cheap(expr: sp.Expr) -> bool:
@@ -70,8 +71,7 @@ class Deriver:
     def run(self) -> Equations:
         m = self.m
         # generated names never collide with the user's (parameters, inputs, states, operators)
-        self._names |= {str(s) for s in m.parameter_table()} | set(m.inputs) | set(m.internal_states) \
-            | set(m.operators)
+        self._names |= {str(s) for s in m.parameter_table()} | set(m.inputs) | set(m.internal_states) | set(m.operators)
         self.e, self.f = {}, {}
         for b in m.bonds:
             label = self._bond_label(b)
@@ -100,17 +100,37 @@ class Deriver:
         program, rates, outputs = _collapse(program, self.rates, outputs)
         inputs = [i.symbol for i in m.inputs.values()]
         params = list(m.parameter_table())
-        return Equations(m, self.c, self.states, inputs, [input_rate_symbol(u) for u in inputs], params,
-                         program, rates, outputs, list(self.ops.values()), self.eliminated, self.loops,
-                         {b.index: (self.e[b.index], self.f[b.index]) for b in m.bonds})
+        return Equations(
+            m,
+            self.c,
+            self.states,
+            inputs,
+            [input_rate_symbol(u) for u in inputs],
+            params,
+            program,
+            rates,
+            outputs,
+            list(self.ops.values()),
+            self.eliminated,
+            self.loops,
+            {b.index: (self.e[b.index], self.f[b.index]) for b in m.bonds},
+        )
 
     # ---- constitutive relations (the element protocol) ---------------------------------------
     def _element(self, name: str, elem):
         ports = {}
         for port, b, s in self.ports[name]:
             key = name if len(elem.ports) <= 1 else f"{name}.{port}"
-            ports[port] = Port(port, key, self.e[b.index], self.f[b.index], s,
-                               self.c.sets_effort(b, (name, port)), key if elem.is_storage else name, self)
+            ports[port] = Port(
+                port,
+                key,
+                self.e[b.index],
+                self.f[b.index],
+                s,
+                self.c.sets_effort(b, (name, port)),
+                key if elem.is_storage else name,
+                self,
+            )
         elem.equations(ports, self)
         for port in ports.values():
             self.quantity_map.setdefault(("e", port.key), port.e)
@@ -172,13 +192,17 @@ class Deriver:
             return self.quantity_map[key]
         elem_name = q.endpoint.split(".")[0] if q.endpoint not in self.m.elements else q.endpoint
         if q.what in ("e", "f"):
-            raise ModelError(f"{self.m.name}: '{q.endpoint}' has no single {'effort' if q.what == 'e' else 'flow'}"
-                             f" (a {self.m.elements[elem_name].kind}); ask for one of its bonded elements instead")
+            raise ModelError(
+                f"{self.m.name}: '{q.endpoint}' has no single {'effort' if q.what == 'e' else 'flow'}"
+                f" (a {self.m.elements[elem_name].kind}); ask for one of its bonded elements instead"
+            )
         # displacement / momentum of something that is not a storage port: integrate a sensor state
         rate_key = ("f" if q.what == "q" else "e", q.endpoint)
         if rate_key not in self.quantity_map:
-            raise ModelError(f"{self.m.name}: cannot integrate the {'flow' if q.what == 'q' else 'effort'}"
-                             f" of '{q.endpoint}' (it has no single one)")
+            raise ModelError(
+                f"{self.m.name}: cannot integrate the {'flow' if q.what == 'q' else 'effort'}"
+                f" of '{q.endpoint}' (it has no single one)"
+            )
         sym = sp.Symbol(self._unique(f"{'x' if q.what == 'q' else 'p'}_{q.endpoint}"), real=True)
         self.states.append(State(sym, "x", q.endpoint, sp.Integer(0)))
         self.rates[sym] = self.quantity_map[rate_key]
@@ -213,8 +237,10 @@ class Deriver:
                     continue
             names = sorted({self.origin[v] for v in comp})
             if any(v in self.ops for v in comp):
-                raise CausalityError(f"{self.m.name}: algebraic loop through a memory operator "
-                                     f"({', '.join(names)}); add a storage element in the loop")
+                raise CausalityError(
+                    f"{self.m.name}: algebraic loop through a memory operator "
+                    f"({', '.join(names)}); add a storage element in the loop"
+                )
             tears = _tear_set(g.subgraph(comp))
             rest = nx.DiGraph(g.subgraph(comp - set(tears)))
             sub: dict = {}
@@ -224,16 +250,20 @@ class Deriver:
             try:
                 A, b = sp.linear_eq_to_matrix(eqs, tears)
             except (ValueError, sp.PolynomialError):
-                raise CausalityError(f"{self.m.name}: nonlinear algebraic loop through {', '.join(names)}; "
-                                     f"add a storage element (small C or I) to break it") from None
+                raise CausalityError(
+                    f"{self.m.name}: nonlinear algebraic loop through {', '.join(names)}; "
+                    f"add a storage element (small C or I) to break it"
+                ) from None
             try:
                 sol = _solve_linear(A, b)
             except ZeroDivisionError:
                 raise CausalityError(f"{self.m.name}: singular algebraic loop through {', '.join(names)}") from None
             for t, val in zip(tears, sol):
                 self.assign_map[t] = val
-            self.loops.append(f"algebraic loop through {', '.join(names)} ({len(comp)} variables, "
-                              f"torn at {', '.join(map(str, tears))}) solved symbolically")
+            self.loops.append(
+                f"algebraic loop through {', '.join(names)} ({len(comp)} variables, "
+                f"torn at {', '.join(map(str, tears))}) solved symbolically"
+            )
 
     # ---- derivative causality ----------------------------------------------------------------
     def _eliminate_dependent(self):
@@ -254,26 +284,32 @@ class Deriver:
             stored_full = stored.xreplace(full)
             bad = stored_full.free_symbols & (wset | set(self.ops))
             if bad:
-                raise CausalityError(f"{self.m.name}: derivative causality of {', '.join(names)} cannot be "
-                                     f"resolved (its stored quantity depends on {', '.join(map(str, bad))}); "
-                                     f"add a compliance or inertia between the coupled storage elements")
-            dt = sum((sp.diff(stored_full, x) * rates_full[x] for x in state_syms if stored_full.has(x)),
-                     sp.Integer(0))
-            dt += sum((sp.diff(stored_full, u) * input_rate_symbol(u) for u in inputs if stored_full.has(u)),
-                      sp.Integer(0))
+                raise CausalityError(
+                    f"{self.m.name}: derivative causality of {', '.join(names)} cannot be "
+                    f"resolved (its stored quantity depends on {', '.join(map(str, bad))}); "
+                    f"add a compliance or inertia between the coupled storage elements"
+                )
+            dt = sum((sp.diff(stored_full, x) * rates_full[x] for x in state_syms if stored_full.has(x)), sp.Integer(0))
+            dt += sum(
+                (sp.diff(stored_full, u) * input_rate_symbol(u) for u in inputs if stored_full.has(u)), sp.Integer(0)
+            )
             eqs.append(w - dt)
         try:
             A, b = sp.linear_eq_to_matrix(eqs, unknowns)
             sol = _solve_linear(A, b)
         except (ValueError, sp.PolynomialError, ZeroDivisionError):
-            raise CausalityError(f"{self.m.name}: derivative causality of {', '.join(names)} cannot be resolved "
-                                 f"(nonlinear or singular coupling); add a compliance or inertia between the "
-                                 f"rigidly coupled storage elements, or make them linear") from None
+            raise CausalityError(
+                f"{self.m.name}: derivative causality of {', '.join(names)} cannot be resolved "
+                f"(nonlinear or singular coupling); add a compliance or inertia between the "
+                f"rigidly coupled storage elements, or make them linear"
+            ) from None
         for (w, stored, name), s in zip(self.dependent, sol):
             self.assign(w, s, name)
-            self.eliminated.append(f"{name} is in derivative causality: its stored quantity "
-                                   f"{sp.sstr(stored.xreplace(full))} depends on the other states; "
-                                   f"state eliminated, its port variable {w} = {sp.sstr(s)}")
+            self.eliminated.append(
+                f"{name} is in derivative causality: its stored quantity "
+                f"{sp.sstr(stored.xreplace(full))} depends on the other states; "
+                f"state eliminated, its port variable {w} = {sp.sstr(s)}"
+            )
 
     # ---- ordering ----------------------------------------------------------------------------
     def _order(self, roots: list[sp.Expr]) -> list[Statement]:
@@ -288,8 +324,11 @@ class Deriver:
             stack.extend(p for p in g.predecessors(v) if p not in need)
         sub = g.subgraph(need)
         try:
-            order = list(nx.lexicographical_topological_sort(sub, key=str)) if len(need) < 400 \
+            order = (
+                list(nx.lexicographical_topological_sort(sub, key=str))
+                if len(need) < 400
                 else list(nx.topological_sort(sub))
+            )
         except nx.NetworkXUnfeasible:
             raise CausalityError(f"{self.m.name}: unresolved algebraic loop") from None
         return [Statement(v, self.assign_map[v], self.origin[v], self.ops.get(v)) for v in order]
@@ -300,8 +339,9 @@ def _tear_set(g: nx.DiGraph) -> list[sp.Symbol]:
     g = nx.DiGraph(g)
     tears: list = []
     while True:
-        cyclic = [c for c in nx.strongly_connected_components(g)
-                  if len(c) > 1 or g.has_edge(next(iter(c)), next(iter(c)))]
+        cyclic = [
+            c for c in nx.strongly_connected_components(g) if len(c) > 1 or g.has_edge(next(iter(c)), next(iter(c)))
+        ]
         if not cyclic:
             return sorted(tears, key=str)
         comp = max(cyclic, key=len)
@@ -333,8 +373,7 @@ def _collapse(program: list[Statement], rates: dict, outputs: dict):
             sub[st.var] = expr
         else:
             kept.append(Statement(st.var, expr, st.origin, st.op))
-    return (kept, {k: v.xreplace(sub) for k, v in rates.items()},
-            {k: v.xreplace(sub) for k, v in outputs.items()})
+    return (kept, {k: v.xreplace(sub) for k, v in rates.items()}, {k: v.xreplace(sub) for k, v in outputs.items()})
 
 
 def _expr(value, origin: str, what) -> sp.Expr:

@@ -10,14 +10,15 @@ layer of an N-layer stack sees the common electrode's voltage, a sum over all N 
 the printers remember the text of every sub-expression they have printed: the printout of
 a 200-layer stack costs as much as its unique sub-expressions, not as its 4 MB of text.
 """
+
 from __future__ import annotations
 
 import sympy as sp
 from sympy.printing.latex import LatexPrinter
 from sympy.printing.str import StrPrinter
 
-from .system import Equations
 from ..model.graph import Model
+from .system import Equations
 
 FORMATS = ("text", "latex", "markdown")
 
@@ -64,16 +65,16 @@ def _rows_elements(eqs: Equations):
     for b in m.bonds:  # one pass (bonds_of per element is quadratic in big graphs)
         for end in {b.tail[0], b.head[0]}:
             bonds[end].append(b.index)
-    return [(name, el.kind, el.describe(), ", ".join(map(str, sorted(bonds[name]))))
-            for name, el in m.elements.items()]
+    return [(name, el.kind, el.describe(), ", ".join(map(str, sorted(bonds[name])))) for name, el in m.elements.items()]
 
 
 def _rows_causality(eqs: Equations):
     rows = []
     for r in eqs.causality.table():
         e, f = eqs.bond_vars[r["bond"]]
-        rows.append((str(r["bond"]), f"{r['from']} → {r['to']}", r["effort_by"], r["flow_by"], r["stroke_at"],
-                     f"{e}, {f}"))
+        rows.append(
+            (str(r["bond"]), f"{r['from']} → {r['to']}", r["effort_by"], r["flow_by"], r["stroke_at"], f"{e}, {f}")
+        )
     return rows
 
 
@@ -87,11 +88,18 @@ def _substituted(eqs: Equations):
     """State equations, outputs and operator inputs, fully substituted in one pass over the
     program (the same as ``state_equations()``, ``output_equations()``, ``operator_inputs()``)."""
     ops = {st.var: st.expr for st in eqs.program if st.op is not None}
-    both = eqs.substituted({**{("x", k): v for k, v in eqs.rates.items()},
-                            **{("y", k): v for k, v in eqs.outputs.items()},
-                            **{("h", k): v for k, v in ops.items()}})
-    return ({k: both[("x", k)] for k in eqs.rates}, {k: both[("y", k)] for k in eqs.outputs},
-            {k: both[("h", k)] for k in ops})
+    both = eqs.substituted(
+        {
+            **{("x", k): v for k, v in eqs.rates.items()},
+            **{("y", k): v for k, v in eqs.outputs.items()},
+            **{("h", k): v for k, v in ops.items()},
+        }
+    )
+    return (
+        {k: both[("x", k)] for k in eqs.rates},
+        {k: both[("y", k)] for k in eqs.outputs},
+        {k: both[("h", k)] for k in ops},
+    )
 
 
 def render(eqs: Equations, fmt: str = "text") -> str:
@@ -117,8 +125,9 @@ def render(eqs: Equations, fmt: str = "text") -> str:
             for r in rows:
                 out.append("| " + " | ".join(str(c).replace("|", "\\|") for c in r) + " |")
         else:
-            widths = [max(len(str(h)), *(len(str(r[i])) for r in rows)) if rows else len(h)
-                      for i, h in enumerate(header)]
+            widths = [
+                max(len(str(h)), *(len(str(r[i])) for r in rows)) if rows else len(h) for i, h in enumerate(header)
+            ]
             out.append("  ".join(str(h).ljust(w) for h, w in zip(header, widths)).rstrip())
             for r in rows:
                 out.append("  ".join(str(c).ljust(w) for c, w in zip(r, widths)).rstrip())
@@ -165,8 +174,10 @@ def _latex(eqs, states, outputs, op_inputs, latex) -> str:
     for s, rhs in states.items():
         lines.append(f"  {_derivative(s, 'latex')} &= {latex(rhs)} \\\\")
     for ob in eqs.operators:
-        lines.append(f"  {latex(ob.symbol)} &= \\mathcal{{H}}_{{\\mathrm{{{ob.operator.kind}}}}}"
-                     f"[{latex(op_inputs[ob.symbol])}] \\\\")
+        lines.append(
+            f"  {latex(ob.symbol)} &= \\mathcal{{H}}_{{\\mathrm{{{ob.operator.kind}}}}}"
+            f"[{latex(op_inputs[ob.symbol])}] \\\\"
+        )
     for name, rhs in outputs.items():
         lines.append(f"  {latex(sp.Symbol(name))} &= {latex(rhs)} \\\\")
     if lines[-1].endswith(" \\\\"):

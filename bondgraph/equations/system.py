@@ -7,14 +7,15 @@ outputs as expressions of program variables, states, inputs and parameters.  Ful
 into x' = f(x, u, θ) is done only on request (printouts, linearisation).  Operator outputs
 (memory elements) appear in the program as calls ``h = H[v]``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .causality import Causality
 from ..model.graph import Model, OperatorBlock
+from .causality import Causality
 
 
 @dataclass
@@ -98,8 +99,9 @@ class Equations:
     def operator_inputs(self) -> dict[sp.Symbol, sp.Expr]:
         return self.substituted({st.var: st.expr for st in self.program if st.op is not None})
 
-    def jacobian(self, roots: list[sp.Expr], wrt: list[sp.Symbol], op_gains: dict | None = None,
-                 inline: bool = True) -> sp.Matrix:
+    def jacobian(
+        self, roots: list[sp.Expr], wrt: list[sp.Symbol], op_gains: dict | None = None, inline: bool = True
+    ) -> sp.Matrix:
         """∂roots/∂wrt by forward differentiation through the program (sparse, linear cost).
 
         An operator output h = H[v] gets slope ``op_gains[h]`` (0 if not given: frozen memory).
@@ -135,4 +137,3 @@ def _grad(expr: sp.Expr, grad: dict, wrt_set: set) -> dict:
         elif s in wrt_set:
             g[s] = g.get(s, 0) + sp.diff(expr, s)
     return g
-

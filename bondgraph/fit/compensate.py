@@ -18,6 +18,7 @@ The predicted tracking error (the simulated model against the reference) is repo
 and without compensation; "without" is the linear inverse: a drive proportional to the
 reference, spanning the same range as the compensated drive.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -26,10 +27,10 @@ import numpy as np
 import sympy as sp
 from scipy.optimize import brentq
 
-from ..support.errors import ModelError, UsageError, did_you_mean
 from ..model.memory import MemoryOperator
 from ..model.signals import PiecewiseLinear
 from ..numerics.simulate import Simulator
+from ..support.errors import ModelError, UsageError, did_you_mean
 
 
 def invert_operator(op: MemoryOperator, y, prm=None) -> np.ndarray:
@@ -72,8 +73,10 @@ def _solve(f, start: float, target: float, step: float) -> float:
             a, b = sorted((lo, hi))
             return brentq(f, a, b, xtol=1e-15 * max(abs(a), abs(b), 1e-300), rtol=4 * np.finfo(float).eps)
         lo, step = hi, step * 2.0
-    raise ModelError(f"cannot invert the operator at output {target:g}: its output does not rise "
-                     "with its input there (the hysteresis model is not monotone)")
+    raise ModelError(
+        f"cannot invert the operator at output {target:g}: its output does not rise "
+        "with its input there (the hysteresis model is not monotone)"
+    )
 
 
 @dataclass
@@ -112,10 +115,15 @@ class Compensation:
 
     def summary(self) -> dict:
         span = max(float(np.ptp(self.reference)), np.finfo(float).tiny)
-        return {"method": self.method, "simulations": len(self.history) + 1,
-                "max_error": self.error, "max_error_uncompensated": self.linear_error,
-                "relative_error": self.error / span, "relative_error_uncompensated": self.linear_error / span,
-                "improvement": self.improvement}
+        return {
+            "method": self.method,
+            "simulations": len(self.history) + 1,
+            "max_error": self.error,
+            "max_error_uncompensated": self.linear_error,
+            "relative_error": self.error / span,
+            "relative_error_uncompensated": self.linear_error / span,
+            "improvement": self.improvement,
+        }
 
 
 def _input_operator(sim: Simulator, u: sp.Symbol):
@@ -136,8 +144,20 @@ def _input_operator(sim: Simulator, u: sp.Symbol):
     return ob, float(a), float(b)
 
 
-def feedforward(model, t, reference, *, input: str = "V", output: str = "x", params=None, inputs=None,
-                iterations: int = 10, tol: float = 1e-4, rtol: float = 1e-6, progress=None) -> Compensation:
+def feedforward(
+    model,
+    t,
+    reference,
+    *,
+    input: str = "V",
+    output: str = "x",
+    params=None,
+    inputs=None,
+    iterations: int = 10,
+    tol: float = 1e-4,
+    rtol: float = 1e-6,
+    progress=None,
+) -> Compensation:
     """The drive of model input ``input`` that makes output ``output`` follow ``reference``
     (sampled at times ``t``, measured from the output at rest with zero drive).
 
@@ -187,7 +207,7 @@ def feedforward(model, t, reference, *, input: str = "V", output: str = "x", par
     else:
         method = "iteration"
         gain = linearize(sim.eqs, input, output, named).dc_gain()
-        if not np.isfinite(gain) or gain == 0.0:   # e.g. a DE-based hysteresis state: probe the model
+        if not np.isfinite(gain) or gain == 0.0:  # e.g. a DE-based hysteresis state: probe the model
             probe = (ref - ref[0]) / span
             gain = float(np.ptp(respond(probe)))
             if not np.isfinite(gain) or gain == 0.0:
@@ -206,13 +226,13 @@ def feedforward(model, t, reference, *, input: str = "V", output: str = "x", par
         history.append(float(np.max(np.abs(err))))
         if history[-1] <= tol * span:
             break
-        if method == "iteration" and len(history) == 1:   # secant gain of the model over the stroke
+        if method == "iteration" and len(history) == 1:  # secant gain of the model over the stroke
             gain = float(np.ptp(x) / np.ptp(drive)) if np.ptp(drive) > 0 else gain
         w_new = w + relax * err / gain
         drive_new = drive_of(w_new)
         x_new = respond(drive_new)
         e_new = float(np.max(np.abs(x_new - ref)))
-        if e_new >= best[0]:       # no progress: smaller steps from the best drive so far
+        if e_new >= best[0]:  # no progress: smaller steps from the best drive so far
             relax *= 0.5
             if relax < 1e-3:
                 break

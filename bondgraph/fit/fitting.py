@@ -17,15 +17,16 @@ fitted model (``params``, what ``--params-file`` applies), the output ``offset``
 ``output`` it belongs to (``simulate --params-file`` adds it), the model input and the data
 columns, the settings (validation share, split, loss, starts) and the scores.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 from ..data import Dataset
+from ..model.modelfile import LoadedModel
 from ..support.errors import UsageError
 from .identify import FitResult, Identification, detect_linear
-from ..model.modelfile import LoadedModel
 
 #: the ``format`` entry of fit files
 FORMAT = "bondgraph-fit/1"
@@ -44,22 +45,47 @@ class ModelFit:
     output_unit: str = ""
     settings: dict = field(default_factory=dict)
 
-    def as_json(self, model: str = "", data: str = "", data_input: str | None = None,
-                data_output: str | None = None) -> dict:
+    def as_json(
+        self, model: str = "", data: str = "", data_input: str | None = None, data_output: str | None = None
+    ) -> dict:
         """The fit file: see the module docstring."""
         res = self.result.as_json()
-        return {"format": FORMAT, "model": model, "data": data,
-                "input": self.input, "output": self.output,
-                "data_input": data_input or self.input, "data_output": data_output or self.output,
-                "params": self.params, "fitted": list(self.result.values), "linear": self.linear,
-                "stderr": res["stderr"], "offset": res["offset"], "offset_unit": self.output_unit,
-                "rms_fit": res["rms_fit"], "rms_validation": res["rms_validation"], "nfev": res["nfev"],
-                "success": res["success"], "message": res["message"], "settings": self.settings}
+        return {
+            "format": FORMAT,
+            "model": model,
+            "data": data,
+            "input": self.input,
+            "output": self.output,
+            "data_input": data_input or self.input,
+            "data_output": data_output or self.output,
+            "params": self.params,
+            "fitted": list(self.result.values),
+            "linear": self.linear,
+            "stderr": res["stderr"],
+            "offset": res["offset"],
+            "offset_unit": self.output_unit,
+            "rms_fit": res["rms_fit"],
+            "rms_validation": res["rms_validation"],
+            "nfev": res["nfev"],
+            "success": res["success"],
+            "message": res["message"],
+            "settings": self.settings,
+        }
 
 
-def fit_parameters(loaded: LoadedModel, data: Dataset, names: Sequence[str], *, input: str | None = None,
-                   output: str | None = None, validation: float = 0.3, split: str = "blocks", loss: str = "linear",
-                   starts: int = 1, progress: Callable[[int], None] | None = None) -> ModelFit:
+def fit_parameters(
+    loaded: LoadedModel,
+    data: Dataset,
+    names: Sequence[str],
+    *,
+    input: str | None = None,
+    output: str | None = None,
+    validation: float = 0.3,
+    split: str = "blocks",
+    loss: str = "linear",
+    starts: int = 1,
+    progress: Callable[[int], None] | None = None,
+) -> ModelFit:
     """Least-squares fit of ``names`` of the loaded model file to ``data`` (model input
     ``input`` driven by the data column of that name, compared with output ``output``; both
     default to the model's first declared input and output)."""
@@ -75,8 +101,10 @@ def fit_parameters(loaded: LoadedModel, data: Dataset, names: Sequence[str], *, 
     decl = model.all_parameters()
     for n in names:
         if n in decl and decl[n].kind != "real":
-            raise UsageError(f"fit: '{n}' is {decl[n].expected()}, not a real number; only real-valued parameters "
-                             f"can be fitted (set it with --set {n}=...)")
+            raise UsageError(
+                f"fit: '{n}' is {decl[n].expected()}, not a real number; only real-valued parameters "
+                f"can be fitted (set it with --set {n}=...)"
+            )
     input = input or next(iter(model.inputs), "")
     output = output or next(iter(model.outputs), "")
     seed = getattr(loaded.module, "seed", None)

@@ -20,6 +20,7 @@ parameters not fitted, and the exactly solved linear ones and offset at their so
 assuming white measurement noise; residuals that are correlated in time (model error) make
 them too small.  ``tests/test_identify.py`` checks their coverage on a linear model.
 """
+
 from __future__ import annotations
 
 import math
@@ -31,11 +32,11 @@ import scipy.linalg
 from scipy.optimize import least_squares, lsq_linear
 
 from ..data import Dataset, uniform_step
-from ..support.errors import DataError, ParameterError, UsageError, did_you_mean
-from ..model.graph import Model
 from ..linear.lti import LTI, first_input, first_output
+from ..model.graph import Model
 from ..model.signals import PiecewiseLinear
 from ..numerics.simulate import SimulationError, Simulator
+from ..support.errors import DataError, ParameterError, UsageError, did_you_mean
 
 
 @dataclass
@@ -58,8 +59,10 @@ class Spec:
 
     def z_bounds(self) -> tuple[float, float]:
         if self.log:
-            return (math.log(self.lower) if self.lower > 0 else -np.inf,
-                    math.log(self.upper) if np.isfinite(self.upper) else np.inf)
+            return (
+                math.log(self.lower) if self.lower > 0 else -np.inf,
+                math.log(self.upper) if np.isfinite(self.upper) else np.inf,
+            )
         return self.lower / self.scale, self.upper / self.scale
 
 
@@ -89,13 +92,21 @@ class FitResult:
     prediction: np.ndarray | None = field(default=None, repr=False)
 
     def as_json(self) -> dict:
-        return {"params": self.values, "stderr": self.stderr, "offset": self.offset,
-                "rms_fit": self.rms_fit, "rms_validation": self.rms_validation,
-                "nfev": self.nfev, "success": self.success, "message": self.message}
+        return {
+            "params": self.values,
+            "stderr": self.stderr,
+            "offset": self.offset,
+            "rms_fit": self.rms_fit,
+            "rms_validation": self.rms_validation,
+            "nfev": self.nfev,
+            "success": self.success,
+            "message": self.message,
+        }
 
 
-def split_masks(t: np.ndarray, validation: float = 0.3, mode: str = "blocks", blocks: int = 30,
-                skip: float = 0.02, shift: int = 0):
+def split_masks(
+    t: np.ndarray, validation: float = 0.3, mode: str = "blocks", blocks: int = 30, skip: float = 0.02, shift: int = 0
+):
     """Boolean (fit, validation) masks over samples.
 
     ``blocks``: ``blocks`` equal time blocks, a share ``validation`` of them (spread evenly,
@@ -126,11 +137,24 @@ class Identification:
     ones); ``data_input``/``data_output`` the data columns (default: the same names);
     ``validation``, ``split``, ``blocks`` and ``shift``: the held-out part (:func:`split_masks`)."""
 
-    def __init__(self, model: Model | Simulator, data: Dataset, input: str | None = None, output: str | None = None,
-                 data_input: str | None = None, data_output: str | None = None,
-                 validation: float = 0.3, split: str = "blocks", max_fit_points: int = 20000,
-                 rtol: float = 1e-6, method: str = "auto", lti: LTI | None = None, cut: float | None = None,
-                 blocks: int = 30, shift: int = 0):
+    def __init__(
+        self,
+        model: Model | Simulator,
+        data: Dataset,
+        input: str | None = None,
+        output: str | None = None,
+        data_input: str | None = None,
+        data_output: str | None = None,
+        validation: float = 0.3,
+        split: str = "blocks",
+        max_fit_points: int = 20000,
+        rtol: float = 1e-6,
+        method: str = "auto",
+        lti: LTI | None = None,
+        cut: float | None = None,
+        blocks: int = 30,
+        shift: int = 0,
+    ):
         self.sim = model if isinstance(model, Simulator) else Simulator(model)
         input = input if input is not None else first_input(self.sim.eqs)
         output = output if output is not None else first_output(self.sim.eqs)
@@ -165,16 +189,31 @@ class Identification:
 
     def like(self, model: Model | Simulator, **kw) -> "Identification":
         """The same data, input/output mapping and split for another (e.g. extended) model."""
-        args = dict(input=self.input, output=self.output, data_input=self.data_input,
-                    data_output=self.data_output, validation=self.validation, split=self.split_mode, blocks=self.blocks,
-                    shift=self.shift,
-                    max_fit_points=self.max_fit_points, rtol=self.rtol, method=self.method, cut=self.cut)
+        args = dict(
+            input=self.input,
+            output=self.output,
+            data_input=self.data_input,
+            data_output=self.data_output,
+            validation=self.validation,
+            split=self.split_mode,
+            blocks=self.blocks,
+            shift=self.shift,
+            max_fit_points=self.max_fit_points,
+            rtol=self.rtol,
+            method=self.method,
+            cut=self.cut,
+        )
         args.update(kw)
         return Identification(model, self.data, **args)
 
     # ---- simulation and scores ---------------------------------------------------------------
-    def predict(self, values: Mapping[str, float] | None = None, inputs=None,
-                drive: np.ndarray | None = None, deadline: float | None = None) -> np.ndarray:
+    def predict(
+        self,
+        values: Mapping[str, float] | None = None,
+        inputs=None,
+        drive: np.ndarray | None = None,
+        deadline: float | None = None,
+    ) -> np.ndarray:
         """Model output at every data time, without offset (exact LTI recursion when the model
         is linear and the data uniformly sampled, with the modes faster than ``cut``
         residualised, from rest; else the compiled integrator).  ``drive``: other input samples
@@ -186,8 +225,14 @@ class Identification:
             ss = self.lti.state_space(th, self.cut)
             u = self.u if drive is None else np.asarray(drive, float)
             return ss.response(self.dt, u, None if ss.fast else self.sim.initial_state(th))[:, 0]
-        res = self.sim.run(self.t, {self.input: self.signal, **(inputs or {})}, params=values,
-                           rtol=self.rtol, method=self.method, deadline=deadline)
+        res = self.sim.run(
+            self.t,
+            {self.input: self.signal, **(inputs or {})},
+            params=values,
+            rtol=self.rtol,
+            method=self.method,
+            deadline=deadline,
+        )
         return res.outputs[self.output]
 
     def offset(self, pred: np.ndarray) -> float:
@@ -220,9 +265,18 @@ class Identification:
             out.append(default_spec(n, self.current(n), decl[n].bounds, linear=n in linear))
         return out
 
-    def fit(self, specs: Sequence[Spec], fixed: Mapping[str, float] | None = None, loss: str = "linear",
-            starts: int = 1, max_nfev: int = 60, rounds: int = 3, progress: Callable | None = None,
-            seed: int = 0, stderr: bool = True) -> FitResult:
+    def fit(
+        self,
+        specs: Sequence[Spec],
+        fixed: Mapping[str, float] | None = None,
+        loss: str = "linear",
+        starts: int = 1,
+        max_nfev: int = 60,
+        rounds: int = 3,
+        progress: Callable | None = None,
+        seed: int = 0,
+        stderr: bool = True,
+    ) -> FitResult:
         """Fit ``specs`` (others at their model values, or ``fixed``); see the module docstring."""
         fixed = dict(fixed or {})
         lin = [s for s in specs if s.linear]
@@ -270,6 +324,7 @@ class Identification:
             if lin:
                 w = self._solve_linear(non, z, lin, fixed)
             if non:
+
                 def resid(zz):
                     try:
                         pred = self.predict(self._values(non, zz, lin, w, fixed))
@@ -280,9 +335,17 @@ class Identification:
                     if progress:
                         progress(self.nfev - n0)
                     return r / scale_y
+
                 lb, ub = np.array([s.z_bounds() for s in non]).T
-                sol = least_squares(resid, np.clip(z, lb, ub), bounds=(lb, ub), loss=loss,
-                                    max_nfev=max_nfev, x_scale=1.0, diff_step=1e-3)
+                sol = least_squares(
+                    resid,
+                    np.clip(z, lb, ub),
+                    bounds=(lb, ub),
+                    loss=loss,
+                    max_nfev=max_nfev,
+                    x_scale=1.0,
+                    diff_step=1e-3,
+                )
                 z, message, success = sol.x, sol.message, bool(sol.success)
         vals = self._values(non, z, lin, w, fixed)
         pred = self.predict(vals)
@@ -306,7 +369,7 @@ class Identification:
         J = J - J.mean(axis=0)
         m, n = J.shape
         dof = max(m - n - 1, 1)
-        s2 = rms ** 2 * m / dof
+        s2 = rms**2 * m / dof
         try:
             cov = s2 * np.linalg.pinv(J.T @ J)
         except np.linalg.LinAlgError:
@@ -333,7 +396,7 @@ def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
         return out
     Q, R, piv = scipy.linalg.qr(A[:, live] / norms[live], mode="economic", pivoting=True)
     d = np.abs(np.diag(R))
-    r = int(np.argmin(d > 1e-10 * d[0])) if np.any(d <= 1e-10 * d[0]) else d.size   # the told-apart columns lead
+    r = int(np.argmin(d > 1e-10 * d[0])) if np.any(d <= 1e-10 * d[0]) else d.size  # the told-apart columns lead
     cols = live[piv[:r]]
     R, qb = R[:r, :r], Q[:, :r].T @ b
     lower = np.asarray(lower, float)[cols] * norms[cols]
@@ -351,8 +414,10 @@ def check_varies(u: np.ndarray, name: str, path: str | None = None) -> None:
     scale = max(float(np.max(np.abs(u))), 1e-300)
     if float(np.ptp(u)) <= 1e-9 * scale:
         where = f"{path}: " if path else ""
-        raise DataError(f"{where}input column '{name}' is constant ({u[0]:g}): nothing to identify; "
-                        f"give a record in which the drive varies")
+        raise DataError(
+            f"{where}input column '{name}' is constant ({u[0]:g}): nothing to identify; "
+            f"give a record in which the drive varies"
+        )
 
 
 def detect_linear(ident: Identification, names: Sequence[str], fixed: Mapping | None = None) -> list[str]:

@@ -4,6 +4,7 @@ The Jacobians come from :meth:`Equations.jacobian` (forward differentiation of t
 straight-line program), symbolic in the parameters; numbers are substituted at the end.  Memory operators are replaced by their small-signal gain (slope from the virgin
 state), input derivatives are held at zero.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -12,8 +13,8 @@ import numpy as np
 import scipy.linalg as sla
 import sympy as sp
 
-from ..numerics.checks import check_linear
 from ..equations.system import Equations
+from ..numerics.checks import check_linear
 from ..support.errors import UsageError, did_you_mean
 
 
@@ -91,37 +92,55 @@ class LinearModel:
             import control
         except ImportError:
             raise UsageError("python-control is not installed: pip install 'bondgraph[control]'") from None
-        return control.ss(self.A, self.B, self.C, self.D, inputs=[self.input], outputs=[self.output],
-                          states=list(self.states), **({"name": name} if name else {}))
+        return control.ss(
+            self.A,
+            self.B,
+            self.C,
+            self.D,
+            inputs=[self.input],
+            outputs=[self.output],
+            states=list(self.states),
+            **({"name": name} if name else {}),
+        )
 
     def python_control_script(self, name: str = "model", comment: str = "") -> str:
         """Python source that builds this model as ``control.StateSpace`` named ``model``
         (numbers written exactly), e.g. to save and import from a control-design script."""
+
         def arr(M):
             return "np.array(" + repr(np.asarray(M, float).tolist()) + ")"
 
-        lines = [f"# {comment}" if comment else "# linearised by bondgraph", "import control",
-                 "import numpy as np", "",
-                 f"A = {arr(self.A) if self.A.size else 'np.zeros((0, 0))'}",
-                 f"B = {arr(self.B) if self.B.size else 'np.zeros((0, 1))'}",
-                 f"C = {arr(self.C) if self.C.size else 'np.zeros((1, 0))'}",
-                 f"D = {arr(self.D)}",
-                 f"model = control.ss(A, B, C, D, inputs={[self.input]!r}, outputs={[self.output]!r},",
-                 f"                   states={list(self.states)!r}, name={name!r})", ""]
+        lines = [
+            f"# {comment}" if comment else "# linearised by bondgraph",
+            "import control",
+            "import numpy as np",
+            "",
+            f"A = {arr(self.A) if self.A.size else 'np.zeros((0, 0))'}",
+            f"B = {arr(self.B) if self.B.size else 'np.zeros((0, 1))'}",
+            f"C = {arr(self.C) if self.C.size else 'np.zeros((1, 0))'}",
+            f"D = {arr(self.D)}",
+            f"model = control.ss(A, B, C, D, inputs={[self.input]!r}, outputs={[self.output]!r},",
+            f"                   states={list(self.states)!r}, name={name!r})",
+            "",
+        ]
         return "\n".join(lines)
 
     def summary(self) -> dict:
         """The JSON object of ``bondgraph linearize --json``."""
         z = self.zeros
         return {
-            "input": self.input, "output": self.output, "states": self.states,
+            "input": self.input,
+            "output": self.output,
+            "states": self.states,
             "natural_frequencies_rad_s": [float(w) for w in self.natural_frequencies],
             "damping_ratios": [float(d) for d in self.damping_ratios()],
             "poles": [[float(p.real), float(p.imag)] for p in self.poles],
             "zeros": [[float(p.real), float(p.imag)] for p in z],
             "rhp_zeros": int(np.sum(z.real > 1e-9 * max(1.0, float(np.abs(z).max(initial=0.0))))),
             "dc_gain": self.dc_gain(),
-            "A": self.A.tolist(), "B": self.B.ravel().tolist(), "C": self.C.ravel().tolist(),
+            "A": self.A.tolist(),
+            "B": self.B.ravel().tolist(),
+            "C": self.C.ravel().tolist(),
             "D": float(self.D[0, 0]),
         }
 
@@ -144,8 +163,14 @@ def symbolic_matrices(eqs: Equations, input: str, output: str, op_gains: dict | 
     return A, B, C, D
 
 
-def linearize(eqs: Equations, input: str | None = None, output: str | None = None, params: dict | None = None,
-              x_op: dict | None = None, u_op: dict | None = None) -> LinearModel:
+def linearize(
+    eqs: Equations,
+    input: str | None = None,
+    output: str | None = None,
+    params: dict | None = None,
+    x_op: dict | None = None,
+    u_op: dict | None = None,
+) -> LinearModel:
     """Linearise the response of ``output`` to ``input`` (default: the model's first declared
     input and output) around the initial state (or ``x_op``) with inputs at zero (or ``u_op``)."""
     input = input if input is not None else next(iter(eqs.model.inputs), "")

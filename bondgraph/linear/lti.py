@@ -21,6 +21,7 @@ approximation of the fast subsystem, which is what data sampled far below those 
 see of them.  With every mode fast the model reduces to its static gain and the rate term.
 The input's rate at the samples is their central difference (one-sided at the ends).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -116,8 +117,9 @@ class StateSpace:
         H = frequency_response(self.A, self.B, self.C, self.D, omega)
         return H + 1j * np.atleast_1d(np.asarray(omega, float)) * self.D1 if self.D1 else H
 
-    def response(self, dt: float, U: np.ndarray, x0: np.ndarray | None = None,
-                 rows: np.ndarray | None = None) -> np.ndarray:
+    def response(
+        self, dt: float, U: np.ndarray, x0: np.ndarray | None = None, rows: np.ndarray | None = None
+    ) -> np.ndarray:
         """Output for each column of ``U`` (inputs sampled every ``dt`` s, linear in between),
         from the state ``x0`` (default rest); at the sample indices ``rows`` (ascending) only,
         if given."""
@@ -163,9 +165,11 @@ class LTI:
         others = [s for s in eqs.inputs if s != u]
         # affine in states and every input (so the Jacobians say everything): the slopes in x
         # and u move with nothing; the slopes in the other inputs move with no state or input
-        self.exact = not eqs.operators and all(
-            not (e.free_symbols & moving) for M in mats for e in M) and all(
-            not (e.free_symbols & (set(xs) | set(eqs.inputs))) for e in eqs.jacobian(rates + y, others))
+        self.exact = (
+            not eqs.operators
+            and all(not (e.free_symbols & moving) for M in mats for e in M)
+            and all(not (e.free_symbols & (set(xs) | set(eqs.inputs))) for e in eqs.jacobian(rates + y, others))
+        )
         zero = {s: 0 for s in list(moving - set(xs) - {u}) + others}
         mats = [M.xreplace(zero) for M in mats]
         used = set().union(*(e.free_symbols for M in mats for e in M))
@@ -175,8 +179,10 @@ class LTI:
         self.n = len(xs)
 
     def matrices(self, th: np.ndarray):
-        A, B, C, D = (np.array(M, dtype=float).reshape(shape) for M, shape in
-                      zip(self._fn(np.asarray(th, float)), [(self.n, self.n), (self.n, 1), (1, self.n), (1, 1)]))
+        A, B, C, D = (
+            np.array(M, dtype=float).reshape(shape)
+            for M, shape in zip(self._fn(np.asarray(th, float)), [(self.n, self.n), (self.n, 1), (1, self.n), (1, 1)])
+        )
         return A, B, C, D
 
     def state_space(self, th: np.ndarray, cut: float | None = None) -> StateSpace:
@@ -219,7 +225,7 @@ def frequency_response(A, B, C, D, omega) -> np.ndarray:
     n = A.shape[0]
     if n == 0:
         return np.full(omega.size, complex(D[0, 0]))
-    Ab, (scale, _) = matrix_balance(A, permute=False, separate=True)   # states in comparable units
+    Ab, (scale, _) = matrix_balance(A, permute=False, separate=True)  # states in comparable units
     lam, V = np.linalg.eig(Ab)
     if np.all(np.isfinite(lam)) and np.linalg.cond(V) <= MODAL_COND:
         r = ((C[0] * scale) @ V) * np.linalg.solve(V, (B[:, 0] / scale).astype(complex))
@@ -243,15 +249,27 @@ def residualise(A, B, C, D, cut: float) -> StateSpace:
     Bt, Ct = Z.T @ B, C @ Z
     if k == 0:
         static = np.linalg.solve(T, Bt)
-        return StateSpace(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
-                          D - Ct @ static, fast=n, D1=float(-(Ct @ np.linalg.solve(T, static))[0, 0]))
+        return StateSpace(
+            np.zeros((0, 0)),
+            np.zeros((0, 1)),
+            np.zeros((1, 0)),
+            D - Ct @ static,
+            fast=n,
+            D1=float(-(Ct @ np.linalg.solve(T, static))[0, 0]),
+        )
     T11, T12, T22 = T[:k, :k], T[:k, k:], T[k:, k:]
     X = solve_sylvester(T11, -T22, -T12)
     B1, B2 = Bt[:k] - X @ Bt[k:], Bt[k:]
     C1, C2 = Ct[:, :k], Ct[:, :k] @ X + Ct[:, k:]
     static = np.linalg.solve(T22, B2)
-    return StateSpace(np.ascontiguousarray(T11), np.ascontiguousarray(B1), np.ascontiguousarray(C1),
-                      D - C2 @ static, fast=n - k, D1=float(-(C2 @ np.linalg.solve(T22, static))[0, 0]))
+    return StateSpace(
+        np.ascontiguousarray(T11),
+        np.ascontiguousarray(B1),
+        np.ascontiguousarray(C1),
+        D - C2 @ static,
+        fast=n - k,
+        D1=float(-(C2 @ np.linalg.solve(T22, static))[0, 0]),
+    )
 
 
 def foh(A: np.ndarray, B: np.ndarray, dt: float):
@@ -262,8 +280,8 @@ def foh(A: np.ndarray, B: np.ndarray, dt: float):
     n, m = B.shape
     em = np.zeros((n + 2 * m, n + 2 * m))
     em[:n, :n] = A * dt
-    em[:n, n:n + m] = B * dt
-    em[n:n + m, n + m:] = np.eye(m)
+    em[:n, n : n + m] = B * dt
+    em[n : n + m, n + m :] = np.eye(m)
     ms = expm(em)
-    Phi, G, G1 = ms[:n, :n], ms[:n, n:n + m], ms[:n, n + m:]
+    Phi, G, G1 = ms[:n, :n], ms[:n, n : n + m], ms[:n, n + m :]
     return np.ascontiguousarray(Phi), np.ascontiguousarray(G - G1 + Phi @ G1), G1

@@ -1,6 +1,7 @@
 """A model file's default simulation (``EXPERIMENT``): end time, output step, inputs, method and
 tolerance. Kept apart from :mod:`bondgraph.numerics.simulate` so that loading a model file does not
 import the compiled integrator."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field

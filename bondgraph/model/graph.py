@@ -10,6 +10,7 @@ flows from a to b).  Endpoints are written ``"element"`` for one-port elements a
 junctions, ``"element.port"`` for multiport elements, ``"component.port"`` for the
 exposed ports of components.
 """
+
 from __future__ import annotations
 
 import copy
@@ -18,8 +19,8 @@ from typing import Any
 
 import sympy as sp
 
-from .elements import Element, Junction, sympify
 from ..support.errors import ModelError, did_you_mean
+from .elements import Element, Junction, sympify
 from .memory import MemoryOperator
 from .parameters import Parameter
 
@@ -138,8 +139,10 @@ class Component:
             elem = self.elements[end[0]]
             if not isinstance(elem, Junction) and any(end in (bd.tail, bd.head) for bd in self.bonds):
                 if len(elem.ports) == 1:
-                    raise ModelError(f"{self.name}: one-port {elem.kind} '{elem.name}' already has a bond; "
-                                     f"put a junction between it and its neighbours")
+                    raise ModelError(
+                        f"{self.name}: one-port {elem.kind} '{elem.name}' already has a bond; "
+                        f"put a junction between it and its neighbours"
+                    )
                 raise ModelError(f"{self.name}: port '{end[1]}' of '{elem.name}' already has a bond")
         bd = Bond(index, tail, head)
         self.bonds.append(bd)
@@ -149,8 +152,12 @@ class Component:
         """Remove the bond a → b (to splice elements into an existing graph)."""
         ta, hb = self.resolve(a), self.resolve(b)
         for bd in self.bonds:
-            if bd.tail[0] == ta[0] and bd.head[0] == hb[0] and (ta[1] is None or bd.tail[1] == ta[1]) \
-                    and (hb[1] is None or bd.head[1] == hb[1]):
+            if (
+                bd.tail[0] == ta[0]
+                and bd.head[0] == hb[0]
+                and (ta[1] is None or bd.tail[1] == ta[1])
+                and (hb[1] is None or bd.head[1] == hb[1])
+            ):
                 self.bonds.remove(bd)
                 return
         raise ModelError(f"{self.name}: there is no bond {a} → {b}")
@@ -180,8 +187,10 @@ class Component:
                 return endpoint, None
             if len(elem.ports) == 1:
                 return endpoint, elem.ports[0]
-            raise ModelError(f"{self.name}: '{endpoint}' is a {elem.kind} with ports "
-                             f"{', '.join(elem.ports)}; bond to '{endpoint}.{elem.ports[0]}' etc.")
+            raise ModelError(
+                f"{self.name}: '{endpoint}' is a {elem.kind} with ports "
+                f"{', '.join(elem.ports)}; bond to '{endpoint}.{elem.ports[0]}' etc."
+            )
         head, _, port = endpoint.rpartition(".")
         if head in self.elements and port in self.elements[head].ports:
             return head, port
@@ -197,8 +206,9 @@ class Component:
         return names
 
     # ---- parameters, blocks, port quantities ----------------------------------------------
-    def parameter(self, name: str, value: float, unit: str = "", doc: str = "",
-                  bounds: tuple[float, float] | None = None) -> sp.Symbol:
+    def parameter(
+        self, name: str, value: float, unit: str = "", doc: str = "", bounds: tuple[float, float] | None = None
+    ) -> sp.Symbol:
         """Declare a real parameter owned by this component; returns its symbol."""
         decl = Parameter(name, float(value), unit, doc, bounds=bounds)
         if name in self.parameters:
@@ -211,8 +221,9 @@ class Component:
         if name in self.internal_states:
             raise ModelError(f"{self.name}: internal state '{name}' declared twice")
         sym = sp.Symbol(name, real=True)
-        self.internal_states[name] = InternalState(sym, sympify(rate, f"state '{name}' rate"),
-                                                   sympify(x0, f"state '{name}' x0"), unit, doc)
+        self.internal_states[name] = InternalState(
+            sym, sympify(rate, f"state '{name}' rate"), sympify(x0, f"state '{name}' x0"), unit, doc
+        )
         return sym
 
     def set_rate(self, name: str, rate):
@@ -228,8 +239,9 @@ class Component:
             raise ModelError(f"{self.name}: operator '{name}' must be a MemoryOperator, got {op!r}")
         op.kernels()  # compiled and checked now: a broken kernel is an error at the line that applies it
         values = op.parameter_values()
-        syms = [self.parameter(f"{name}.{pn}", v, doc=f"{op.kind} parameter")
-                for pn, v in zip(op.parameter_names, values)]
+        syms = [
+            self.parameter(f"{name}.{pn}", v, doc=f"{op.kind} parameter") for pn, v in zip(op.parameter_names, values)
+        ]
         sym = sp.Symbol(name, real=True)
         self.operators[name] = OperatorBlock(sym, op, sympify(input, f"operator '{name}' input"), syms)
         return sym
@@ -275,10 +287,12 @@ class Component:
             self.parameters[prefix + name] = (new, val)
         for name, st in comp.internal_states.items():
             self.internal_states[prefix + name] = InternalState(
-                mapping[st.symbol], st.rate.xreplace(mapping), st.x0.xreplace(mapping), st.unit, st.doc)
+                mapping[st.symbol], st.rate.xreplace(mapping), st.x0.xreplace(mapping), st.unit, st.doc
+            )
         for name, ob in comp.operators.items():
             self.operators[prefix + name] = OperatorBlock(
-                mapping[ob.symbol], ob.operator, ob.input.xreplace(mapping), [mapping[s] for s in ob.params])
+                mapping[ob.symbol], ob.operator, ob.input.xreplace(mapping), [mapping[s] for s in ob.params]
+            )
         self.components[comp.name] = comp.doc
         for sub, doc in comp.components.items():
             self.components[prefix + sub] = doc
@@ -359,14 +373,17 @@ class Component:
         for name, elem in self.elements.items():
             if isinstance(elem, Junction):
                 if count[name] < 2:
-                    raise ModelError(f"{self.name}: junction '{name}' has {count[name]} bond(s); "
-                                     f"a junction needs at least two (remove it or bond more elements to it)")
+                    raise ModelError(
+                        f"{self.name}: junction '{name}' has {count[name]} bond(s); "
+                        f"a junction needs at least two (remove it or bond more elements to it)"
+                    )
             else:
                 missing = [p for p in elem.ports if (name, p) not in ports_used]
                 if missing:
                     which = f"port(s) {', '.join(missing)} of " if len(elem.ports) > 1 else ""
-                    raise ModelError(f"{self.name}: {which}{elem.kind} '{name}' is not connected; "
-                                     f"bond it to a junction or remove it")
+                    raise ModelError(
+                        f"{self.name}: {which}{elem.kind} '{name}' is not connected; bond it to a junction or remove it"
+                    )
 
 
 class Model(Component):

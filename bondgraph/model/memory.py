@@ -28,6 +28,7 @@ with their helpers, when numba refuses them); ``output = staticmethod(f)`` and
 Subclass :class:`MemoryOperator` to add an operator; see ``library/hysteresis/`` for the
 play/stop (Prandtl–Ishlinskii) and Maxwell-slip banks.
 """
+
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
@@ -90,16 +91,18 @@ class MemoryOperator(ABC):
     def kernels(self) -> "OperatorKernels":
         """The compiled ``output`` and ``commit`` (compiled once per class and process)."""
         from .operator_kernels import compile_kernels  # numba is imported when first needed
+
         return compile_kernels(type(self))
 
     def run(self, v: np.ndarray, prm: np.ndarray | None = None) -> np.ndarray:
         """Apply the operator to a sampled input sequence, from rest at ``v[0]``, with the
         compiled kernels the integrator uses (output, then commit, at every sample)."""
         prm = np.array(self.parameter_values() if prm is None else prm, dtype=np.float64)  # private,
-        v = np.array(v, dtype=np.float64)                                                 # writable copies
+        v = np.array(v, dtype=np.float64)  # writable copies
         mem = np.array(self.initial_memory(float(v[0]), prm), dtype=np.float64)
         k = self.kernels()
         y = np.empty_like(v)
         from .operator_kernels import run_kernels
+
         run_kernels(k.output, k.commit, v, mem, prm, y)
         return y

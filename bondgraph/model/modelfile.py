@@ -12,6 +12,7 @@ A model file defines::
 :func:`load_model` runs the file, applies ``--set`` overrides (unknown names are errors
 listing the known ones) and returns the built model with its parameter values attached.
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -21,9 +22,9 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..support.errors import BondGraphError, ModelError, ParameterError, UsageError, did_you_mean
+from .experiment import Experiment
 from .graph import Model
 from .parameters import Parameter, ParameterValues
-from .experiment import Experiment
 
 
 @dataclass
@@ -59,22 +60,27 @@ def read_model_module(path: str | Path):
     except BondGraphError as exc:
         raise type(exc)(f"{path}: {exc}") from None
     except SystemExit as exc:
-        raise ModelError(f"{path}:{_user_line(exc, p)}: the model file called sys.exit({exc.code!r}); a model file "
-                         f"must define PARAMETERS and build(p), not end the program") from None
+        raise ModelError(
+            f"{path}:{_user_line(exc, p)}: the model file called sys.exit({exc.code!r}); a model file "
+            f"must define PARAMETERS and build(p), not end the program"
+        ) from None
     except Exception as exc:  # noqa: BLE001 - any failure of user code is reported as an input error
         raise ModelError(f"{path}:{_user_line(exc, p)}: {type(exc).__name__}: {exc}") from None
     for attr in ("PARAMETERS", "build"):
         if not hasattr(module, attr):
-            raise ModelError(f"model file {path}: defines no {attr} (a model file needs PARAMETERS "
-                             f"and build(p); see README)")
+            raise ModelError(
+                f"model file {path}: defines no {attr} (a model file needs PARAMETERS and build(p); see README)"
+            )
     declared = list(module.PARAMETERS)
     if not all(isinstance(d, Parameter) for d in declared):
         raise ModelError(f"model file {path}: PARAMETERS must be a list of bondgraph.Parameter")
     names = [d.name for d in declared]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
-        raise ModelError(f"model file {path}: parameter {', '.join(repr(n) for n in twice)} declared twice in "
-                         f"PARAMETERS; declare each name once")
+        raise ModelError(
+            f"model file {path}: parameter {', '.join(repr(n) for n in twice)} declared twice in "
+            f"PARAMETERS; declare each name once"
+        )
     return module, declared
 
 
@@ -99,8 +105,9 @@ def load_model(path: str | Path, overrides: Mapping[str, Any] | None = None) -> 
     except BondGraphError as exc:
         raise type(exc)(f"{path}: {exc}") from None
     except SystemExit as exc:
-        raise ModelError(f"{path}:{_user_line(exc, p)}: build(p) called sys.exit({exc.code!r}); it must return "
-                         f"a bondgraph.Model") from None
+        raise ModelError(
+            f"{path}:{_user_line(exc, p)}: build(p) called sys.exit({exc.code!r}); it must return a bondgraph.Model"
+        ) from None
     except Exception as exc:  # noqa: BLE001
         raise ModelError(f"{path}:{_user_line(exc, p)}: {type(exc).__name__} while building: {exc}") from None
     if not isinstance(model, Model):
@@ -121,4 +128,3 @@ def load_model(path: str | Path, overrides: Mapping[str, Any] | None = None) -> 
     if not isinstance(experiment, Experiment):
         raise ModelError(f"model file {path}: EXPERIMENT must be a bondgraph.Experiment")
     return LoadedModel(p, model, values, experiment, declared, module)
-

@@ -1,6 +1,7 @@
 """Compilation of memory-operator kernels with numba (nopython), their checks and fingerprints:
 the part of the operator contract (:mod:`bondgraph.model.memory`) that needs numba, imported only when
 an operator is applied or run, so that loading a model without operators stays fast."""
+
 from __future__ import annotations
 
 import hashlib
@@ -30,8 +31,17 @@ class OperatorKernels(NamedTuple):
     fingerprint: str
 
 
-@njit(nbt.void(nbt.FunctionType(OUTPUT_TYPE), nbt.FunctionType(COMMIT_TYPE), nbt.float64[::1],
-               nbt.float64[::1], nbt.float64[::1], nbt.float64[::1]), cache=True)
+@njit(
+    nbt.void(
+        nbt.FunctionType(OUTPUT_TYPE),
+        nbt.FunctionType(COMMIT_TYPE),
+        nbt.float64[::1],
+        nbt.float64[::1],
+        nbt.float64[::1],
+        nbt.float64[::1],
+    ),
+    cache=True,
+)
 def run_kernels(output, commit, v, mem, prm, y):
     """y[k] = output(v[k]), then commit(v[k]), for every sample (what the integrator does per accepted step)."""
     for k in range(v.shape[0]):
@@ -46,8 +56,9 @@ def compile_kernels(cls: type) -> OperatorKernels:
     """Compile (once per process) and check the kernels of operator class ``cls``."""
     if cls not in _COMPILED:
         fns = {which: _static_function(cls, which) for which in ("output", "commit")}
-        compiled = {which: _compile(cls, which, fn, sig)
-                    for (which, fn), sig in zip(fns.items(), (OUTPUT_TYPE, COMMIT_TYPE))}
+        compiled = {
+            which: _compile(cls, which, fn, sig) for (which, fn), sig in zip(fns.items(), (OUTPUT_TYPE, COMMIT_TYPE))
+        }
         digest = hashlib.sha256()
         for fn in fns.values():
             digest.update(_fingerprint(fn, set()).encode())
@@ -68,13 +79,16 @@ def _static_function(cls: type, which: str):
     elif isinstance(fn, types.FunctionType) and isinstance(raw, staticmethod):
         params = inspect.signature(fn).parameters
     else:
-        raise ModelError(f"{_name(cls)}: {which} must be a static function {which}(v, mem, prm) "
-                         f"(decorate it with @staticmethod, or assign staticmethod(f) or numba.njit(f)), "
-                         f"got {raw!r}")
+        raise ModelError(
+            f"{_name(cls)}: {which} must be a static function {which}(v, mem, prm) "
+            f"(decorate it with @staticmethod, or assign staticmethod(f) or numba.njit(f)), "
+            f"got {raw!r}"
+        )
     positional = [p for p in params.values() if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
     if len(positional) != 3 or len(params) != 3:
-        raise ModelError(f"{_name(cls)}: {which} must take exactly three arguments (v, mem, prm), "
-                         f"it takes ({', '.join(params)})")
+        raise ModelError(
+            f"{_name(cls)}: {which} must take exactly three arguments (v, mem, prm), it takes ({', '.join(params)})"
+        )
     return fn
 
 
@@ -90,15 +104,20 @@ def _compile(cls: type, which: str, fn, sig):
         cache = len({f.__code__.co_filename for f in _plain_functions(fn, {})}) == 1
         return _jit(fn, sig, {}, cache)
     except NumbaError as exc:
-        raise ModelError(f"{_name(cls)}: {which}(v, mem, prm) cannot be compiled by numba in nopython mode "
-                         f"({_numba_reason(exc)}); use numbers, numpy arrays, math and numpy functions, and "
-                         f"functions that obey the same rules") from None
+        raise ModelError(
+            f"{_name(cls)}: {which}(v, mem, prm) cannot be compiled by numba in nopython mode "
+            f"({_numba_reason(exc)}); use numbers, numpy arrays, math and numpy functions, and "
+            f"functions that obey the same rules"
+        ) from None
 
 
 def _helpers(fn) -> dict:
     """The plain Python functions ``fn`` reads as globals, by name."""
-    return {name: fn.__globals__[name] for name in _global_names(fn.__code__)
-            if isinstance(fn.__globals__.get(name), types.FunctionType)}
+    return {
+        name: fn.__globals__[name]
+        for name in _global_names(fn.__code__)
+        if isinstance(fn.__globals__.get(name), types.FunctionType)
+    }
 
 
 def _plain_functions(fn, seen: dict) -> dict:

@@ -7,11 +7,12 @@ booleans and choices are *structural*: the model sees the value and may build a 
 graph from it.  A real parameter declared ``symbolic=False`` is passed as a number (for
 quantities the model must compute with numerically, e.g. beam geometry for mode shapes).
 """
+
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
@@ -90,7 +91,8 @@ class Parameter:
             raise  # out of bounds, not one of the choices: already says so
         except (ValueError, OverflowError):
             raise ParameterError(
-                f"bad value {text!r} for parameter '{self.name}': expected {self.expected()}") from None
+                f"bad value {text!r} for parameter '{self.name}': expected {self.expected()}"
+            ) from None
 
     def coerce(self, value: Any) -> Any:
         """Check a Python value against kind, choices and bounds; return it normalised."""
@@ -107,7 +109,8 @@ class Parameter:
             if value in self.choices:
                 return value
             raise ParameterError(
-                f"bad value {value!r} for parameter '{self.name}': expected one of {', '.join(self.choices)}")
+                f"bad value {value!r} for parameter '{self.name}': expected one of {', '.join(self.choices)}"
+            )
         else:
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 v = float(value)
@@ -124,8 +127,12 @@ class Parameter:
         return v
 
     def expected(self) -> str:
-        return {"bool": "true or false", "int": "an integer", "real": "a real number",
-                "choice": "one of " + ", ".join(self.choices or ())}[self.kind]
+        return {
+            "bool": "true or false",
+            "int": "an integer",
+            "real": "a real number",
+            "choice": "one of " + ", ".join(self.choices or ()),
+        }[self.kind]
 
 
 class ParameterValues:
@@ -186,8 +193,9 @@ def parse_assignments(items: Iterable[str]) -> dict[str, str]:
             raise ParameterError(f"bad --set {item!r}: expected NAME=VALUE, e.g. --set K=1.2e7")
         name = name.strip()
         if name in out:
-            raise ParameterError(f"--set {name} given twice ({name}={out[name]} and {name}={value.strip()}); "
-                                 f"give each parameter once")
+            raise ParameterError(
+                f"--set {name} given twice ({name}={out[name]} and {name}={value.strip()}); give each parameter once"
+            )
         out[name] = value.strip()
     return out
 
@@ -242,6 +250,7 @@ def read_fit_file(path: str | Path) -> tuple[dict[str, Any], dict[str | None, fl
         raise ParameterError(f"parameter file {path}: expected a JSON object of name: value")
     for key, value in data.items():
         if value is None or isinstance(value, (list, dict)):
-            raise ParameterError(f"parameter file {path}: value of {key!r} must be a number, true/false or "
-                                 f"text, got {json.dumps(value)}")
+            raise ParameterError(
+                f"parameter file {path}: value of {key!r} must be a number, true/false or text, got {json.dumps(value)}"
+            )
     return data, offsets

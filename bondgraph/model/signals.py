@@ -2,8 +2,8 @@
 
 Every signal is encoded as a kind code, a row of parameters and (for tables) a slice of a
 shared time/value table, so the compiled integrator evaluates all inputs and their time
-derivatives without calling back into Python.  ``value(t)`` evaluates the same code from
-Python.  Times in s, frequencies in Hz, phases in degrees; values in the input's unit.
+derivatives without calling back into Python
+(:class:`bondgraph.numerics.signal_bank.SignalBank`).  Times in s, frequencies in Hz, phases in degrees; values in the input's unit.
 
 Command-line syntax (``--input NAME=SPEC``): ``step(amplitude=1, t0=0, offset=0)``,
 ``ramp(slope=1, t0=0, offset=0)``, ``sine(amplitude=1, frequency=1, phase=0, offset=0)``,
@@ -12,6 +12,7 @@ scipy.signal.chirp), ``triangle(amplitude=1, frequency=1, phase=0, offset=0)``,
 ``pwl(0:0, 1:10, 2:0)`` (time:value pairs) and ``csv(file=data.csv, column=V)``; a plain
 number is a constant.
 """
+
 from __future__ import annotations
 
 import inspect
@@ -28,7 +29,6 @@ from ..support.errors import SignalError
 #: length of a signal's parameter row
 CONST, STEP, RAMP, SINE, CHIRP, TRIANGLE, PWL = range(7)
 NPAR = 6
-
 
 
 @dataclass(frozen=True)
@@ -62,10 +62,6 @@ class Signal:
             out = []
         return [b for b in out if t0 < b < t1]
 
-    def value(self, t) -> np.ndarray:
-        """Signal value at times ``t`` (array), evaluated by the compiled code."""
-        return SignalBank({"_": self}).sample(t)[:, 0]
-
     def __str__(self):
         return self.label
 
@@ -76,7 +72,9 @@ def Constant(value: float = 0.0) -> Signal:
 
 def Step(amplitude: float = 1.0, t0: float = 0.0, offset: float = 0.0) -> Signal:
     """offset for t < t0, offset + amplitude from t0 on."""
-    return Signal(STEP, _row(amplitude, t0, offset), label=f"step(amplitude={amplitude:g}, t0={t0:g}, offset={offset:g})")
+    return Signal(
+        STEP, _row(amplitude, t0, offset), label=f"step(amplitude={amplitude:g}, t0={t0:g}, offset={offset:g})"
+    )
 
 
 def Ramp(slope: float = 1.0, t0: float = 0.0, offset: float = 0.0) -> Signal:
@@ -86,24 +84,34 @@ def Ramp(slope: float = 1.0, t0: float = 0.0, offset: float = 0.0) -> Signal:
 
 def Sine(amplitude: float = 1.0, frequency: float = 1.0, phase: float = 0.0, offset: float = 0.0) -> Signal:
     """offset + amplitude·sin(2π·frequency·t + phase°)."""
-    return Signal(SINE, _row(amplitude, frequency, math.radians(phase), offset),
-                  label=f"sine(amplitude={amplitude:g}, frequency={frequency:g}, phase={phase:g}, offset={offset:g})")
+    return Signal(
+        SINE,
+        _row(amplitude, frequency, math.radians(phase), offset),
+        label=f"sine(amplitude={amplitude:g}, frequency={frequency:g}, phase={phase:g}, offset={offset:g})",
+    )
 
 
-def Chirp(amplitude: float = 1.0, f0: float = 1.0, f1: float = 100.0, t1: float = 1.0,
-          phase: float = 0.0, offset: float = 0.0) -> Signal:
+def Chirp(
+    amplitude: float = 1.0, f0: float = 1.0, f1: float = 100.0, t1: float = 1.0, phase: float = 0.0, offset: float = 0.0
+) -> Signal:
     """Linear sweep from f0 at t=0 to f1 at t1 (continues beyond t1, like scipy.signal.chirp)."""
     if t1 <= 0:
         raise SignalError("chirp: t1 must be positive")
-    return Signal(CHIRP, _row(amplitude, f0, f1, t1, math.radians(phase), offset),
-                  label=f"chirp(amplitude={amplitude:g}, f0={f0:g}, f1={f1:g}, t1={t1:g})")
+    return Signal(
+        CHIRP,
+        _row(amplitude, f0, f1, t1, math.radians(phase), offset),
+        label=f"chirp(amplitude={amplitude:g}, f0={f0:g}, f1={f1:g}, t1={t1:g})",
+    )
 
 
 def Triangle(amplitude: float = 1.0, frequency: float = 1.0, phase: float = 0.0, offset: float = 0.0) -> Signal:
     """Symmetric triangle between offset ± amplitude; like
     ``offset + amplitude·scipy.signal.sawtooth(2π·f·t + phase°, width=0.5)``."""
-    return Signal(TRIANGLE, _row(amplitude, frequency, math.radians(phase), offset),
-                  label=f"triangle(amplitude={amplitude:g}, frequency={frequency:g}, offset={offset:g})")
+    return Signal(
+        TRIANGLE,
+        _row(amplitude, frequency, math.radians(phase), offset),
+        label=f"triangle(amplitude={amplitude:g}, frequency={frequency:g}, offset={offset:g})",
+    )
 
 
 def PiecewiseLinear(times, values, label: str = "") -> Signal:
@@ -145,8 +153,9 @@ def parse_signal(spec: str, base_dir: str | None = None) -> Signal:
         raise SignalError(f"bad signal {spec!r}: write e.g. sine(amplitude=10, frequency=5) or a number")
     kind, body = m.group(1), m.group(2).strip()
     if kind not in _FACTORIES and kind not in ("pwl", "csv"):
-        raise SignalError(f"unknown signal kind '{kind}' in {spec!r}; "
-                          f"known: {', '.join(list(_FACTORIES) + ['pwl', 'csv'])}")
+        raise SignalError(
+            f"unknown signal kind '{kind}' in {spec!r}; known: {', '.join(list(_FACTORIES) + ['pwl', 'csv'])}"
+        )
     if kind == "pwl":
         try:
             pairs = [tuple(float(x) for x in item.split(":")) for item in body.split(",") if item.strip()]

@@ -9,6 +9,7 @@ and their Jacobian (finite differences, as the method choice does) and raises on
 values that differ from their declared defaults, the ones whose reset to the default cures
 the problem (else the one farthest from its default).
 """
+
 from __future__ import annotations
 
 import math
@@ -33,8 +34,10 @@ def check_start(sim, params: Mapping | None = None, inputs: Mapping | None = Non
     model = sim.eqs.model
     changed = _changed(model, values)
     cures = [n for n in changed if _problem(sim, {**values, n: _default(model, n)}, inputs, t0) is None]
-    raise ParameterError(f"the model's equations {problem} with {_describe(model, values, cures or changed[:1])}; "
-                         f"give {'it' if len(cures or changed[:1]) <= 1 else 'them'} a physical value")
+    raise ParameterError(
+        f"the model's equations {problem} with {_describe(model, values, cures or changed[:1])}; "
+        f"give {'it' if len(cures or changed[:1]) <= 1 else 'them'} a physical value"
+    )
 
 
 def check_linear(model, matrices, values: Mapping[str, float]) -> None:
@@ -48,8 +51,10 @@ def check_linear(model, matrices, values: Mapping[str, float]) -> None:
         problem = f"have a rate above {MAX_RATE:g} 1/s"
     if problem:
         culprits = _changed(model, values)[:1]
-        raise ParameterError(f"the linearised model's matrices {problem} with {_describe(model, values, culprits)}; "
-                             f"give it a physical value")
+        raise ParameterError(
+            f"the linearised model's matrices {problem} with {_describe(model, values, culprits)}; "
+            f"give it a physical value"
+        )
 
 
 def _problem(sim, values: Mapping[str, float], inputs, t0: float) -> str | None:

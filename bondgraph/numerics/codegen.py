@@ -11,6 +11,7 @@ The source is written to a cache directory named by its hash and compiled by num
 No sympy is evaluated when the functions run.  Programs longer than the setting
 ``codegen.tape_threshold`` run on the tape interpreter (:mod:`bondgraph.numerics.tape`) instead.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -24,8 +25,8 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from ..support import config
 from ..equations.system import Equations
+from ..support import config
 from .model_functions import ARGUMENTS, SIGNATURE, ModelFunctions
 
 _NO_AUX = np.zeros(1)
@@ -34,7 +35,8 @@ _NO_AUX = np.zeros(1)
 def cache_dir() -> Path:
     """Directory of generated model code: $BONDGRAPH_CACHE or ~/.cache/bondgraph."""
     base = os.environ.get("BONDGRAPH_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "bondgraph")
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "bondgraph"
+    )
     path = Path(base)
     path.mkdir(parents=True, exist_ok=True)
     return path
@@ -109,12 +111,13 @@ def generate_source(eqs: Equations, with_jacobian: bool = False) -> str:
     lay = layout(eqs)
     pr = _Printer(lay.names)
     op_index = {ob.symbol: k for k, ob in enumerate(eqs.operators)}
-    lines = ["import math", "import numpy as np", "from numba import njit", "",
-             f"SIG = {SIGNATURE!r}", ""]
+    lines = ["import math", "import numpy as np", "from numba import njit", "", f"SIG = {SIGNATURE!r}", ""]
     for k, ob in enumerate(eqs.operators):
         kind = type(ob.operator)
-        lines.append(f"# op{k}_output, op{k}_commit: kernels of {kind.__module__}.{kind.__qualname__} "
-                     f"(code {ob.operator.kernels().fingerprint})")
+        lines.append(
+            f"# op{k}_output, op{k}_commit: kernels of {kind.__module__}.{kind.__qualname__} "
+            f"(code {ob.operator.kernels().fingerprint})"
+        )
     signature = ", ".join(ARGUMENTS)
 
     def function(name: str, targets: list[sp.Expr], extra: list[str] | None = None) -> list[str]:
@@ -152,13 +155,13 @@ def compile_equations(eqs: Equations, with_jacobian: bool = False) -> ModelFunct
     programs (more statements than ``codegen.tape_threshold``) the tape interpreter."""
     if len(eqs.program) > config.get("codegen.tape_threshold") and not with_jacobian:
         from . import tape
+
         try:
             program = tape.build_tape(eqs)
         except tape.TapeUnsupported:
             pass
         else:
-            return ModelFunctions(tape.rhs, tape.output, tape.nothing, tape.nothing, layout(eqs), program,
-                                  route="tape")
+            return ModelFunctions(tape.rhs, tape.output, tape.nothing, tape.nothing, layout(eqs), program, route="tape")
     src = generate_source(eqs, with_jacobian)
     key = hashlib.sha256(src.encode()).hexdigest()[:20]
     path = cache_dir() / f"bg_{key}.py"
@@ -181,8 +184,17 @@ def compile_equations(eqs: Equations, with_jacobian: bool = False) -> ModelFunct
         except BaseException:
             del sys.modules[modname]
             raise
-    return ModelFunctions(module.rhs, module.output, module.opin, module.commit, layout(eqs), _NO_AUX,
-                          getattr(module, "jac", None), str(path), "numba")
+    return ModelFunctions(
+        module.rhs,
+        module.output,
+        module.opin,
+        module.commit,
+        layout(eqs),
+        _NO_AUX,
+        getattr(module, "jac", None),
+        str(path),
+        "numba",
+    )
 
 
 def parameter_vector(eqs: Equations) -> np.ndarray:

@@ -16,6 +16,7 @@ Error weight per state: ``atol_i + rtol·max(|x_i|, peak_i)``, where ``peak_i`` 
 |x_i| seen so far (a tolerance relative to the signal's range, suited to SI magnitudes of
 1e-9..1e3 in the same model).
 """
+
 from __future__ import annotations
 
 import math
@@ -25,10 +26,8 @@ import numpy as np
 from numba import njit, types
 from scipy.integrate import RK45
 
-from .model_functions import FUNCTION_TYPE
-
-
 from ..model.signals import CHIRP, CONST, PWL, RAMP, SINE, STEP  # signal kinds (the last, TRIANGLE, is the else branch)
+from .model_functions import FUNCTION_TYPE
 
 
 @njit(cache=True, inline="always")
@@ -165,9 +164,9 @@ def _dense(x, Q, h, theta, out):
 class Flags(NamedTuple):
     """What the model's functions read, so the integrator evaluates inputs only when needed."""
 
-    input_rates: bool          # the laws use input rates (evaluate du at every stage)
-    outputs_use_inputs: bool   # the outputs read inputs or input rates
-    opins_use_inputs: bool     # the operator inputs read inputs or input rates
+    input_rates: bool  # the laws use input rates (evaluate du at every stage)
+    outputs_use_inputs: bool  # the outputs read inputs or input rates
+    opins_use_inputs: bool  # the operator inputs read inputs or input rates
 
 
 class Stats(NamedTuple):
@@ -186,11 +185,62 @@ _STATS = types.NamedUniTuple(types.int64, len(Stats._fields), Stats)
 _FN4 = (FUNCTION_TYPE,) * 4
 
 
-@njit(_STATS(*_FN4, _f1, _f1, _f1, _f1, types.int64, _i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1,
-             types.float64, _f1, types.float64, types.float64, types.int64, _f2, _f2, _FLAGS),
-      cache=True)
-def dopri5(rhs, output, opin, commit, x0, th, mem, aux, n_ops, skind, spar, soff, slen, stt, stv, scur, t_out,
-           t_break, rtol, atol, h_init, h_max, max_steps, X, Y, flags):
+@njit(
+    _STATS(
+        *_FN4,
+        _f1,
+        _f1,
+        _f1,
+        _f1,
+        types.int64,
+        _i1,
+        _f2,
+        _i1,
+        _i1,
+        _f1,
+        _f1,
+        _i1,
+        _f1,
+        _f1,
+        types.float64,
+        _f1,
+        types.float64,
+        types.float64,
+        types.int64,
+        _f2,
+        _f2,
+        _FLAGS,
+    ),
+    cache=True,
+)
+def dopri5(
+    rhs,
+    output,
+    opin,
+    commit,
+    x0,
+    th,
+    mem,
+    aux,
+    n_ops,
+    skind,
+    spar,
+    soff,
+    slen,
+    stt,
+    stv,
+    scur,
+    t_out,
+    t_break,
+    rtol,
+    atol,
+    h_init,
+    h_max,
+    max_steps,
+    X,
+    Y,
+    flags,
+):
     """Integrate from t_out[0] to t_out[-1]; write states X and outputs Y at t_out.
 
     ``rhs``, ``output``, ``opin``, ``commit`` are the model's functions (calling convention of
@@ -332,7 +382,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, aux, n_ops, skind, spar, soff
             n_rej += 1
             continue
         if en > 1.0:
-            h *= max(_MIN_FACTOR, _SAFETY * en ** -0.2)
+            h *= max(_MIN_FACTOR, _SAFETY * en**-0.2)
             n_rej += 1
             continue
         # memory operators: reject steps whose operator inputs reverse inside the step
@@ -400,8 +450,7 @@ def dopri5(rhs, output, opin, commit, x0, th, mem, aux, n_ops, skind, spar, soff
             else:
                 for i in range(n):
                     K[0, i] = K[ns, i]
-        fac = _MAX_FACTOR if en == 0.0 else min(_MAX_FACTOR, _SAFETY * en ** -0.2)
+        fac = _MAX_FACTOR if en == 0.0 else min(_MAX_FACTOR, _SAFETY * en**-0.2)
         # a step shortened to land on a breakpoint keeps the size the controller had proposed
         h = min(h_full, h_max) if hit else min(h * fac, h_max)
     return Stats(status, n_steps, n_rej, n_rhs, n_rev, k_out)
-

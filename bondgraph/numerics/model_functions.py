@@ -16,6 +16,7 @@ every model because these functions are passed to it as first-class function val
 ``mem`` is the operator memory and nothing else; ``aux`` is read-only data and scratch space a
 route needs (the tape interpreter's program and registers; empty for generated code).
 """
+
 from __future__ import annotations
 
 from typing import Callable, NamedTuple

@@ -5,6 +5,7 @@ tables) a time/value table; :class:`SignalBank` concatenates them so that
 :func:`~bondgraph.numerics.integrators.eval_inputs` evaluates every input and its time
 derivative inside compiled code, without calling back into Python.
 """
+
 from __future__ import annotations
 
 import math
@@ -50,14 +51,18 @@ class SignalBank:
 
     def table_spacing(self) -> float:
         """Median sample interval of the tabulated inputs (s); inf when there are none."""
-        gaps = [np.median(np.diff(self.tt[o:o + n])) for k, o, n in zip(self.kind, self.off, self.len)
-                if k == PWL and n > 1]
+        gaps = [
+            np.median(np.diff(self.tt[o : o + n]))
+            for k, o, n in zip(self.kind, self.off, self.len)
+            if k == PWL and n > 1
+        ]
         return float(min(gaps)) if gaps else math.inf
 
     def args(self) -> "SignalArrays":
         """The arrays the compiled integrator and :func:`eval_inputs` take, in their order."""
-        return SignalArrays(self.kind, self.par, self.off, self.len, self.tt, self.tv,
-                            np.zeros(len(self.names), np.int64))
+        return SignalArrays(
+            self.kind, self.par, self.off, self.len, self.tt, self.tv, np.zeros(len(self.names), np.int64)
+        )
 
     def sample(self, t) -> np.ndarray:
         """Values of all inputs at times ``t``: array (len(t), n_inputs)."""

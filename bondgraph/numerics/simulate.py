@@ -13,6 +13,7 @@ a model at rest, whose error estimate is zero): with tables, every method's step
 Defaults (tolerances, the step cap, the stiffness threshold of ``auto``) are settings of
 :mod:`bondgraph.config` (section ``simulate``), read when a run starts.
 """
+
 from __future__ import annotations
 
 import time
@@ -23,16 +24,16 @@ from typing import Mapping
 import numpy as np
 import scipy.integrate as si
 
-from ..support import config
-from .codegen import compile_equations, parameter_vector
-from ..equations.system import Equations
 from ..equations.derivation import derive
+from ..equations.system import Equations
 from ..model.experiment import Experiment  # noqa: F401  (bondgraph.numerics.simulate.Experiment)
-from ..support.errors import BondGraphError, ParameterError, SignalError, did_you_mean
 from ..model.graph import Model
+from ..model.signals import Constant, Signal
+from ..support import config
+from ..support.errors import BondGraphError, ParameterError, SignalError, did_you_mean
+from .codegen import compile_equations, parameter_vector
 from .integrators import STATUS, Flags, dopri5, eval_inputs
 from .model_functions import ModelFunctions
-from ..model.signals import Constant, Signal
 from .signal_bank import SignalBank
 
 METHODS = ("auto", "dopri5", "radau", "bdf", "lsoda")
@@ -44,8 +45,9 @@ def _signal(name: str, value) -> Signal:
         return value
     if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
         return Constant(float(value))
-    raise SignalError(f"input {name!r}: give a number or a signal (Sine(...), PiecewiseLinear(t, v), ...), "
-                      f"not {type(value).__name__}")
+    raise SignalError(
+        f"input {name!r}: give a number or a signal (Sine(...), PiecewiseLinear(t, v), ...), not {type(value).__name__}"
+    )
 
 
 class SimulationError(BondGraphError, RuntimeError):
@@ -136,9 +138,13 @@ class Simulator:
         inputs = dict(inputs or {})
         unknown = set(inputs) - set(self.input_names)
         if unknown:
-            raise SignalError(f"model has no input {sorted(unknown)[0]!r}; inputs: {', '.join(self.input_names) or 'none'}")
-        return SignalBank({n: _signal(n, inputs.get(n, 0.0)) for n in self.input_names},
-                          kinks=self.uses_input_rates or bool(self.eqs.operators))
+            raise SignalError(
+                f"model has no input {sorted(unknown)[0]!r}; inputs: {', '.join(self.input_names) or 'none'}"
+            )
+        return SignalBank(
+            {n: _signal(n, inputs.get(n, 0.0)) for n in self.input_names},
+            kinks=self.uses_input_rates or bool(self.eqs.operators),
+        )
 
     def initial_memory(self, t0, x0, th, bank: SignalBank) -> np.ndarray:
         """The operators' memory at rest at the initial state and inputs."""
@@ -157,9 +163,20 @@ class Simulator:
         return mem
 
     # ---- running -----------------------------------------------------------------------------
-    def run(self, t, inputs: Mapping[str, Signal] | None = None, params: Mapping | None = None,
-            x0=None, method: str = "auto", rtol: float | None = None, atol=None, max_step: float = np.inf,
-            max_steps: int | None = None, progress=None, deadline: float | None = None) -> SimResult:
+    def run(
+        self,
+        t,
+        inputs: Mapping[str, Signal] | None = None,
+        params: Mapping | None = None,
+        x0=None,
+        method: str = "auto",
+        rtol: float | None = None,
+        atol=None,
+        max_step: float = np.inf,
+        max_steps: int | None = None,
+        progress=None,
+        deadline: float | None = None,
+    ) -> SimResult:
         """Simulate and sample at times ``t`` (increasing array, or a scalar end time → 1001 samples).
 
         ``inputs`` maps input names to signals or numbers (constants; an input not given is 0);
@@ -195,30 +212,56 @@ class Simulator:
         n_chunks = 1 if progress is None else int(min(50, max(1, t.size // 20000)))
         bounds = np.linspace(0, t.size - 1, n_chunks + 1).round().astype(int)
         for a, b in zip(bounds[:-1], bounds[1:]):
-            tc = t[a:b + 1]
+            tc = t[a : b + 1]
             breaks = bank.breaks(tc[0], tc[-1])
-            Xc, Yc = X[a:b + 1], Y[a:b + 1]
+            Xc, Yc = X[a : b + 1], Y[a : b + 1]
             if method == "dopri5":
-                st = dopri5(*self.compiled.integrator_functions, x, th, mem, aux, len(self.eqs.operators),
-                            *bank.args(), np.ascontiguousarray(tc), breaks, float(rtol), atol_v, 0.0,
-                            float(max_step), int(max_steps), Xc, Yc, self._flags)
+                st = dopri5(
+                    *self.compiled.integrator_functions,
+                    x,
+                    th,
+                    mem,
+                    aux,
+                    len(self.eqs.operators),
+                    *bank.args(),
+                    np.ascontiguousarray(tc),
+                    breaks,
+                    float(rtol),
+                    atol_v,
+                    0.0,
+                    float(max_step),
+                    int(max_steps),
+                    Xc,
+                    Yc,
+                    self._flags,
+                )
                 if st.status != 0:
-                    raise SimulationError(f"integration failed ({STATUS[st.status]}) near t = "
-                                          f"{tc[max(st.written - 1, 0)]:.6g} s; check parameters or try --method radau")
-                stats.update(steps=st.steps, rejected=st.rejected, rhs_calls=st.rhs_calls,
-                             reversal_rejections=st.reversal_rejections)
+                    raise SimulationError(
+                        f"integration failed ({STATUS[st.status]}) near t = "
+                        f"{tc[max(st.written - 1, 0)]:.6g} s; check parameters or try --method radau"
+                    )
+                stats.update(
+                    steps=st.steps,
+                    rejected=st.rejected,
+                    rhs_calls=st.rhs_calls,
+                    reversal_rejections=st.reversal_rejections,
+                )
             else:
-                stats += self._run_scipy(method, tc, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, Xc, Yc,
-                                         deadline)
+                stats += self._run_scipy(
+                    method, tc, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, Xc, Yc, deadline
+                )
             x = np.ascontiguousarray(Xc[-1])
             if b < t.size - 1:
                 _check_deadline(deadline, float(t[b]))
             if progress is not None:
                 progress(b / (t.size - 1))
-        return SimResult(t, {n: Y[:, i] for i, n in enumerate(self.output_names)},
-                         {n: X[:, i] for i, n in enumerate(self.state_names)},
-                         {"method": method, **{k: int(stats[k]) for k in
-                                               ("steps", "rejected", "rhs_calls", "reversal_rejections")}}, bank)
+        return SimResult(
+            t,
+            {n: Y[:, i] for i, n in enumerate(self.output_names)},
+            {n: X[:, i] for i, n in enumerate(self.state_names)},
+            {"method": method, **{k: int(stats[k]) for k in ("steps", "rejected", "rhs_calls", "reversal_rejections")}},
+            bank,
+        )
 
     def jacobian_at(self, t0, x, th, mem, bank) -> np.ndarray:
         """∂(dx/dt)/∂x from the compiled symbolic Jacobian."""
@@ -253,8 +296,9 @@ class Simulator:
         steps = (t[-1] - t[0]) * lam / 3.3
         return "radau" if steps > config.get("simulate.explicit_step_limit") else "dopri5"
 
-    def _run_scipy(self, method, t, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, X, Y,
-                   deadline: float | None = None) -> Counter:
+    def _run_scipy(
+        self, method, t, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, X, Y, deadline: float | None = None
+    ) -> Counter:
         """scipy's stiff solvers; returns the step and right-hand-side counts."""
         c = self.compiled
         stats: Counter = Counter()
@@ -282,7 +326,7 @@ class Simulator:
         def emit(tt, xx):
             eval_inputs(tt, *args, u, du)
             c.output(tt, xx, u, du, th, mem, aux, y)
-            return y[:len(self.output_names)]
+            return y[: len(self.output_names)]
 
         X[0], Y[0] = x, emit(t[0], x)
         k = 1

@@ -10,6 +10,7 @@ Tape layout in ``aux`` (all float64):
 ``[n_rhs_ops, rhs_offset, n_out_ops, out_offset, n_states, n_outputs, reg_offset, 0]``
 then the op rows ``(code, dst, a, b, c)``, then the registers.
 """
+
 from __future__ import annotations
 
 import math
@@ -22,8 +23,9 @@ from ..equations.system import Equations
 from .model_functions import SIGNATURE
 
 HEADER = 8
-(CONST, LDX, LDU, LDDU, LDTH, ADD, MUL, DIV, NEG, POWC, POW, SIN, COS, EXP, LOG, SQRT, ABS, SIGN,
- TANH, STORE) = range(20)
+(CONST, LDX, LDU, LDDU, LDTH, ADD, MUL, DIV, NEG, POWC, POW, SIN, COS, EXP, LOG, SQRT, ABS, SIGN, TANH, STORE) = range(
+    20
+)
 _FUNCS = {sp.sin: SIN, sp.cos: COS, sp.exp: EXP, sp.log: LOG, sp.Abs: ABS, sp.sign: SIGN, sp.tanh: TANH}
 
 
@@ -40,8 +42,12 @@ class _Builder:
         us = {s: i for i, s in enumerate(eqs.inputs)}
         dus = {s: i for i, s in enumerate(eqs.input_rates)}
         ths = {s: i for i, s in enumerate(eqs.params)}
-        self.leaf = {**{s: (LDX, i) for s, i in xs.items()}, **{s: (LDU, i) for s, i in us.items()},
-                     **{s: (LDDU, i) for s, i in dus.items()}, **{s: (LDTH, i) for s, i in ths.items()}}
+        self.leaf = {
+            **{s: (LDX, i) for s, i in xs.items()},
+            **{s: (LDU, i) for s, i in us.items()},
+            **{s: (LDDU, i) for s, i in dus.items()},
+            **{s: (LDTH, i) for s, i in ths.items()},
+        }
 
     def new(self) -> int:
         self.n_regs += 1
@@ -71,8 +77,11 @@ class _Builder:
         elif e.is_Pow:
             base = self.expr(e.base)
             if e.exp.is_Number:
-                r = self.emit(POWC, base, c=float(e.exp)) if e.exp != -1 else \
-                    self.emit(DIV, self.expr(sp.Integer(1)), base)
+                r = (
+                    self.emit(POWC, base, c=float(e.exp))
+                    if e.exp != -1
+                    else self.emit(DIV, self.expr(sp.Integer(1)), base)
+                )
             else:
                 r = self.emit(POW, base, self.expr(e.exp))
         elif e.func in _FUNCS and len(e.args) == 1:
@@ -142,7 +151,7 @@ def _run(n_ops, off, x, u, du, th, tape, out):
             if c == 2.0:
                 tape[dst] = v * v
             else:
-                tape[dst] = v ** c
+                tape[dst] = v**c
         elif code == POW:
             tape[dst] = tape[reg + a] ** tape[reg + b]
         elif code == SIN:

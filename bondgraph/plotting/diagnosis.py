@@ -1,4 +1,5 @@
 """The diagnosis at a glance: measured, calibrated and extended output, residuals, loops."""
+
 from __future__ import annotations
 
 from . import figures
@@ -16,8 +17,12 @@ def plot_diagnosis(report, path: str) -> None:
     fig, ax = plt.subplots(3, 1, figsize=(9, 9))
     ax[0].plot(t, y, lw=0.8, label="measured")
     which = "calibrated" if report.baseline == "calibrated" else "plausible device"
-    ax[0].plot(t, base, lw=0.8, label="calibrated model" if which == "calibrated" else
-               "plausible device (calibrated within tolerance)")
+    ax[0].plot(
+        t,
+        base,
+        lw=0.8,
+        label="calibrated model" if which == "calibrated" else "plausible device (calibrated within tolerance)",
+    )
     if ext is not None:
         ax[0].plot(t, ext, lw=0.8, ls="--", label=f"extended ({chain})")
     ax[0].set_xlabel("t (s)")

@@ -3,6 +3,7 @@
 Every figure is written atomically, in the format of its file name (png, pdf or svg);
 without matplotlib a one-line error names the extra to install.
 """
+
 from __future__ import annotations
 
 import os
@@ -17,6 +18,7 @@ def pyplot():
     """matplotlib's pyplot on the Agg backend, or a one-line :class:`UsageError` without it."""
     try:
         import matplotlib
+
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:

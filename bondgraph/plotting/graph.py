@@ -1,4 +1,5 @@
 """The bond graph drawn with its power half-arrows and causal strokes."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -40,11 +41,24 @@ def plot_bond_graph(causality, path: str) -> None:
     for name, (x, y) in pos.items():
         el = m.elements[name]
         label = el.kind if el.kind in ("0", "1") else f"{el.kind}:{name}"
-        ax.text(x, y, label, ha="center", va="center", fontsize=8,
-                bbox=dict(boxstyle="round,pad=0.25", fc="mistyrose" if name in deriv else "white",
-                          ec="tab:red" if name in deriv else "0.5"))
-    ax.set_title(f"{m.name}: half-arrows show power, red strokes causality"
-                 + (" (red boxes: derivative causality)" if deriv else ""), fontsize=9)
+        ax.text(
+            x,
+            y,
+            label,
+            ha="center",
+            va="center",
+            fontsize=8,
+            bbox=dict(
+                boxstyle="round,pad=0.25",
+                fc="mistyrose" if name in deriv else "white",
+                ec="tab:red" if name in deriv else "0.5",
+            ),
+        )
+    ax.set_title(
+        f"{m.name}: half-arrows show power, red strokes causality"
+        + (" (red boxes: derivative causality)" if deriv else ""),
+        fontsize=9,
+    )
     ax.set_axis_off()
     ax.set_aspect("equal")
     figures.save(fig, path)

@@ -4,6 +4,7 @@ Axes carry the quantity and its unit (taken from the model's declared inputs and
 signals that never change are left out (and listed in the title); curves that share a unit
 share a panel, with a legend.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -20,7 +21,9 @@ def plot_signals(t, signals: dict, units: dict, path: str, title: str = "") -> N
     constant = []
     for name, y in signals.items():
         if not figures.varies(y):
-            constant.append(f"{name} = {float(np.asarray(y)[0]):.4g}" + (f" {units.get(name)}" if units.get(name) else ""))
+            constant.append(
+                f"{name} = {float(np.asarray(y)[0]):.4g}" + (f" {units.get(name)}" if units.get(name) else "")
+            )
             continue
         unit = units.get(name, "")
         panels.setdefault(unit if unit else ("", name), []).append(name)  # unitless: a panel each
@@ -70,8 +73,9 @@ def plot_fit(t, measured, fitted, path: str, name: str = "y", unit: str = "", ti
     figures.save(fig, path)
 
 
-def plot_bode(w, H, path: str, title: str = "", input: tuple[str, str] = ("u", ""),
-              output: tuple[str, str] = ("y", "")) -> None:
+def plot_bode(
+    w, H, path: str, title: str = "", input: tuple[str, str] = ("u", ""), output: tuple[str, str] = ("y", "")
+) -> None:
     """Magnitude and phase of the frequency response H(jω) of ``output`` to ``input``
     (each a (name, unit) pair; the magnitude's unit is theirs divided)."""
     plt = figures.pyplot()

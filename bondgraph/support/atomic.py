@@ -35,6 +35,7 @@ Every temporary file lives next to its target and is listed in
 :data:`bondgraph.support.interrupt.TEMPORARY`, so the interrupt handler removes them all
 (:func:`remove_temporary_files`) before the process exits.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -49,6 +50,7 @@ from .interrupt import COMMIT_LOCK, COMMITTED, TEMPORARY, remove_temporary_files
 __all__ = ["atomic_write", "Outputs", "remove_temporary_files", "COMMIT_LOCK"]
 
 _MODES = {"w", "wt", "wb"}
+
 
 def _create_temp(directory: str, base: str, suffix: str = "") -> tuple[int, str]:
     """Create a new, empty, exclusively-owned temp file next to the target.
@@ -170,13 +172,14 @@ class Outputs:
 
     def __init__(self, inputs: Iterable[str | os.PathLike | None] = ()):
         self._inputs = {os.path.realpath(os.fspath(p)): os.fspath(p) for p in inputs if p}
-        self._temps: dict[str, str] = {}     # target (real path) -> temporary file
-        self._names: dict[str, str] = {}     # target (real path) -> option that named it
-        self._written: set[str] = set()      # targets whose content was written
-        self._shown: dict[str, str] = {}     # target (real path) -> the name the user gave
+        self._temps: dict[str, str] = {}  # target (real path) -> temporary file
+        self._names: dict[str, str] = {}  # target (real path) -> option that named it
+        self._written: set[str] = set()  # targets whose content was written
+        self._shown: dict[str, str] = {}  # target (real path) -> the name the user gave
 
-    def add(self, path: str | os.PathLike | None, option: str = "--out",
-            suffixes: Iterable[str] | None = None) -> str | None:
+    def add(
+        self, path: str | os.PathLike | None, option: str = "--out", suffixes: Iterable[str] | None = None
+    ) -> str | None:
         """Check that ``path`` can be written and reserve its temporary file; returns the
         path (``None`` passes through).  Problems are :class:`UsageError` naming ``option``."""
         if path is None:
@@ -189,9 +192,12 @@ class Outputs:
             suffixes = tuple(suffixes)
             suffix = os.path.splitext(name)[1].lower()
             if suffix not in suffixes:
-                raise UsageError(f"{where}: unknown file type {suffix or '(none)'!r}; "
-                                 f"use {', '.join(suffixes[:-1])} or {suffixes[-1]}" if len(suffixes) > 1
-                                 else f"{where}: the file name must end in {suffixes[0]}")
+                raise UsageError(
+                    f"{where}: unknown file type {suffix or '(none)'!r}; "
+                    f"use {', '.join(suffixes[:-1])} or {suffixes[-1]}"
+                    if len(suffixes) > 1
+                    else f"{where}: the file name must end in {suffixes[0]}"
+                )
         target = os.path.realpath(name)
         directory, base = os.path.split(target)
         if os.path.isdir(target):
@@ -205,8 +211,9 @@ class Outputs:
         if target in self._inputs:
             raise UsageError(f"{where}: would overwrite the input file {self._inputs[target]}; choose another name")
         if target in self._names:
-            raise UsageError(f"{where}: the same file is already the output of {self._names[target]}; "
-                             f"give each output its own name")
+            raise UsageError(
+                f"{where}: the same file is already the output of {self._names[target]}; give each output its own name"
+            )
         try:
             fd, tmp = _create_temp(directory, base, os.path.splitext(base)[1])
         except OSError as exc:

@@ -5,6 +5,7 @@ Every error a user can cause by a bad model, bad data or a bad command line is a
 Each subclass also derives from the builtin that fits it, so ``except ValueError``
 keeps working for library users.
 """
+
 from __future__ import annotations
 
 import difflib

@@ -20,6 +20,7 @@ terminal's Ctrl-C (which reaches the whole process group), so they print no trac
 Pools started with ``spawn``/``forkserver`` should pass :func:`worker_initializer` as their
 initializer (it ignores SIGINT); they are killed all the same.
 """
+
 from __future__ import annotations
 
 import contextlib

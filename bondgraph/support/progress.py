@@ -21,6 +21,7 @@ seconds (1 s by default), so quick commands stay silent.  Notes are shown at onc
 quiet mode).  When something was shown, :meth:`close` ends with a line saying how long the
 work took.  Updates are cheap (a clock read when nothing is due) and thread-safe.
 """
+
 from __future__ import annotations
 
 import os
@@ -43,8 +44,17 @@ class Progress:
     module docstring; ``stream``: where to write (default ``sys.stderr`` at each write).
     """
 
-    def __init__(self, label: str, total: float | None = None, *, unit: str = "", mode: str = "auto",
-                 stream: IO | None = None, delay: float = 1.0, interval: float | None = None):
+    def __init__(
+        self,
+        label: str,
+        total: float | None = None,
+        *,
+        unit: str = "",
+        mode: str = "auto",
+        stream: IO | None = None,
+        delay: float = 1.0,
+        interval: float | None = None,
+    ):
         if mode not in MODES:
             raise ValueError(f"progress mode must be one of {', '.join(MODES)}, not {mode!r}")
         self.label, self.total, self.unit = label, total, unit
@@ -58,8 +68,8 @@ class Progress:
         self.done: float = 0.0
         self.status = ""
         self.t0 = time.monotonic()
-        self._last = -1.0        # time of the last line written (-1: nothing shown yet)
-        self._bar_open = False   # a bar line is on screen without its newline
+        self._last = -1.0  # time of the last line written (-1: nothing shown yet)
+        self._bar_open = False  # a bar line is on screen without its newline
         self._closed = False
         self._lock = threading.Lock()
 

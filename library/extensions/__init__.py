@@ -17,15 +17,30 @@ may miss, each rewriting the model with the element of the papers that produces 
 They use only :mod:`bondgraph.diagnosis`'s public contract and are registered through the
 entry point ``bondgraph.diagnosis`` → ``piezo = library.extensions:candidates``.
 """
+
 from .circuit import LoopInductance
 from .drive import InputBoucWen, InputCreep, InputExpansion, InputHysteresis, InputRC, InputRLC, InputSaturation
 from .modes import OutputMode, ParallelMode
-from .structure import (FieldStiffness, FrictionDamping, NonlinearDamping, PolarizationSaturation,
-                        StiffnessSoftening)
+from .structure import FieldStiffness, FrictionDamping, NonlinearDamping, PolarizationSaturation, StiffnessSoftening
 
 
 def candidates() -> list:
     """The piezo candidate set."""
-    return [InputHysteresis(), InputBoucWen(), InputCreep(), InputSaturation(), InputExpansion(), InputRC(), InputRLC(),
-            LoopInductance(), ParallelMode(), OutputMode(), PolarizationSaturation(), StiffnessSoftening(),
-            FieldStiffness(), NonlinearDamping(), NonlinearDamping(velocity=True), FrictionDamping()]
+    return [
+        InputHysteresis(),
+        InputBoucWen(),
+        InputCreep(),
+        InputSaturation(),
+        InputExpansion(),
+        InputRC(),
+        InputRLC(),
+        LoopInductance(),
+        ParallelMode(),
+        OutputMode(),
+        PolarizationSaturation(),
+        StiffnessSoftening(),
+        FieldStiffness(),
+        NonlinearDamping(),
+        NonlinearDamping(velocity=True),
+        FrictionDamping(),
+    ]

@@ -3,6 +3,7 @@ output) in the loop where the amplifier drives the actuator's capacitance, the l
 resistance refitted with it.  The loop keeps the actuator's current, so the stage feels the
 actuator's electromechanical admittance: the exact form of what :class:`~.drive.InputRLC`
 approximates by a stage on the drive that does not."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -63,7 +64,9 @@ class LoopInductance(Candidate):
     def fit(self, view):
         core = view.core()
         _, resistors = drive_loop(core, view.input)
-        rs = [n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values.get(n, 0.0) > 0]
+        rs = [
+            n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values.get(n, 0.0) > 0
+        ]
         model = self._base(view)
         predict = view.predictor(model, self._core_drive(view))[0]
         scores = []
@@ -74,8 +77,7 @@ class LoopInductance(Candidate):
         specs = [Spec("loop.L", L0, float(SCAN_H[0]), float(SCAN_H[-1]), log=True)]
         spread = float(config.get("diagnosis.tolerance"))
         specs += [Spec(n, view.values[n], view.values[n] / spread, view.values[n] * spread, log=True) for n in rs]
-        values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=30,
-                                                  drive=self._core_drive(view))
+        values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=30, drive=self._core_drive(view))
         model = self.build(view, view.rewrite(), values["loop.L"])
         model.values.update({n: values[n] for n in rs})
         return Extension(model, values, ["loop.L"] + rs, raw, None, None, at, ok, msg)
@@ -85,6 +87,8 @@ class LoopInductance(Candidate):
         with_l = view.score(predict(ext.values))[3]
         without = view.score(predict({**ext.values, "loop.L": float(SCAN_H[0])}))[3]
         if without <= float(config.get("diagnosis.equivalent")) * with_l:
-            return (f"its inductance adds nothing to a refit of the loop's resistance (validation RMS "
-                    f"{without:.3g} without it, {with_l:.3g} with it)")
+            return (
+                f"its inductance adds nothing to a refit of the loop's resistance (validation RMS "
+                f"{without:.3g} without it, {with_l:.3g} with it)"
+            )
         return ""

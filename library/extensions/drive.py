@@ -8,6 +8,7 @@ Bouc–Wen and Prandtl–Ishlinskii); Ghafarirad et al., MCMDS 21(2) (2015) 130�
 bimorph's drive); Wood, Steltz & Fearing, ICRA 2005 (creep as a Kelvin–Voigt chain,
 field-dependent stiffness k_a(E)).
 """
+
 from __future__ import annotations
 
 import math
@@ -16,7 +17,7 @@ from dataclasses import replace
 import numpy as np
 import sympy as sp
 
-from bondgraph import C, I, J0, J1, Quantity, R, Se
+from bondgraph import J0, J1, C, I, Quantity, R, Se
 from bondgraph.diagnosis import LINEAR, Candidate, Extension, Term
 from bondgraph.diagnosis.filters import lowpass, resonator
 from library.hysteresis import PrandtlIshlinskii, bouc_wen_response, play_outputs, threshold_grid
@@ -53,8 +54,13 @@ def static_curve(view, pieces: int) -> np.ndarray:
         out = side[side > 0]
         knees = np.unique(np.quantile(out, levels)) if out.size else []
         basis += [np.maximum(side - k, 0.0) for k in knees]
-    fit = view.fit_drive(basis, [-np.inf] * len(basis), [np.inf] * len(basis), identity=False,
-                         names=[f"static.k{i}" for i in range(len(basis))])
+    fit = view.fit_drive(
+        basis,
+        [-np.inf] * len(basis),
+        [np.inf] * len(basis),
+        identity=False,
+        names=[f"static.k{i}" for i in range(len(basis))],
+    )
     return fit.prediction
 
 
@@ -62,8 +68,10 @@ def best_on_grid(view, basis_of, grid, **fit_args):
     """The point of ``grid`` whose basis ``basis_of(point)`` fits the fit part best with the
     linear parameters held (one linear solve each): for a start of a basis that a local
     optimiser would find only from the right one (where the device's history left it)."""
+
     def cost(point):
         return view.score(view.fit_drive(basis_of(point), refit=False, **fit_args).prediction)[2]
+
     return min(grid, key=cost)
 
 
@@ -100,8 +108,18 @@ class _DriveCandidate(Candidate):
 
     def extension(self, view, fit, model, new: dict, drive_expr) -> Extension:
         values = {**fit.values, **new}
-        return Extension(model, values, list(new), fit.prediction, fit.drive, drive_expr, fit.at_bounds,
-                         fit.success, fit.message, additive=fit.additive)
+        return Extension(
+            model,
+            values,
+            list(new),
+            fit.prediction,
+            fit.drive,
+            drive_expr,
+            fit.at_bounds,
+            fit.success,
+            fit.message,
+            additive=fit.additive,
+        )
 
 
 class InputHysteresis(_DriveCandidate):
@@ -135,8 +153,9 @@ class InputHysteresis(_DriveCandidate):
         asymmetric = self.passes_through(base)
         even = [column] if asymmetric else []
         names = names + ["H.q"] if asymmetric else names
-        bounds = dict(lower=[0.0] + [-np.inf] * (len(names) - 1), upper=[np.inf] * len(names), identity=False,
-                      names=names)
+        bounds = dict(
+            lower=[0.0] + [-np.inf] * (len(names) - 1), upper=[np.inf] * len(names), identity=False, names=names
+        )
 
         def basis(prior):
             return list(play_outputs(base, r, prior).T) + even
@@ -151,7 +170,7 @@ class InputHysteresis(_DriveCandidate):
         fit = view.fit_drive(basis(prior), **bounds)
         model = view.rewrite()
         B = view.additive.base_expr
-        h = model.operator("H", PrandtlIshlinskii(r, fit.coef[:len(r)], prior), B)
+        h = model.operator("H", PrandtlIshlinskii(r, fit.coef[: len(r)], prior), B)
         if asymmetric:
             h = h + even_expr(model, "H", float(fit.coef[-1]), centre, half, B)
         expr = view.additive_expr(h, identity=False)
@@ -212,14 +231,19 @@ class InputBoucWen(_DriveCandidate):
         # starts (slow and fast saturation; from rest and both branches), each one linear solve
         grid = [(math.log(s0), 0.0, f0) for s0 in (3.0, 30.0) for f0 in (0.0, 0.9, -0.9)]
         start = best_on_grid(view, basis, grid, lower=[-np.inf], upper=[np.inf], names=["bw.kappa"])
-        fit = view.fit_drive(basis, [-np.inf], [np.inf], z0=list(start),
-                             z_bounds=[(math.log(0.05), math.log(500.0)), (-6.0, 6.0), (-1.0, 1.0)],
-                             z_names=["bw.s", "bw.rho", "bw.z0"], names=["bw.kappa"])
+        fit = view.fit_drive(
+            basis,
+            [-np.inf],
+            [np.inf],
+            z0=list(start),
+            z_bounds=[(math.log(0.05), math.log(500.0)), (-6.0, 6.0), (-1.0, 1.0)],
+            z_names=["bw.s", "bw.rho", "bw.z0"],
+            names=["bw.kappa"],
+        )
         fit.at_bounds = [n for n in fit.at_bounds if n != "bw.z0"]
         beta, gamma = self.shape(fit.z)
         z_start = float(fit.z[2]) / (beta + gamma)
         model = view.rewrite()
-        V = view.input_symbol
         kappa = model.parameter("bw.kappa", float(fit.coef[0]), "", "weight of the Bouc-Wen state in the drive")
         b = model.parameter("bw.beta", beta, "", "Bouc-Wen beta")
         g = model.parameter("bw.gamma", gamma, "", "Bouc-Wen gamma")
@@ -229,8 +253,9 @@ class InputBoucWen(_DriveCandidate):
         model.set_rate("bw.z", vdot - b * sp.Abs(vdot) * z - g * vdot * sp.Abs(z))
         expr = view.additive_expr(kappa * vr * z)
         view.with_drive(model, expr)
-        return self.extension(view, fit, model, {"bw.kappa": float(fit.coef[0]), "bw.beta": beta, "bw.gamma": gamma},
-                              expr)
+        return self.extension(
+            view, fit, model, {"bw.kappa": float(fit.coef[0]), "bw.beta": beta, "bw.gamma": gamma}, expr
+        )
 
 
 class InputCreep(_DriveCandidate):
@@ -314,11 +339,12 @@ class InputCreep(_DriveCandidate):
         steady = [lowpass(d, tau, view.dt) for tau in taus]
         decays = [np.exp(-np.arange(len(d)) * (view.dt / tau)) for tau in taus]
 
-        def cells_from(prior):   # cells in equilibrium with the level ``prior`` at the start
+        def cells_from(prior):  # cells in equilibrium with the level ``prior`` at the start
             return [s + (prior - d0) * e for s, e in zip(steady, decays)]
 
-        bounds = dict(lower=[0.0] * len(taus), upper=[np.inf] * len(taus),
-                      names=[f"creep.cell{i}" for i in range(len(taus))])
+        bounds = dict(
+            lower=[0.0] * len(taus), upper=[np.inf] * len(taus), names=[f"creep.cell{i}" for i in range(len(taus))]
+        )
         # the record starts where the device's history left it: the level the cells had
         # settled to (prior) is chosen on a grid over the drive's range, the first input among
         # the points (cells in equilibrium with it)
@@ -327,8 +353,11 @@ class InputCreep(_DriveCandidate):
         fit = view.fit_drive(cells, **bounds)
         keep = [i for i in range(len(taus)) if fit.coef[i] > 1e-6 * max(float(np.max(fit.coef)), 1e-300)]
         # only the cells that creep are kept, as terms named by their ratio parameters
-        fit.additive = replace(fit.additive, terms=fit.additive.terms[:-len(taus)] + tuple(
-            Term(f"creep.c{k}", cells[i], 0.0, np.inf) for k, i in enumerate(keep, 1)))
+        fit.additive = replace(
+            fit.additive,
+            terms=fit.additive.terms[: -len(taus)]
+            + tuple(Term(f"creep.c{k}", cells[i], 0.0, np.inf) for k, i in enumerate(keep, 1)),
+        )
         model = view.rewrite()
         D = view.additive.base_expr
         model.add(Se("creep.src", D), J0("creep.node"))
@@ -336,8 +365,9 @@ class InputCreep(_DriveCandidate):
         new, qs = {}, []
         for k, i in enumerate(keep, 1):
             c = model.parameter(f"creep.c{k}", float(fit.coef[i]), "", f"creep ratio of cell {k}", bounds=(0, 1e3))
-            tau = model.parameter(f"creep.tau{k}", float(taus[i]), "s", f"creep time constant of cell {k}",
-                                  bounds=(0, 1e6))
+            tau = model.parameter(
+                f"creep.tau{k}", float(taus[i]), "s", f"creep time constant of cell {k}", bounds=(0, 1e6)
+            )
             model.add(J1(f"creep.cell{k}"), C(f"creep.C{k}", 1.0, q0=prior), R(f"creep.R{k}", tau))
             model.bond("creep.node", f"creep.cell{k}")
             model.bond(f"creep.cell{k}", f"creep.C{k}")
@@ -381,14 +411,15 @@ class InputCreep(_DriveCandidate):
             return "no creep cell has a positive ratio"
         within = self.creep_range(ext) / self.elastic_slope(ext)
         if within > self.max_ratio:
-            return (f"it creeps by {within:.2g} of the elastic response within the record (more than "
-                    f"{self.max_ratio:g})")
+            return f"it creeps by {within:.2g} of the elastic response within the record (more than {self.max_ratio:g})"
         cs, taus, limit = np.asarray(cs), np.asarray(taus), self.lag_limit(view)
         fast = float(cs[taus < limit].sum()) / float(cs.sum())
         spread = self.spread(self.taus(view), taus, cs)
         if fast > 0.5 and spread < self.min_spread:
-            return (f"{fast:.0%} of it is faster than creep may be (τ < {limit:.3g} s) and it "
-                    f"is one lag, not a spectrum ({spread:.0%} outside its heaviest two neighbouring cells)")
+            return (
+                f"{fast:.0%} of it is faster than creep may be (τ < {limit:.3g} s) and it "
+                f"is one lag, not a spectrum ({spread:.0%} outside its heaviest two neighbouring cells)"
+            )
         return ""
 
     @staticmethod
@@ -403,15 +434,15 @@ class InputCreep(_DriveCandidate):
 
 
 def _cubic(x):
-    return x ** 3
+    return x**3
 
 
 def _quintic(x):
-    return x ** 5
+    return x**5
 
 
 def _cubic_less_quintic(x):
-    return x ** 3 - x ** 5
+    return x**3 - x**5
 
 
 class _InputPolynomial(_DriveCandidate):
@@ -437,7 +468,7 @@ class _InputPolynomial(_DriveCandidate):
 
     def evidence(self, view):
         d = np.asarray(view.drive) / drive_scale(view)
-        cubic = d ** 3 - d * (d @ d ** 3) / max(d @ d, 1e-300)
+        cubic = d**3 - d * (d @ d**3) / max(d @ d, 1e-300)
         resp = view.respond([cubic])[:, 0]
         r = view.residual - view.residual.mean()
         resp = resp - resp.mean()
@@ -450,12 +481,18 @@ class _InputPolynomial(_DriveCandidate):
         names = [f"{p}.{suffix}" for suffix, _, _ in self.shapes] + ([f"{p}.q"] if self.asymmetric else [])
         even = even_term(d) if self.asymmetric else None
         basis = [self.sign * Vr * shape(d / Vr) for _, _, shape in self.shapes] + ([even[0]] if even else [])
-        fit = view.fit_drive(basis, [0.0, 0.0, -np.inf][:len(names)], [np.inf] * len(names), names=names)
+        fit = view.fit_drive(basis, [0.0, 0.0, -np.inf][: len(names)], [np.inf] * len(names), names=names)
         model = view.rewrite()
         vr = model.parameter(f"{p}.Vr", Vr, "", "reference drive (largest |drive| of the data)")
         D = view.additive.base_expr
-        curve = self.sign * vr * sum(model.parameter(name, float(w), "", what, bounds=(0, 1e6)) * shape(D / vr)
-                                     for name, w, (_, what, shape) in zip(names, fit.coef, self.shapes))
+        curve = (
+            self.sign
+            * vr
+            * sum(
+                model.parameter(name, float(w), "", what, bounds=(0, 1e6)) * shape(D / vr)
+                for name, w, (_, what, shape) in zip(names, fit.coef, self.shapes)
+            )
+        )
         if even:
             curve = curve + even_expr(model, p, float(fit.coef[2]), even[1], even[2], D)
         expr = view.additive_expr(curve)
@@ -477,8 +514,10 @@ class InputSaturation(_InputPolynomial):
     cause = "saturation"
     label = "compressive drive nonlinearity (saturating polarization)"
     sign, prefix, asymmetric = -1.0, "sat", True
-    shapes = (("m", "weight of the mid-range compression x³ − x⁵ (x: drive / Vr)", _cubic_less_quintic),
-              ("e", "weight of the compression at the range's ends x⁵ (x: drive / Vr)", _quintic))
+    shapes = (
+        ("m", "weight of the mid-range compression x³ − x⁵ (x: drive / Vr)", _cubic_less_quintic),
+        ("e", "weight of the compression at the range's ends x⁵ (x: drive / Vr)", _quintic),
+    )
 
 
 class InputExpansion(_InputPolynomial):
@@ -514,15 +553,23 @@ class InputRC(_DriveCandidate):
             res = np.linalg.lstsq(A, view.y[idx], rcond=None)[1]
             sse.append(float(res[0]) if res.size else math.inf)
         tau0 = float(taus[int(np.argmin(sse))])
-        fit = view.fit_drive(lambda z: [lowpass(d, math.exp(z[0]), view.dt)], [-np.inf], [np.inf], identity=False,
-                             z0=[math.log(tau0)], z_bounds=[(math.log(lo), math.log(hi))], z_names=["rc.R"])
+        fit = view.fit_drive(
+            lambda z: [lowpass(d, math.exp(z[0]), view.dt)],
+            [-np.inf],
+            [np.inf],
+            identity=False,
+            z0=[math.log(tau0)],
+            z_bounds=[(math.log(lo), math.log(hi))],
+            z_names=["rc.R"],
+        )
         tau = math.exp(fit.z[0])
         model = view.rewrite()
         Rin = model.parameter("rc.R", tau / self.cap, "ohm", "series resistance of the input stage", bounds=(0, 1e12))
         Cin = model.parameter("rc.C", self.cap, "F", "capacitance of the input stage (only R·C matters)")
         D = view.drive_expr
-        model.add(Se("rc.src", D), J1("rc.i"), R("rc.Rs", Rin), J0("rc.node"),
-                  C("rc.C", Cin, q0=Cin * float(view.drive[0])))
+        model.add(
+            Se("rc.src", D), J1("rc.i"), R("rc.Rs", Rin), J0("rc.node"), C("rc.C", Cin, q0=Cin * float(view.drive[0]))
+        )
         model.chain("rc.src", "rc.i", "rc.node", "rc.C")
         model.bond("rc.i", "rc.Rs")
         expr = Quantity("e", "rc.C")
@@ -560,31 +607,41 @@ class InputRLC(_DriveCandidate):
         best = None
         for om in np.geomspace(low, top, 10):
             for ze in (0.1, 0.4, 1.0):
-                col = view.respond([om ** 2 * resonator(d, view.dt, om, ze)])[:, 0]
+                col = view.respond([om**2 * resonator(d, view.dt, om, ze)])[:, 0]
                 A = np.column_stack([col, np.ones(len(d))])[idx]
                 res = np.linalg.lstsq(A, view.y[idx], rcond=None)[1]
                 sse = float(res[0]) if res.size else math.inf
                 if best is None or sse < best[0]:
                     best = (sse, om, ze)
         _, om0, ze0 = best
-        fit = view.fit_drive(lambda z: [math.exp(2 * z[0]) * resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]))],
-                             [-np.inf], [np.inf], identity=False, z0=[math.log(om0), math.log(ze0)],
-                             z_bounds=[(math.log(low), math.log(top)), (math.log(0.02), math.log(5.0))],
-                             z_names=["rlc.L", "rlc.R"])
+        fit = view.fit_drive(
+            lambda z: [math.exp(2 * z[0]) * resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]))],
+            [-np.inf],
+            [np.inf],
+            identity=False,
+            z0=[math.log(om0), math.log(ze0)],
+            z_bounds=[(math.log(low), math.log(top)), (math.log(0.02), math.log(5.0))],
+            z_names=["rlc.L", "rlc.R"],
+        )
         om, ze = math.exp(fit.z[0]), math.exp(fit.z[1])
-        L_val, R_val = 1 / (om ** 2 * self.cap), 2 * ze / (om * self.cap)
+        L_val, R_val = 1 / (om**2 * self.cap), 2 * ze / (om * self.cap)
         model = view.rewrite()
         Rp = model.parameter("rlc.R", R_val, "ohm", "series resistance of the input stage", bounds=(0, 1e12))
         Lp = model.parameter("rlc.L", L_val, "H", "series inductance of the input stage", bounds=(0, 1e12))
         Cp = model.parameter("rlc.C", self.cap, "F", "capacitance of the input stage (only LC, RC matter)")
-        model.add(Se("rlc.src", view.drive_expr), J1("rlc.loop"), R("rlc.Rs", Rp), I("rlc.Ls", Lp),
-                  C("rlc.Cs", Cp, q0=Cp * float(view.drive[0])))
+        model.add(
+            Se("rlc.src", view.drive_expr),
+            J1("rlc.loop"),
+            R("rlc.Rs", Rp),
+            I("rlc.Ls", Lp),
+            C("rlc.Cs", Cp, q0=Cp * float(view.drive[0])),
+        )
         model.bond("rlc.src", "rlc.loop")
         for e in ("rlc.Rs", "rlc.Ls", "rlc.Cs"):
             model.bond("rlc.loop", e)
         expr = Quantity("e", "rlc.Cs")
         view.with_drive(model, expr)
-        fit.drive = om ** 2 * resonator(d, view.dt, om, ze)
+        fit.drive = om**2 * resonator(d, view.dt, om, ze)
         fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.extra
         return self.extension(view, fit, model, {"rlc.R": R_val, "rlc.L": L_val}, expr)
 
@@ -597,6 +654,8 @@ class InputRLC(_DriveCandidate):
             return f"its resonance ({om / (2 * math.pi):.3g} Hz) is above the data's band"
         zeta = ext.values["rlc.R"] / 2 * math.sqrt(self.cap / ext.values["rlc.L"])
         if zeta < self.min_damping:
-            return (f"its resonance is as sharp as a mechanical mode's (damping ratio {zeta:.2g} < "
-                    f"{self.min_damping:g}): not an electrical stage")
+            return (
+                f"its resonance is as sharp as a mechanical mode's (damping ratio {zeta:.2g} < "
+                f"{self.min_damping:g}): not an electrical stage"
+            )
         return ""

@@ -1,5 +1,6 @@
 """A mode the model lacks.  Both candidates keep the model linear, so they are fitted on the
 exact linear route; Ghafarirad et al. (MCMDS 21(2), 2015) superpose bending modes the same way."""
+
 from __future__ import annotations
 
 import math
@@ -8,7 +9,7 @@ import numpy as np
 import sympy as sp
 from scipy import signal
 
-from bondgraph import C, I, J0, J1, Quantity, R, Se
+from bondgraph import J0, J1, C, I, Quantity, R, Se
 from bondgraph.diagnosis import LINEAR, Candidate, Extension
 from bondgraph.diagnosis.context import welch
 from bondgraph.diagnosis.filters import resonator
@@ -30,8 +31,10 @@ def unresolved(view) -> str:
     record resolves the response at no frequency (output and drive coherent nowhere)."""
     if view.empirical_frf()[0].size:
         return ""
-    return (f"the record resolves the response at no frequency (coherence of output and drive "
-            f"≤ {view.resolved_coherence:g} everywhere): no mismatch to place a mode at")
+    return (
+        f"the record resolves the response at no frequency (coherence of output and drive "
+        f"≤ {view.resolved_coherence:g} everywhere): no mismatch to place a mode at"
+    )
 
 
 def mismatch_peaks(view, n: int = 3) -> list[float]:
@@ -64,8 +67,10 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
         return f"its frequency ({f:.4g} Hz) is beyond the data's Nyquist frequency"
     low = view.lowest_resonance_hz
     if low is not None and f < 0.5 * low:
-        return (f"its frequency ({f:.4g} Hz) is below half the model's lowest mode ({low:.4g} Hz): not a "
-                f"higher mode of this structure")
+        return (
+            f"its frequency ({f:.4g} Hz) is below half the model's lowest mode ({low:.4g} Hz): not a "
+            f"higher mode of this structure"
+        )
     d = np.asarray(view.drive if view.drive is not None else view.u)
     fr, P = welch(d, view.fs, 4096)
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
@@ -74,9 +79,11 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
     coh = view.coherence_near(omega)
     share = None if raw is None or coh >= view.resolved_coherence else view.resolved_share(raw)
     if coh < view.resolved_coherence and (share is None or share < 0.5):
-        return (f"the record does not resolve the response near {f:.4g} Hz (coherence {coh:.2g} < "
-                f"{view.resolved_coherence:g}: as much noise as response there)"
-                + ("" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it"))
+        return (
+            f"the record does not resolve the response near {f:.4g} Hz (coherence {coh:.2g} < "
+            f"{view.resolved_coherence:g}: as much noise as response there)"
+            + ("" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it")
+        )
     if zeta > 0.3:
         return f"it is not a resonance (damping ratio {zeta:.2g})"
     return ""
@@ -123,24 +130,41 @@ class ParallelMode(Candidate):
         trials = resonance_trials(view)
         _, om, ze = trials[0]
         starts = [[math.log(t[1]), math.log(t[2])] for t in trials[1:3]]
-        fit = view.fit_drive(direct=lambda z: [resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]))],
-                             z0=[math.log(om), math.log(ze)],
-                             z_bounds=[(math.log(om / 2), math.log(om * 2)), (math.log(1e-4), math.log(0.5))],
-                             z_names=["hm.omega", "hm.zeta"], starts=starts)
+        fit = view.fit_drive(
+            direct=lambda z: [resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]))],
+            z0=[math.log(om), math.log(ze)],
+            z_bounds=[(math.log(om / 2), math.log(om * 2)), (math.log(1e-4), math.log(0.5))],
+            z_names=["hm.omega", "hm.zeta"],
+            starts=starts,
+        )
         om, ze, g = math.exp(fit.z[0]), math.exp(fit.z[1]), float(fit.direct[0])
         model = view.rewrite()
         o = model.parameter("hm.omega", om, "rad/s", "natural frequency of the added mode")
         z = model.parameter("hm.zeta", ze, "", "damping ratio of the added mode")
         gg = model.parameter("hm.g", g, "", "input gain of the added mode (unit modal mass)")
-        model.add(Se("hm.force", gg * view.drive_expr), J1("hm.mode"), I("hm.mass", 1), C("hm.spring", 1 / o ** 2),
-                  R("hm.damper", 2 * z * o))
+        model.add(
+            Se("hm.force", gg * view.drive_expr),
+            J1("hm.mode"),
+            I("hm.mass", 1),
+            C("hm.spring", 1 / o**2),
+            R("hm.damper", 2 * z * o),
+        )
         model.bond("hm.force", "hm.mode")
         for e in ("hm.mass", "hm.spring", "hm.damper"):
             model.bond("hm.mode", e)
         view.add_to_output(model, Quantity("q", "hm.spring"))
         new = {"hm.omega": om, "hm.zeta": ze, "hm.g": g}
-        return Extension(model, {**fit.values, **new}, list(new), fit.prediction, view.drive, view.drive_expr,
-                         fit.at_bounds, fit.success, fit.message)
+        return Extension(
+            model,
+            {**fit.values, **new},
+            list(new),
+            fit.prediction,
+            view.drive,
+            view.drive_expr,
+            fit.at_bounds,
+            fit.success,
+            fit.message,
+        )
 
     def implausible(self, view, ext):
         return mode_implausible(view, ext.values["hm.omega"], ext.values["hm.zeta"], ext.prediction)
@@ -178,8 +202,13 @@ class OutputMode(Candidate):
         share = model.parameter("om.mu", mu, "", "share of the inertia's mass on the actuator's side of the spring")
         reduced = share * (1 - share) * M
         modify_law(model, el, lambda p, old: old / share)
-        model.add(J0("om.k"), C("om.spring", 1 / (reduced * om ** 2)), J1("om.plate"), I("om.mass", (1 - share) * M),
-                  R("om.damper", 2 * ze * om * reduced))
+        model.add(
+            J0("om.k"),
+            C("om.spring", 1 / (reduced * om**2)),
+            J1("om.plate"),
+            I("om.mass", (1 - share) * M),
+            R("om.damper", 2 * ze * om * reduced),
+        )
         model.bond(junction_of(model, el), "om.k")
         model.bond("om.k", "om.spring")
         model.bond("om.k", "om.plate")
@@ -190,7 +219,7 @@ class OutputMode(Candidate):
 
     def fit(self, view):
         best = None
-        on_core = view.on_core   # fitted on the linear core, driven by what it sees (exact route)
+        on_core = view.on_core  # fitted on the linear core, driven by what it sees (exact route)
         drive = view.drive if on_core else None
         # starts: the resonator scan's best frequency and damping at each of the two largest
         # mismatch peaks, with the mass share that fits best before any refit
@@ -204,10 +233,15 @@ class OutputMode(Candidate):
             model = self.build(view, view.core() if on_core else view.rewrite(), om, ze, 0.5)
             predict, known = view.predictor(model, drive)
             base = {k: v for k, v in view.values.items() if k in known}
-            mu = min((0.1, 0.3, 0.5, 0.8, 0.95),
-                     key=lambda m: view.score(predict({**base, "om.omega": om, "om.zeta": ze, "om.mu": m}))[2])
-            specs = [Spec("om.omega", om, om / 3, om * 3, log=True), Spec("om.zeta", ze, 1e-4, 1.0, log=True),
-                     Spec("om.mu", mu, 0.02, 0.98)]
+            mu = min(
+                (0.1, 0.3, 0.5, 0.8, 0.95),
+                key=lambda m: view.score(predict({**base, "om.omega": om, "om.zeta": ze, "om.mu": m}))[2],
+            )
+            specs = [
+                Spec("om.omega", om, om / 3, om * 3, log=True),
+                Spec("om.zeta", ze, 1e-4, 1.0, log=True),
+                Spec("om.mu", mu, 0.02, 0.98),
+            ]
             values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=20, drive=drive)
             rf = view.score(raw)[2]
             if best is None or rf < best[0]:

@@ -6,6 +6,7 @@ the rest of the model is linear, or a drive transform of its linear core (hyster
 creep on the drive named before), they are simulated on the exact linear route as a Lur'e
 system (:meth:`bondgraph.diagnosis.View.lure`), else, or for parameter values that make that
 route diverge, with the compiled integrator."""
+
 from __future__ import annotations
 
 from abc import abstractmethod
@@ -52,8 +53,10 @@ class _Centred(Candidate):
         if not view.model.with_role(self.role):
             return f"no element is tagged '{self.role}'"
         if view.reduced:
-            return (f"the '{self.role}' elements act in modes faster than the data resolve (their "
-                    f"quasi-static effect is a drive nonlinearity)")
+            return (
+                f"the '{self.role}' elements act in modes faster than the data resolve (their "
+                f"quasi-static effect is a drive nonlinearity)"
+            )
         return True
 
     @staticmethod
@@ -93,14 +96,20 @@ class _Centred(Candidate):
         else:
             st = view.states()
             xs = {el: st[view.state_of(el)] if self.role != "damping" else st["output rate"] for el in els}
-            az = {el: field(view)[1] if partners[el] == DRIVE else
-                  st[view.state_of(partners[el])] if partners[el] else None for el in els}
+            az = {
+                el: field(view)[1]
+                if partners[el] == DRIVE
+                else st[view.state_of(partners[el])]
+                if partners[el]
+                else None
+                for el in els
+            }
         refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
         r2s = {el: refs[el][1] for el in els}
         if lure is not None and len(els) > 1:
             base = series[view.output]
             effect = {}
-            for el in els:   # what the term does at the top of the scan, element by element
+            for el in els:  # what the term does at the top of the scan, element by element
                 effect[el] = np.inf
                 for f in (self.grid[-1], 0.1 * self.grid[-1]):
                     coefs = [(f * refs[e][0] if e == el else 0.0, r2s[e]) for e in els]
@@ -117,25 +126,34 @@ class _Centred(Candidate):
         model = self.build(view, {el: 0.0 for el in els}, r2s)
         predict = None
         if lure is not None:
+
             def predict(values):
                 coefs = [(values[n], r2s[el]) for n, el in zip(names, els)]
                 try:
                     raw = lure.simulate(values, lure.drive, self.term, coefs)
-                except NotConverged:   # integrate the rewritten model for these values instead,
-                    try:               # within a bounded number of explicit steps
+                except NotConverged:  # integrate the rewritten model for these values instead,
+                    try:  # within a bounded number of explicit steps
                         return view.simulate(model, values, max_steps=50 * len(view.y))
-                    except SimulationError:   # it diverges: a fit as bad as no model at all
+                    except SimulationError:  # it diverges: a fit as bad as no model at all
                         return np.zeros(len(view.y))
                 return raw if lure.extra is None else raw + lure.extra
 
         def fitted(specs, nfev, start=None):
             return view.fit_model(model, specs, max_nfev=nfev, start=start, predict=predict)
 
-        def spec(f, free=False):   # elements whose term cannot matter are held at 0
-            return [Spec(n, 0.0, 0.0, 0.0, scale=refs[el][0]) if el in held else
-                    Spec(n, f * refs[el][0], 0.0 if free else f * refs[el][0],
-                         self.upper * refs[el][0] if free else f * refs[el][0], scale=refs[el][0])
-                    for n, el in zip(names, els)]
+        def spec(f, free=False):  # elements whose term cannot matter are held at 0
+            return [
+                Spec(n, 0.0, 0.0, 0.0, scale=refs[el][0])
+                if el in held
+                else Spec(
+                    n,
+                    f * refs[el][0],
+                    0.0 if free else f * refs[el][0],
+                    self.upper * refs[el][0] if free else f * refs[el][0],
+                    scale=refs[el][0],
+                )
+                for n, el in zip(names, els)
+            ]
 
         best = None
         # from the calibration; when it left a parameter on its search bound, from the model
@@ -158,7 +176,7 @@ class _Centred(Candidate):
             raise SimulationError(f"{self.cause}: the extended model could not be simulated")
         start = {k: v for k, v in best[2].items() if k not in names}
         values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
-        at = [n for n in at if values[n] > 0]   # a coefficient of 0 is no such effect, not a search limit
+        at = [n for n in at if values[n] > 0]  # a coefficient of 0 is no such effect, not a search limit
         stuck = [el for n, el in zip(names, els) if n in at]
         if stuck and len(stuck) + len(held) < len(els):
             # beyond the bound the term is no longer plausible (a softening whose tangent
@@ -167,12 +185,24 @@ class _Centred(Candidate):
             held += stuck
             values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
             at = [n for n in at if values[n] > 0]
-            msg = (f"{', '.join(f'{self.prefix}_{el}' for el in stuck)} went to "
-                   f"{'its search bound and is' if len(stuck) == 1 else 'their search bounds and are'} held at 0; {msg}")
+            msg = (
+                f"{', '.join(f'{self.prefix}_{el}' for el in stuck)} went to "
+                f"{'its search bound and is' if len(stuck) == 1 else 'their search bounds and are'} held at 0; {msg}"
+            )
         kept = [(n, el) for n, el in zip(names, els) if el not in held]
         terms = [(el, partners[el], self.term, values[n], r2s[el]) for n, el in kept]
-        return Extension(self.build(view, {el: values[n] for n, el in kept}, r2s), values, [n for n, _ in kept],
-                         raw, None, None, at, ok, msg, terms=terms)
+        return Extension(
+            self.build(view, {el: values[n] for n, el in kept}, r2s),
+            values,
+            [n for n, _ in kept],
+            raw,
+            None,
+            None,
+            at,
+            ok,
+            msg,
+            terms=terms,
+        )
 
 
 class StiffnessSoftening(_Centred):
@@ -188,11 +218,11 @@ class StiffnessSoftening(_Centred):
 
     @staticmethod
     def term(c, r2, x, a):
-        return -c * x * (x ** 2 - r2)
+        return -c * x * (x**2 - r2)
 
     def refs(self, view, el, x, a):
         peak = float(np.max(np.abs(x))) or 1.0
-        return abs(slope(view.model, el, view.values)) / peak ** 2, 1.5 * float(np.mean(x ** 2))
+        return abs(slope(view.model, el, view.values)) / peak**2, 1.5 * float(np.mean(x**2))
 
 
 class PolarizationSaturation(_Centred):
@@ -212,7 +242,7 @@ class PolarizationSaturation(_Centred):
     label = "saturating polarization inside the dynamics"
     role, prefix, upper = "polarization", "sat.k", 3.0
     grid = (0.01, 0.03, 0.1, 0.3, 1.0)
-    cost = 4          # two shapes, each a fit on the exact route
+    cost = 4  # two shapes, each a fit on the exact route
     #: the most elements tagged ``polarization`` it is fitted on
     most = 2
     #: the powers m tried (the better fit is kept)
@@ -230,12 +260,14 @@ class PolarizationSaturation(_Centred):
         return super().applies(view)
 
     def term(self, c, r, x, a):
-        return c * x * (x ** self.power - r)
+        return c * x * (x**self.power - r)
 
     def refs(self, view, el, x, a):
         peak = float(np.max(np.abs(x))) or 1.0
-        return (abs(slope(view.model, el, view.values)) / peak ** self.power,
-                (1.5 if self.power == 2 else 5 / 3) * float(np.mean(x ** self.power)))
+        return (
+            abs(slope(view.model, el, view.values)) / peak**self.power,
+            (1.5 if self.power == 2 else 5 / 3) * float(np.mean(x**self.power)),
+        )
 
     def fit(self, view):
         if self.power is not None:
@@ -263,11 +295,11 @@ class FieldStiffness(_Centred):
 
     @staticmethod
     def term(c, r2, x, a):
-        return -c * x * (a ** 2 - r2)
+        return -c * x * (a**2 - r2)
 
     def refs(self, view, el, x, a):
         peak = float(np.max(np.abs(a))) or 1.0
-        return abs(slope(view.model, el, view.values)) / peak ** 2, float(np.mean(a ** 2))
+        return abs(slope(view.model, el, view.values)) / peak**2, float(np.mean(a**2))
 
 
 class NonlinearDamping(_Centred):
@@ -297,8 +329,7 @@ class NonlinearDamping(_Centred):
     def partner(self, model, el):
         if self.velocity:
             return None
-        return next((o for o in neighbours(model, el) if getattr(model.elements[o], "role", None) == "stiffness"),
-                    None)
+        return next((o for o in neighbours(model, el) if getattr(model.elements[o], "role", None) == "stiffness"), None)
 
     @staticmethod
     def term(c, r2, x, a):
@@ -307,8 +338,7 @@ class NonlinearDamping(_Centred):
     def refs(self, view, el, x, a):
         amp = x if a is None else a
         peak = float(np.max(np.abs(amp))) or 1.0
-        return (abs(slope(view.model, el, view.values)) / peak ** 2,
-                (1.5 if a is None else 0.5) * float(np.mean(amp ** 2)))
+        return (abs(slope(view.model, el, view.values)) / peak**2, (1.5 if a is None else 0.5) * float(np.mean(amp**2)))
 
 
 class FrictionDamping(NonlinearDamping):
@@ -321,7 +351,7 @@ class FrictionDamping(NonlinearDamping):
     terms)."""
 
     label = "Coulomb friction (smoothed) in the damping elements"
-    cost = 4          # up to three smoothing velocities, each a fit on the exact route
+    cost = 4  # up to three smoothing velocities, each a fit on the exact route
     upper = 300.0
     grid = (1.0, 8.0, 64.0)
     #: smoothing velocities tried, as shares of the data's peak velocity (the best fit is kept)

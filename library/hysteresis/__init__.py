@@ -21,13 +21,30 @@ from the demagnetised state v = 0, h_i = max(v0 - r_i, min(v0 + r_i, 0)). With t
 the analytic inverse of :meth:`PrandtlIshlinskii.inverse` is exact from rest: the monotone
 approach 0 -> v0 maps onto the monotone approach 0 -> H[v0] of the inverse operator.
 """
+
 from __future__ import annotations
 
 from .identification import bouc_wen_response, fit_pi_weights, play_outputs, threshold_grid
-from .play import (InverseModifiedPI, InverseRelativeModifiedPI, ModifiedPI, PIStop, PrandtlIshlinskii,
-                   RelativeModifiedPI)
+from .play import (
+    InverseModifiedPI,
+    InverseRelativeModifiedPI,
+    ModifiedPI,
+    PIStop,
+    PrandtlIshlinskii,
+    RelativeModifiedPI,
+)
 from .slip import MaxwellSlip
 
-__all__ = ["PrandtlIshlinskii", "PIStop", "ModifiedPI", "InverseModifiedPI", "RelativeModifiedPI",
-           "InverseRelativeModifiedPI", "MaxwellSlip", "play_outputs", "threshold_grid", "fit_pi_weights",
-           "bouc_wen_response"]
+__all__ = [
+    "PrandtlIshlinskii",
+    "PIStop",
+    "ModifiedPI",
+    "InverseModifiedPI",
+    "RelativeModifiedPI",
+    "InverseRelativeModifiedPI",
+    "MaxwellSlip",
+    "play_outputs",
+    "threshold_grid",
+    "fit_pi_weights",
+    "bouc_wen_response",
+]

@@ -1,5 +1,6 @@
 """Parameter vectors, the initial-memory convention and Kuhnen's inverse formula shared by the
 hysteresis operators of this package."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -59,7 +60,8 @@ def _kuhnen_inverse(r: np.ndarray, w: np.ndarray, what: str) -> tuple[np.ndarray
     if r[0] != 0.0 or np.any(big_w <= 0.0):
         raise ParameterError(
             f"{what} inverse needs a term with threshold 0 and positive partial weight sums "
-            "(sorted by threshold); the loading curve is not strictly increasing")
+            "(sorted by threshold); the loading curve is not strictly increasing"
+        )
     w_inv = np.empty_like(w)
     w_inv[0] = 1.0 / w[0]
     w_inv[1:] = -w[1:] / (big_w[1:] * big_w[:-1])

@@ -1,5 +1,6 @@
 """Identification helpers: play outputs along a sampled path, threshold grids, non-negative PI
 weights, the Bouc–Wen variable along a path."""
+
 from __future__ import annotations
 
 import math
@@ -36,8 +37,11 @@ def play_outputs(v, thresholds, prior: float | None = None) -> np.ndarray:
     r = np.ascontiguousarray(_vector("thresholds", thresholds, nonneg=True))
     if v.size == 0:
         raise ParameterError("input sequence is empty")
-    h = _virgin_plays(v[0], r) if prior is None else \
-        np.ascontiguousarray(np.clip(float(prior), v[0] - r, v[0] + r), dtype=np.float64)
+    h = (
+        _virgin_plays(v[0], r)
+        if prior is None
+        else np.ascontiguousarray(np.clip(float(prior), v[0] - r, v[0] + r), dtype=np.float64)
+    )
     return _play_matrix(v, r, h)
 
 
@@ -126,7 +130,7 @@ def _bouc_wen_path(v, beta, gamma, n, z0, out):
         h = dv / m
         for _ in range(m):
             az = abs(z)
-            z += h - beta * abs(h) * az ** (n - 1.0) * z - gamma * h * az ** n
+            z += h - beta * abs(h) * az ** (n - 1.0) * z - gamma * h * az**n
         out[k] = z
 
 

@@ -2,6 +2,7 @@
 zones on the absolute PI sum or measured from the last reversal, with their exact inverses.
 Kernels and the helpers they call live in this one file (numba caches a kernel only when all
 its helpers share its file)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -111,7 +112,7 @@ class PrandtlIshlinskii(_PlayBank):
     def small_signal_gain(self, prm: np.ndarray) -> float:
         """Slope right after a reversal: the sum of the weights of the r = 0 plays."""
         n = self.n_memory
-        return float(np.sum(prm[n:2 * n][prm[:n] == 0.0]))
+        return float(np.sum(prm[n : 2 * n][prm[:n] == 0.0]))
 
     def inverse(self) -> "PrandtlIshlinskii":
         """The exact inverse PI operator (Krejci/Kuhnen), output units of v, input units of y.
@@ -145,7 +146,7 @@ class PIStop(_PlayBank):
     def small_signal_gain(self, prm: np.ndarray) -> float:
         """Slope right after a reversal: every stop with r > 0 is unsaturated (slope 1)."""
         n = self.n_memory
-        return float(np.sum(prm[n:2 * n][prm[:n] > 0.0]))
+        return float(np.sum(prm[n : 2 * n][prm[:n] > 0.0]))
 
 
 class _DeadZonePI(_PlayBank):
@@ -165,8 +166,8 @@ class _DeadZonePI(_PlayBank):
         """(sum of w over r = 0, sum of ws over d = 0): the slopes of both stages after a reversal."""
         n = self.thresholds.size
         m = self.deadzones.size
-        d, ws = prm[2 * n:2 * n + m], prm[2 * n + m:2 * n + 2 * m]
-        return float(np.sum(prm[n:2 * n][prm[:n] == 0.0])), float(np.sum(ws[d == 0.0]))
+        d, ws = prm[2 * n : 2 * n + m], prm[2 * n + m : 2 * n + 2 * m]
+        return float(np.sum(prm[n : 2 * n][prm[:n] == 0.0])), float(np.sum(ws[d == 0.0]))
 
     def small_signal_gain(self, prm: np.ndarray) -> float:
         """Slope after a reversal at rest at v = 0: product of both stages' zero-threshold weights."""
@@ -272,7 +273,7 @@ class RelativeModifiedPI(_RelativeDeadZones):
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         n = self.thresholds.size
         h = _virgin_plays(v0, np.asarray(prm[:n], dtype=np.float64))
-        x0 = _frozen_pi_sum(v0, h, prm, n)   # as the kernels sum it: a last-bit difference would be a reversal
+        x0 = _frozen_pi_sum(v0, h, prm, n)  # as the kernels sum it: a last-bit difference would be a reversal
         return np.r_[h, 0.0, 0.0, 1.0 if x0 >= 0.0 else -1.0, x0]
 
     @staticmethod
@@ -282,7 +283,7 @@ class RelativeModifiedPI(_RelativeDeadZones):
         m = (len(prm) - 2 * n) // 2
         x = _frozen_pi_sum(v, mem, prm, n)
         x_r, y_r, s = mem[n], mem[n + 1], mem[n + 2]
-        if s * (x - mem[n + 3]) < 0.0:   # turned back: a reversal at the last accepted point
+        if s * (x - mem[n + 3]) < 0.0:  # turned back: a reversal at the last accepted point
             y_r += s * _branch_gain(s * (mem[n + 3] - x_r), prm, n, m)
             x_r = mem[n + 3]
             s = -s

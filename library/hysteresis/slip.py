@@ -1,4 +1,5 @@
 """The Maxwell-slip operator (Wood, Steltz & Fearing 2005)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -26,15 +27,14 @@ class MaxwellSlip(VectorOperator):
         self.stiffnesses = _vector("stiffnesses", stiffnesses)
         if np.any(self.stiffnesses <= 0):
             raise ParameterError("stiffnesses must be > 0")
-        self.breakaway_forces = _vector("breakaway_forces", breakaway_forces,
-                                        self.stiffnesses.size, nonneg=True)
+        self.breakaway_forces = _vector("breakaway_forces", breakaway_forces, self.stiffnesses.size, nonneg=True)
         n = self.stiffnesses.size
         self.parameter_names = _indexed("k", n) + _indexed("f", n)
 
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         """Slip positions at rest at ``v0`` after a monotone approach from 0, units of v."""
         n = self.n_memory
-        return _virgin_plays(v0, prm[n:2 * n] / prm[:n])
+        return _virgin_plays(v0, prm[n : 2 * n] / prm[:n])
 
     @staticmethod
     def output(v, mem, prm):
@@ -56,7 +56,7 @@ class MaxwellSlip(VectorOperator):
     def small_signal_gain(self, prm: np.ndarray) -> float:
         """Slope right after a reversal: the sum of k_i over branches with f_i > 0."""
         n = self.n_memory
-        return float(np.sum(prm[:n][prm[n:2 * n] > 0.0]))
+        return float(np.sum(prm[:n][prm[n : 2 * n] > 0.0]))
 
     def to_pi_stop(self) -> PIStop:
         """The equal stop-form PI operator: r_i = f_i / k_i, w_i = k_i."""

@@ -133,6 +133,7 @@ Timing (a loaded 2-core machine): a ``ci`` record takes 0.1-5 s to generate, a f
 ``bench`` record 1-60 s, median 16 s, a few that need many rounds of the visibility rule up to
 ~10 min (compounds at 250 000 samples).
 """
+
 from .families import FAMILIES
 from .generator import ATTEMPTS, NOISE_FLOOR, VISIBLE, Record, design, draw
 from .runner import diagnose_record
@@ -160,8 +161,17 @@ def fresh_seeds(start: int, n: int, families=None) -> list[int]:
 
 
 #: the causes of the truths (a diagnosis' ``electrical-rc`` is scored as ``electrical``)
-CAUSES = ("none", "hysteresis", "creep", "saturation", "softening", "nonlinear-damping",
-          "higher-mode", "electrical")
+CAUSES = ("none", "hysteresis", "creep", "saturation", "softening", "nonlinear-damping", "higher-mode", "electrical")
 
-__all__ = ["SEEDS", "CAUSES", "VISIBLE", "ATTEMPTS", "NOISE_FLOOR", "Record", "design", "draw",
-           "diagnose_record", "fresh_seeds"]
+__all__ = [
+    "SEEDS",
+    "CAUSES",
+    "VISIBLE",
+    "ATTEMPTS",
+    "NOISE_FLOOR",
+    "Record",
+    "design",
+    "draw",
+    "diagnose_record",
+    "fresh_seeds",
+]

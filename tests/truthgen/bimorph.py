@@ -16,6 +16,7 @@ with ``u`` the equivalent drive voltage.  The hidden effects enter as
 * extra modes (a next beam mode, an off-beam mode), or a sensor-bracket mode excited by the
   acceleration of the sensed point.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -28,11 +29,11 @@ from .terms import ModalForces
 
 @dataclass
 class Effects:
-    creep: list = field(default_factory=list)          # (tau_j, w_j)
-    drive_map: object | None = None                    # V array -> u array
-    modal: list = field(default_factory=list)          # laws (q, qd, V) -> forces on the modes
-    extra_modes: list = field(default_factory=list)    # (omega, zeta, mp, phi)
-    sensor_mode: dict | None = None                    # {gamma, omega, zeta}
+    creep: list = field(default_factory=list)  # (tau_j, w_j)
+    drive_map: object | None = None  # V array -> u array
+    modal: list = field(default_factory=list)  # laws (q, qd, V) -> forces on the modes
+    extra_modes: list = field(default_factory=list)  # (omega, zeta, mp, phi)
+    sensor_mode: dict | None = None  # {gamma, omega, zeta}
 
 
 def system(p: dict, fx: Effects | None = None, probes: bool = False):
@@ -72,6 +73,7 @@ def system(p: dict, fx: Effects | None = None, probes: bool = False):
 
         def law(q, qd, v):
             return sum(f(q, qd, v) for f in laws)
+
         law.reset = lambda: [f.reset() for f in laws if hasattr(f, "reset")]
         terms.append(ModalForces(qs[:n_model], qds[:n_model], law))
     sys_ = System.build(eq, out, terms)
@@ -83,7 +85,7 @@ def system(p: dict, fx: Effects | None = None, probes: bool = False):
 
 def static_gain(p: dict) -> float:
     """Quasi-static x/V (m/V) of the linear device."""
-    return float(sum(mp * phi / w ** 2 for w, mp, phi in zip(p["omega"], p["mp"], p["phi"])))
+    return float(sum(mp * phi / w**2 for w, mp, phi in zip(p["omega"], p["mp"], p["phi"])))
 
 
 # Uniform clamped-free Euler–Bernoulli beam: roots of 1 + cos(bL) cosh(bL) = 0.
@@ -94,6 +96,7 @@ def cantilever_ratios(mode: int, target: float):
     """(omega_k/omega_1, slope_k(L)/slope_1(L), shape_k(t)/shape_1(t)) of a uniform
     cantilever for mode ``k`` (1-based) at the sensor position ``target`` (fraction of L):
     how a further beam mode scales against the first (mass-normalised shapes)."""
+
     def shape(k, xi):
         b = BETA_L[k - 1]
         sig = (np.sinh(b) - np.sin(b)) / (np.cosh(b) + np.cos(b))
@@ -104,5 +107,4 @@ def cantilever_ratios(mode: int, target: float):
         sig = (np.sinh(b) - np.sin(b)) / (np.cosh(b) + np.cos(b))
         return b * (np.sinh(b) + np.sin(b) - sig * (np.cosh(b) - np.cos(b)))
 
-    return ((BETA_L[mode - 1] / BETA_L[0]) ** 2, slope_tip(mode) / slope_tip(1),
-            shape(mode, target) / shape(1, target))
+    return ((BETA_L[mode - 1] / BETA_L[0]) ** 2, slope_tip(mode) / slope_tip(1), shape(mode, target) / shape(1, target))

@@ -1,4 +1,5 @@
 """Random numbers the protocol draws: log-uniform values and factors that avoid 1."""
+
 from __future__ import annotations
 
 import math

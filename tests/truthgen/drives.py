@@ -18,6 +18,7 @@ Kinds (every drive starts at 0 V, from rest; offsets are reached by a smooth ram
 Ranges per device come from :class:`DriveRange`: the device's voltage limits, the frequency band
 it is driven in, and the largest frequency the sampling allows.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -67,7 +68,7 @@ def signal(spec: dict, t: np.ndarray) -> np.ndarray:
     if kind in ("sine", "triangle"):
         wave = np.sin if kind == "sine" else _triangle
         phase = 2 * np.pi * spec["freq"] * t + spec["phase"]
-        return spec["offset"] + spec["amp"] * wave(phase)   # starts at 0 V (phase -pi/2 if unipolar)
+        return spec["offset"] + spec["amp"] * wave(phase)  # starts at 0 V (phase -pi/2 if unipolar)
     if kind == "steps":
         v = np.zeros_like(t)
         prev = 0.0
@@ -102,7 +103,7 @@ def signal(spec: dict, t: np.ndarray) -> np.ndarray:
         centre = spec["centre"] * _ramp(t, spec["ramp"])
         return centre + env * np.sin(2 * np.pi * spec["freq"] * t)
     if kind == "stepped-sine":
-        edges = np.asarray(spec["edges"])           # dwell boundaries, len(freqs) + 1
+        edges = np.asarray(spec["edges"])  # dwell boundaries, len(freqs) + 1
         idx = np.clip(np.searchsorted(edges, t, "right") - 1, 0, len(spec["freqs"]) - 1)
         freqs = np.asarray(spec["freqs"])
         amps = np.asarray(spec["amps"])
@@ -130,18 +131,20 @@ def draw(kind: str, r: DriveRange, T: float, fs: float, rng: np.random.Generator
     """A random drive of ``kind`` for a device driven as ``r``, ``T`` seconds sampled at ``fs``.
     ``resonant-bursts`` are bursts at the resonance ``r.f_res``."""
     f_lo, f_hi = r.f_slow
-    f_min = max(f_lo, 3.0 / T)            # at least three periods in the record
+    f_min = max(f_lo, 3.0 / T)  # at least three periods in the record
     f_hi = max(min(f_hi, 0.05 * fs), f_min * 1.01)
     offset, amp = _window(r, rng)
     if r.amp_dyn is not None and kind in ("chirp", "noise", "steps"):
         amp = rng.uniform(*r.amp_dyn)
         offset = 0.0 if r.bipolar else amp
-    lo, hi = (offset - amp, offset + amp) if r.amp_dyn is not None else \
-        ((r.vmin, r.vmax) if r.bipolar else (max(r.vmin, 0.0), r.vmax))
+    lo, hi = (
+        (offset - amp, offset + amp)
+        if r.amp_dyn is not None
+        else ((r.vmin, r.vmax) if r.bipolar else (max(r.vmin, 0.0), r.vmax))
+    )
     spec: dict = {"kind": kind}
     if kind in ("sine", "triangle"):
-        spec.update(freq=loguniform(rng, f_min, f_hi), amp=amp, offset=offset,
-                    phase=0.0 if r.bipolar else -np.pi / 2)
+        spec.update(freq=loguniform(rng, f_min, f_hi), amp=amp, offset=offset, phase=0.0 if r.bipolar else -np.pi / 2)
     elif kind == "steps":
         hold_hi = min(max(T / 4, 0.02), 2.0)
         hold_lo = min(max(T / 40, 0.005), hold_hi / 2)
@@ -154,12 +157,25 @@ def draw(kind: str, r: DriveRange, T: float, fs: float, rng: np.random.Generator
     elif kind == "chirp":
         ramp = min(0.1 * T, 0.2)
         amp_c = amp if r.amp_dyn is not None else rng.uniform(0.1, 0.5) * amp
-        spec.update(f0=loguniform(rng, max(1.0, 2.0 / T), max(2.02 / T, 50.0)),
-                    f1=rng.uniform(0.3, 0.45) * fs, amp=amp_c, offset=offset, ramp=ramp, sweep=T - ramp)
+        spec.update(
+            f0=loguniform(rng, max(1.0, 2.0 / T), max(2.02 / T, 50.0)),
+            f1=rng.uniform(0.3, 0.45) * fs,
+            amp=amp_c,
+            offset=offset,
+            ramp=ramp,
+            sweep=T - ramp,
+        )
     elif kind == "noise":
-        spec.update(seed=int(rng.integers(2**31)), f_lo=rng.uniform(0.5, 5.0),
-                    f_hi=rng.uniform(0.15, 0.45) * fs, rms=rng.uniform(0.15, 0.35) * (hi - lo) / 2,
-                    offset=offset, lo=lo, hi=hi, ramp=min(0.1 * T, 0.2))
+        spec.update(
+            seed=int(rng.integers(2**31)),
+            f_lo=rng.uniform(0.5, 5.0),
+            f_hi=rng.uniform(0.15, 0.45) * fs,
+            rms=rng.uniform(0.15, 0.35) * (hi - lo) / 2,
+            offset=offset,
+            lo=lo,
+            hi=hi,
+            ramp=min(0.1 * T, 0.2),
+        )
     elif kind in ("bursts", "resonant-bursts"):
         if kind == "resonant-bursts":
             freq, full, centre = rng.uniform(0.92, 1.06) * r.f_res, rng.uniform(*r.amp_res), 0.0
@@ -169,23 +185,26 @@ def draw(kind: str, r: DriveRange, T: float, fs: float, rng: np.random.Generator
         period = 1.0 / freq
         env_t, env_a, t0 = [0.0], [0.0], 0.0
         while t0 < T:
-            t0 += period * rng.uniform(3, 14)           # amplitude ramp to the next level
+            t0 += period * rng.uniform(3, 14)  # amplitude ramp to the next level
             level = full * rng.choice([1.0, rng.uniform(0.2, 0.9), 0.0], p=[0.45, 0.35, 0.2])
             env_t.append(t0)
             env_a.append(level)
-            t0 += period * rng.uniform(2, 10)           # plateau at that level (0: a hold)
+            t0 += period * rng.uniform(2, 10)  # plateau at that level (0: a hold)
             env_t.append(t0)
             env_a.append(level)
         if not np.any(np.interp(np.linspace(0.0, T, 1001), env_t, env_a) > 0):
-            env_a[1] = env_a[2] = full                  # a silent record: its first burst at full level
-        spec.update(kind="bursts", freq=freq, centre=centre, env_t=env_t, env_a=env_a,
-                    ramp=min(2 * period, T / 10))
+            env_a[1] = env_a[2] = full  # a silent record: its first burst at full level
+        spec.update(kind="bursts", freq=freq, centre=centre, env_t=env_t, env_a=env_a, ramp=min(2 * period, T / 10))
     elif kind == "stepped-sine":
         count = int(rng.integers(4, 10))
         edges = np.concatenate([[0.0], np.sort(rng.uniform(0.0, T, count - 1)), [T * 1.01]])
-        spec.update(freqs=list(r.f_res * rng.uniform(0.9, 1.08, count)),
-                    amps=list(rng.uniform(*r.amp_res, count)), edges=list(edges), offset=0.0,
-                    ramp=min(3.0 / r.f_res, T / 10))
+        spec.update(
+            freqs=list(r.f_res * rng.uniform(0.9, 1.08, count)),
+            amps=list(rng.uniform(*r.amp_res, count)),
+            edges=list(edges),
+            offset=0.0,
+            ramp=min(3.0 / r.f_res, T / 10),
+        )
     else:
         raise ValueError(f"unknown drive kind {kind!r}")
     return spec

@@ -6,6 +6,7 @@ Linear parameters are drawn as the file's value times a log-uniform factor in ``
 is never within 2 % of 1 (:func:`factor`); the sensor gain and offset are drawn with the noise
 (:mod:`.measure`).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -24,10 +25,11 @@ ROOT = Path(__file__).resolve().parents[2]
 @lru_cache(maxsize=None)
 def _model_values(model: str, overrides: tuple) -> dict:
     from bondgraph.model.modelfile import load_model
+
     lm = load_model(ROOT / model, dict(overrides))
     values = {str(k): float(v) for k, v in lm.model.parameter_table().items()}
     file_values = lm.params.as_dict()
-    if "layers" in file_values:                 # an integer: not in the symbolic table
+    if "layers" in file_values:  # an integer: not in the symbolic table
         values["layers"] = int(file_values["layers"])
     return values
 
@@ -84,7 +86,7 @@ class Family:
 
     def refs(self, y: np.ndarray, rows: np.ndarray, V: np.ndarray) -> dict:
         """Ranges of the effect-free response that scale the effects (see :mod:`.mechanisms`)."""
-        rng_ = lambda a: (float(np.min(a)), float(np.max(a)))   # noqa: E731
+        rng_ = lambda a: (float(np.min(a)), float(np.max(a)))  # noqa: E731
         if self.physics == "stack":
             return {"e": rng_(rows[0]), "x": rng_(rows[1]), "V": rng_(V)}
         return {"q1": rng_(rows[0]), "qd1": rng_(rows[1]), "vel": rng_(rows[2]), "V": rng_(V)}
@@ -94,8 +96,14 @@ class StackLike(Family):
     physics = "stack"
 
     def perturb(self, p, rng):
-        ranges = {"Re": (0.5, 2.0), "S": (0.75, 1.33), "a": (0.8, 1.25), "K": (0.75, 1.33),
-                  "c": (0.1, 10.0), "M": (0.7, 1.4)}
+        ranges = {
+            "Re": (0.5, 2.0),
+            "S": (0.75, 1.33),
+            "a": (0.8, 1.25),
+            "K": (0.75, 1.33),
+            "c": (0.1, 10.0),
+            "M": (0.7, 1.4),
+        }
         return {k: p[k] * factor(rng, *ranges[k]) for k in stack.LINEAR}
 
 
@@ -104,8 +112,7 @@ class Apa(StackLike):
 
     name = "apa"
     model = "models/apa120ml.py"
-    causes = ("none", "hysteresis", "creep", "saturation", "none", "electrical", "higher-mode",
-              "hysteresis+creep")
+    causes = ("none", "hysteresis", "creep", "saturation", "none", "electrical", "higher-mode", "hysteresis+creep")
     reveal = {
         "none": ("sine", "triangle", "steps", "chirp", "noise", "bursts"),
         "hysteresis": ("sine", "triangle", "bursts", "steps"),
@@ -117,8 +124,7 @@ class Apa(StackLike):
 
     def nominal(self, overrides):
         v = _model_values(self.model, tuple(sorted(overrides.items())))
-        return {"Re": v["Re"], "S": v["kx"] * v["l"] ** 2, "a": v["a"] * v["T"],
-                "K": v["K"], "c": v["c"], "M": v["M"]}
+        return {"Re": v["Re"], "S": v["kx"] * v["l"] ** 2, "a": v["a"] * v["T"], "K": v["K"], "c": v["c"], "M": v["M"]}
 
     def shape(self, size, causes, rng, overrides):
         if size == "bench":
@@ -151,8 +157,14 @@ class BareStack(Apa):
         v = _model_values(self.model, tuple(sorted(overrides.items())))
         n = v.get("layers", 20)
         lumped = bool(overrides.get("lumped", False))
-        return {"Re": v["Re"] + (0.0 if lumped else v["Re_layer"] / n), "S": v["kx"] * v["l"] ** 2,
-                "a": v["a"], "K": v["K"], "c": v["c"], "M": (n + 1) / 2 * v["M_layer"]}
+        return {
+            "Re": v["Re"] + (0.0 if lumped else v["Re_layer"] / n),
+            "S": v["kx"] * v["l"] ** 2,
+            "a": v["a"],
+            "K": v["K"],
+            "c": v["c"],
+            "M": (n + 1) / 2 * v["M_layer"],
+        }
 
     def shape(self, size, causes, rng, overrides):
         fast = "electrical" in causes or rng.uniform() < 0.25
@@ -162,14 +174,17 @@ class BareStack(Apa):
             return Shape(float(rng.choice([2000.0, 5000.0])), rng.uniform(1.0, 2.0), 2e-4, "fast")
         if size == "bench":
             return Shape(200.0, 70.0, 5e-4, "slow") if rng.uniform() < 0.6 else Shape(1000.0, 30.0, 5e-4, "slow")
-        return Shape(200.0, rng.uniform(15.0, 25.0), 5e-4, "slow") if rng.uniform() < 0.5 else \
-            Shape(1000.0, rng.uniform(3.0, 5.0), 5e-4, "slow")
+        return (
+            Shape(200.0, rng.uniform(15.0, 25.0), 5e-4, "slow")
+            if rng.uniform() < 0.5
+            else Shape(1000.0, rng.uniform(3.0, 5.0), 5e-4, "slow")
+        )
 
     def drive_range(self, p, shape, rng):
         f = (0.2, 5.0) if shape.regime == "slow" else (1.0, 50.0)
         if rng.uniform() < 0.5:
-            return DriveRange(-150.0, 150.0, True, f)      # a +-150 V stack test
-        return DriveRange(-20.0, 120.0, False, f)          # a PICMA-like unipolar range
+            return DriveRange(-150.0, 150.0, True, f)  # a +-150 V stack test
+        return DriveRange(-20.0, 120.0, False, f)  # a PICMA-like unipolar range
 
     def drive_kinds(self, causes, shape):
         kinds = super().drive_kinds(causes, shape)
@@ -198,10 +213,12 @@ class Bimorph(Family):
 
     def perturb(self, p, rng):
         common = factor(rng, 0.92, 1.08)
-        return {"omega": [w * common * rng.uniform(0.98, 1.02) for w in p["omega"]],
-                "zeta": [z * factor(rng, 0.2, 5.0) for z in p["zeta"]],
-                "mp": [m * factor(rng, 0.8, 1.25) for m in p["mp"]],
-                "phi": list(p["phi"])}
+        return {
+            "omega": [w * common * rng.uniform(0.98, 1.02) for w in p["omega"]],
+            "zeta": [z * factor(rng, 0.2, 5.0) for z in p["zeta"]],
+            "mp": [m * factor(rng, 0.8, 1.25) for m in p["mp"]],
+            "phi": list(p["phi"]),
+        }
 
     def context(self, p):
         return {"target": self.target}
@@ -214,8 +231,17 @@ class T215(Bimorph):
     name = "t215"
     model = "models/bimorph_t215.py"
     target = 0.95
-    causes = ("none", "hysteresis", "softening", "nonlinear-damping", "none", "higher-mode",
-              "saturation", "creep", "softening+nonlinear-damping")
+    causes = (
+        "none",
+        "hysteresis",
+        "softening",
+        "nonlinear-damping",
+        "none",
+        "higher-mode",
+        "saturation",
+        "creep",
+        "softening+nonlinear-damping",
+    )
 
     def model_args(self, rng):
         return {"modes": 3} if rng.uniform() < 0.25 else {}
@@ -223,14 +249,15 @@ class T215(Bimorph):
     def shape(self, size, causes, rng, overrides):
         if size == "bench":
             return Shape(50000.0, 5.0, 2.5e-5)
-        if "higher-mode" in causes:     # the next beam mode (6.3 kHz; 12.3 kHz past three) must show
+        if "higher-mode" in causes:  # the next beam mode (6.3 kHz; 12.3 kHz past three) must show
             fs = 50000.0 if overrides.get("modes", 2) > 2 else 20000.0
             return Shape(fs, rng.uniform(0.2, 0.35), 2.5e-5)
         return Shape(float(rng.choice([10000.0, 20000.0])), rng.uniform(0.3, 0.6), 2.5e-5)
 
     def drive_range(self, p, shape, rng):
-        return DriveRange(-60.0, 60.0, True, (0.5, 50.0), f_res=p["omega"][0] / (2 * np.pi),
-                          amp_res=(0.1, 2.0), amp_dyn=(0.3, 10.0))
+        return DriveRange(
+            -60.0, 60.0, True, (0.5, 50.0), f_res=p["omega"][0] / (2 * np.pi), amp_res=(0.1, 2.0), amp_dyn=(0.3, 10.0)
+        )
 
 
 class T226(Bimorph):
@@ -249,8 +276,9 @@ class T226(Bimorph):
         return Shape(10000.0, rng.uniform(0.5, 0.8), 5e-5)
 
     def drive_range(self, p, shape, rng):
-        return DriveRange(-20.0, 20.0, True, (1.0, 100.0), f_res=p["omega"][0] / (2 * np.pi),
-                          amp_res=(0.3, 6.0), amp_dyn=(0.2, 3.0))
+        return DriveRange(
+            -20.0, 20.0, True, (1.0, 100.0), f_res=p["omega"][0] / (2 * np.pi), amp_res=(0.3, 6.0), amp_dyn=(0.2, 3.0)
+        )
 
 
 FAMILIES = {f.name: f for f in (Apa(), BareStack(), T215(), T226())}

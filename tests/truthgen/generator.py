@@ -1,5 +1,6 @@
 """``draw(seed, size) -> Record``: one randomized truth record (see the package docstring for
 the protocol)."""
+
 from __future__ import annotations
 
 import math
@@ -52,8 +53,8 @@ class Record:
     seed: int
     size: str
     family: str
-    model: str                   # model file, relative to the repository root
-    overrides: dict              # the model file's --set NAME=VALUE for this record
+    model: str  # model file, relative to the repository root
+    overrides: dict  # the model file's --set NAME=VALUE for this record
     t: np.ndarray
     V: np.ndarray
     x: np.ndarray
@@ -61,20 +62,20 @@ class Record:
     ordered: bool
     mechanisms: tuple
     strengths: tuple
-    params: dict                 # the drawn linear parameters of the truth
-    nominal: dict                # the model file's values they were drawn around
+    params: dict  # the drawn linear parameters of the truth
+    nominal: dict  # the model file's values they were drawn around
     drive: dict
     fs: float
     duration: float
     noise: dict
-    noise_rms: float             # of x, in metres
-    stroke: float                # effect-free peak-to-peak x (m, before the sensor gain)
-    effect_size: tuple           # RMS(with - without effect) / noise RMS, per cause
-    visible_size: tuple          # what the best plausible linear refit leaves / noise RMS
-    attempts: int                # rounds of the visibility rule used
-    clean: np.ndarray            # noise-free x (m, before the sensor) at the instants x was taken
-    clean0: np.ndarray           # the same without the hidden effects
-    seconds: float = 0.0         # generation time
+    noise_rms: float  # of x, in metres
+    stroke: float  # effect-free peak-to-peak x (m, before the sensor gain)
+    effect_size: tuple  # RMS(with - without effect) / noise RMS, per cause
+    visible_size: tuple  # what the best plausible linear refit leaves / noise RMS
+    attempts: int  # rounds of the visibility rule used
+    clean: np.ndarray  # noise-free x (m, before the sensor) at the instants x was taken
+    clean0: np.ndarray  # the same without the hidden effects
+    seconds: float = 0.0  # generation time
     extra: dict = field(default_factory=dict)
 
     @property
@@ -93,20 +94,26 @@ class Record:
 
     def metadata(self) -> dict:
         """What a lab would write in the file: the device and the sampling, never the truth."""
-        return {"device": f"synthetic {self.family} (tests/truthgen seed {self.seed}, {self.size})",
-                "sample_rate": f"{self.fs:g} Hz", "model": self.model}
+        return {
+            "device": f"synthetic {self.family} (tests/truthgen seed {self.seed}, {self.size})",
+            "sample_rate": f"{self.fs:g} Hz",
+            "model": self.model,
+        }
 
     def dataset(self):
         from bondgraph.data import Dataset
+
         return Dataset(self.t, {"V": self.V, "x": self.x}, self.metadata())
 
     def write_csv(self, path) -> None:
         """The record in the project's CSV format (bondgraph.data.write_csv)."""
         from bondgraph.data import write_csv
+
         write_csv(path, self.t, {"V": self.V, "x": self.x}, self.metadata())
 
     def truth(self) -> dict:
         """The truth as plain JSON-able values."""
+
         def clean(v):
             if isinstance(v, dict):
                 return {k: clean(x) for k, x in v.items()}
@@ -115,15 +122,35 @@ class Record:
             if isinstance(v, (np.floating, np.integer)):
                 return v.item()
             return v
-        return clean({"seed": self.seed, "size": self.size, "family": self.family, "model": self.model,
-                      "overrides": self.overrides, "label": self.label, "cause": self.cause,
-                      "causes": list(self.causes), "ordered": self.ordered,
-                      "mechanisms": list(self.mechanisms), "strengths": list(self.strengths),
-                      "params": self.params, "nominal": self.nominal, "drive": _drive_summary(self.drive),
-                      "fs": self.fs, "duration": self.duration, "samples": len(self.t), "noise": self.noise,
-                      "noise_rms": self.noise_rms, "stroke": self.stroke,
-                      "effect_size": list(self.effect_size), "visible_size": list(self.visible_size),
-                      "attempts": self.attempts, "seconds": round(self.seconds, 2)})
+
+        return clean(
+            {
+                "seed": self.seed,
+                "size": self.size,
+                "family": self.family,
+                "model": self.model,
+                "overrides": self.overrides,
+                "label": self.label,
+                "cause": self.cause,
+                "causes": list(self.causes),
+                "ordered": self.ordered,
+                "mechanisms": list(self.mechanisms),
+                "strengths": list(self.strengths),
+                "params": self.params,
+                "nominal": self.nominal,
+                "drive": _drive_summary(self.drive),
+                "fs": self.fs,
+                "duration": self.duration,
+                "samples": len(self.t),
+                "noise": self.noise,
+                "noise_rms": self.noise_rms,
+                "stroke": self.stroke,
+                "effect_size": list(self.effect_size),
+                "visible_size": list(self.visible_size),
+                "attempts": self.attempts,
+                "seconds": round(self.seconds, 2),
+            }
+        )
 
 
 def _drive_summary(spec: dict) -> dict:
@@ -158,8 +185,15 @@ def plan(seed: int, size: str = "ci") -> Plan:
     fam_name, causes = design(seed)
     fam = FAMILIES[fam_name]
     names = ("model", "params", "shape", "drive", "mechanisms", "noise", "visibility")
-    streams = dict(zip(names, (np.random.default_rng(s) for s in
-                               np.random.SeedSequence([int(seed), SIZES.index(size)]).spawn(len(names)))))
+    streams = dict(
+        zip(
+            names,
+            (
+                np.random.default_rng(s)
+                for s in np.random.SeedSequence([int(seed), SIZES.index(size)]).spawn(len(names))
+            ),
+        )
+    )
     overrides = fam.model_args(streams["model"])
     nominal = fam.nominal(overrides)
     p = fam.perturb(nominal, streams["params"])
@@ -176,8 +210,15 @@ def draw(seed: int, size: str = "ci") -> Record:
     """The truth record of ``seed`` at ``size`` (``ci``: small, ``bench``: realistic)."""
     start = time.perf_counter()
     pl = plan(seed, size)
-    fam, causes, overrides, nominal, p, shape, mechs = (pl.family, pl.causes, pl.overrides, pl.nominal,
-                                                        pl.params, pl.shape, pl.mechanisms)
+    fam, causes, overrides, nominal, p, shape, mechs = (
+        pl.family,
+        pl.causes,
+        pl.overrides,
+        pl.nominal,
+        pl.params,
+        pl.shape,
+        pl.mechanisms,
+    )
     r_drive, r_mech, r_noise, r_vis = (pl.streams[k] for k in ("drive", "mechanisms", "noise", "visibility"))
     m = max(1, math.ceil(1.0 / (shape.fs * shape.h_max)))
     h = 1.0 / (shape.fs * m)
@@ -233,21 +274,23 @@ def draw(seed: int, size: str = "ci") -> Record:
         if not weak:
             break
         if attempts == ATTEMPTS + (UNMASK_ATTEMPTS if len(mechs) > 1 else 0):
-            raise RuntimeError(f"seed {seed} ({size}): the hidden {'+'.join(causes)} stays below "
-                               f"{VISIBLE} noise RMS after {attempts} rounds of the visibility rule")
-        masked = [i for i in weak if visible[i] >= VISIBLE]     # visible alone, not beside its partner
+            raise RuntimeError(
+                f"seed {seed} ({size}): the hidden {'+'.join(causes)} stays below "
+                f"{VISIBLE} noise RMS after {attempts} rounds of the visibility rule"
+            )
+        masked = [i for i in weak if visible[i] >= VISIBLE]  # visible alone, not beside its partner
         partners = [j for j in range(len(mechs)) if j not in weak and strengths[j] > mechs[j].lo]
-        if attempts >= ATTEMPTS and masked and partners:        # 4. a weaker partner (compounds)
+        if attempts >= ATTEMPTS and masked and partners:  # 4. a weaker partner (compounds)
             for j in partners:
                 strengths[j] = max(strengths[j] / 2, mechs[j].lo)
                 lowered.add(j)
-        elif any(strengths[i] < mechs[i].hi for i in weak if i not in lowered):   # 1. a stronger effect
+        elif any(strengths[i] < mechs[i].hi for i in weak if i not in lowered):  # 1. a stronger effect
             for i in weak:
                 if i not in lowered:
                     strengths[i] = min(2 * strengths[i], mechs[i].hi)
-        elif noise["level"] > NOISE_FLOOR:                      # 2. a quieter sensor
+        elif noise["level"] > NOISE_FLOOR:  # 2. a quieter sensor
             noise["level"] = max(noise["level"] / 2, NOISE_FLOOR)
-        else:                                                   # 3. a drive that reveals it
+        else:  # 3. a drive that reveals it
             spec, V, y0, ref = new_drive(r_vis)
             stroke = float(np.ptp(y0[::m]))
             ctx["ref"] = ref
@@ -255,12 +298,31 @@ def draw(seed: int, size: str = "ci") -> Record:
     order = sorted(range(len(mechs)), key=lambda i: -visible[i]) if mechs else []
     t, Vs, x, noise_rms, (clean, clean0) = measure.sample(t_fine, V, y, shape.fs, n, noise, stroke, [y, y0])
     return Record(
-        seed=int(seed), size=size, family=fam.name, model=fam.model, overrides=overrides,
-        t=t, V=Vs, x=x, causes=tuple(causes[i] for i in order),
+        seed=int(seed),
+        size=size,
+        family=fam.name,
+        model=fam.model,
+        overrides=overrides,
+        t=t,
+        V=Vs,
+        x=x,
+        causes=tuple(causes[i] for i in order),
         ordered=len(order) < 2 or visible[order[0]] >= 2 * visible[order[1]],
-        mechanisms=tuple(mechs[i].name for i in order), strengths=tuple(strengths[i] for i in order),
-        params=p, nominal=nominal, drive=spec, fs=shape.fs, duration=shape.T, noise=noise,
-        noise_rms=noise_rms, stroke=stroke,
-        effect_size=tuple(effect[i] for i in order), visible_size=tuple(visible[i] for i in order),
-        attempts=attempts, clean=clean, clean0=clean0, seconds=time.perf_counter() - start,
-        extra={"regime": shape.regime, "substeps": m})
+        mechanisms=tuple(mechs[i].name for i in order),
+        strengths=tuple(strengths[i] for i in order),
+        params=p,
+        nominal=nominal,
+        drive=spec,
+        fs=shape.fs,
+        duration=shape.T,
+        noise=noise,
+        noise_rms=noise_rms,
+        stroke=stroke,
+        effect_size=tuple(effect[i] for i in order),
+        visible_size=tuple(visible[i] for i in order),
+        attempts=attempts,
+        clean=clean,
+        clean0=clean0,
+        seconds=time.perf_counter() - start,
+        extra={"regime": shape.regime, "substeps": m},
+    )

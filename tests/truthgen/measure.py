@@ -15,6 +15,7 @@ Drawn per record (:func:`draw`):
   over the drive range (or none), and a small noise on the recorded V (0.01-0.05 % of its
   range) in half the records.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -50,13 +51,13 @@ def _coloured(spec: dict, n: int, fs: float, rng) -> np.ndarray:
     t = np.arange(n) / fs
     if kind == "pink":
         f = np.fft.rfftfreq(n, 1 / fs)
-        spec_ = (rng.standard_normal(len(f)) + 1j * rng.standard_normal(len(f)))
+        spec_ = rng.standard_normal(len(f)) + 1j * rng.standard_normal(len(f))
         spec_[1:] /= np.sqrt(f[1:])
         spec_[0] = 0.0
         c = np.fft.irfft(spec_, n)
     else:
         rho = np.exp(-2 * np.pi * spec["corner"] / fs)
-        c = lfilter([np.sqrt(1 - rho ** 2)], [1.0, -rho], rng.standard_normal(n))
+        c = lfilter([np.sqrt(1 - rho**2)], [1.0, -rho], rng.standard_normal(n))
         if kind == "hum":
             c = c / max(np.std(c), 1e-30)
             phase = rng.uniform(0, 2 * np.pi, 2)

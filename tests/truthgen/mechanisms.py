@@ -36,6 +36,7 @@ higher-mode        beam                        gain of the next beam mode (1 = b
 higher-mode        offbeam                     static compliance over mode 1's, 0.005-0.1
 =================  ==========================  ================================================
 """
+
 from __future__ import annotations
 
 import math
@@ -60,9 +61,9 @@ class Mechanism:
     name: str
     lo: float
     hi: float
-    shape: Callable      # (rng, ctx) -> dict
-    apply: Callable      # (fx, strength, shape, ctx) -> None
-    applies: Callable = _always   # (ctx) -> bool: can the record show it at all?
+    shape: Callable  # (rng, ctx) -> dict
+    apply: Callable  # (fx, strength, shape, ctx) -> None
+    applies: Callable = _always  # (ctx) -> bool: can the record show it at all?
 
 
 def _centre_half(lo_hi):
@@ -71,6 +72,7 @@ def _centre_half(lo_hi):
 
 
 # ----------------------------------------------------------------------------- creep kernels
+
 
 def _creep_shape(kind):
     def shape(rng, ctx):
@@ -82,8 +84,11 @@ def _creep_shape(kind):
             taus = 10 ** np.arange(math.log10(max(5 * h, 1e-4)), math.log10(30 * T), 1 / 3)
             return {"taus": taus, "alpha": rng.uniform(0.1, 0.4)}
         count = int(rng.integers(1, 4))
-        return {"taus": np.sort([loguniform(rng, 0.01 * T, 0.5 * T) for _ in range(count)]),
-                "share": rng.dirichlet(np.ones(count))}
+        return {
+            "taus": np.sort([loguniform(rng, 0.01 * T, 0.5 * T) for _ in range(count)]),
+            "share": rng.dirichlet(np.ones(count)),
+        }
+
     return shape
 
 
@@ -104,9 +109,11 @@ def creep_cells(kind, strength, shape, T):
 
 # ----------------------------------------------------------------------------- stacks
 
+
 def _hysteresis_shape(name):
     """A random operator of the family whose own loop is at least 0.4 of its range wide (so that
     realistic loop widths need no more hysteretic than reversible response)."""
+
     def shape(rng, ctx):
         for _ in range(50):
             op = HYSTERESIS[name](rng)
@@ -114,6 +121,7 @@ def _hysteresis_shape(name):
             if gap >= 0.4 * span:
                 break
         return {"op": op, "gap": gap, "span": span}
+
     return shape
 
 
@@ -127,6 +135,7 @@ def _stack_field_hysteresis(name):
     def apply(fx, s, shape, ctx):
         c, half = _centre_half(ctx["ref"]["e"])
         fx.laws.append(FieldLaw(hysteretic_weight(s, shape), shape["op"], c, half))
+
     return _hysteresis_shape(name), apply
 
 
@@ -146,6 +155,7 @@ def _stack_saturation(name):
     def apply(fx, s, shape, ctx):
         top = max(abs(v) for v in ctx["ref"]["e"])
         fx.laws.append(FieldLaw(s, deficit=shape["deficit"], top=top))
+
     return shape, apply
 
 
@@ -175,8 +185,10 @@ def _stop_apply(fx, s, shape, ctx):
 
 def _creep(kind):
     """Creep cells in the field domain (both physics keep them in ``Effects.creep``)."""
+
     def apply(fx, s, shape, ctx):
         fx.creep.extend(creep_cells(kind, s, shape, ctx["T"]))
+
     return _creep_shape(kind), apply
 
 
@@ -248,6 +260,7 @@ def _stack_mechanisms():
 
 # ----------------------------------------------------------------------------- bimorphs
 
+
 def _bim_input_hysteresis(name):
     def apply(fx, s, shape, ctx):
         c, half = _centre_half(ctx["ref"]["V"])
@@ -256,7 +269,9 @@ def _bim_input_hysteresis(name):
         def drive_map(V):
             h_ = op.apply((V - c) / half)
             return V + w * half * (h_ - h_[0])
+
         fx.drive_map = drive_map
+
     return _hysteresis_shape(name), apply
 
 
@@ -291,7 +306,9 @@ def _bim_saturation(name):
 
         def drive_map(V):
             return V + s * top * deficit(V / top)
+
         fx.drive_map = drive_map
+
     return shape, apply
 
 
@@ -314,17 +331,19 @@ def _softening(name):
         def law(q, qd, v):
             f = np.zeros(n)
             if name == "cubic":
-                f[0] = s * w1 * w1 * q[0] ** 3 / qr ** 2
+                f[0] = s * w1 * w1 * q[0] ** 3 / qr**2
             elif name == "cubic-quintic":
                 a = q[0] / qr
-                f[0] = s * w1 * w1 * qr * ((1 + r) * a ** 3 - r * a ** 5)
+                f[0] = s * w1 * w1 * qr * ((1 + r) * a**3 - r * a**5)
             elif name == "tip-cubic":
                 w = float(phi @ q)
-                f = phi * (s * w1 * w1 / (phi[0] ** 2 * (phi[0] * qr) ** 2)) * w ** 3
-            else:   # field-stiffness: the stiffness drops with the drive field (k_a(E))
+                f = phi * (s * w1 * w1 / (phi[0] ** 2 * (phi[0] * qr) ** 2)) * w**3
+            else:  # field-stiffness: the stiffness drops with the drive field (k_a(E))
                 f[0] = s * w1 * w1 * abs(v) / vmax * q[0]
             return f
+
         fx.modal.append(law)
+
     return shape, apply
 
 
@@ -351,7 +370,9 @@ def _damping(name):
             amp = math.sqrt(q[0] ** 2 + (qd[0] / w1) ** 2)
             f[0] = -c1 * s * (amp / qr) ** m * qd[0]
             return f
+
         fx.modal.append(law)
+
     return shape, apply
 
 
@@ -381,13 +402,16 @@ def _beam_apply(fx, s, shape, ctx):
 def _offbeam_shape(rng, ctx):
     top = 2 * np.pi * 0.42 * ctx["fs"]
     lo = 1.3 * max(ctx["p"]["omega"])
-    return {"omega": loguniform(rng, lo, max(top, lo * 1.1)), "zeta": loguniform(rng, 0.005, 0.05),
-            "sign": float(rng.choice([-1.0, 1.0]))}
+    return {
+        "omega": loguniform(rng, lo, max(top, lo * 1.1)),
+        "zeta": loguniform(rng, 0.005, 0.05),
+        "sign": float(rng.choice([-1.0, 1.0])),
+    }
 
 
 def _offbeam_apply(fx, s, shape, ctx):
     p = ctx["p"]
-    g1 = p["mp"][0] * p["phi"][0] / p["omega"][0] ** 2        # mode 1 static compliance
+    g1 = p["mp"][0] * p["phi"][0] / p["omega"][0] ** 2  # mode 1 static compliance
     mp = shape["sign"] * s * g1 * shape["omega"] ** 2 / p["phi"][0]
     fx.extra_modes.append((shape["omega"], shape["zeta"], mp, p["phi"][0]))
 
@@ -408,12 +432,39 @@ def _bimorph_mechanisms():
         out.append(Mechanism("softening", name, 0.01, 0.12, *_softening(name)))
     for name in ("quadratic", "amplitude", "friction"):
         out.append(Mechanism("nonlinear-damping", name, 0.2, 3.0, *_damping(name)))
-    out.append(Mechanism("higher-mode", "beam", 0.5, 2.0, _beam_shape, _beam_apply,
-                         lambda ctx: _below_nyquist(1.05 * _next_beam_mode(ctx), ctx)))
-    out.append(Mechanism("higher-mode", "offbeam", 0.005, 0.1, _offbeam_shape, _offbeam_apply,
-                         lambda ctx: _below_nyquist(1.5 * max(ctx["p"]["omega"]), ctx)))
-    out.append(Mechanism("higher-mode", "fixture", 0.1, 1.0, _fixture_shape, _fixture_apply,
-                         lambda ctx: _below_nyquist(1.5 * ctx["p"]["omega"][0], ctx)))
+    out.append(
+        Mechanism(
+            "higher-mode",
+            "beam",
+            0.5,
+            2.0,
+            _beam_shape,
+            _beam_apply,
+            lambda ctx: _below_nyquist(1.05 * _next_beam_mode(ctx), ctx),
+        )
+    )
+    out.append(
+        Mechanism(
+            "higher-mode",
+            "offbeam",
+            0.005,
+            0.1,
+            _offbeam_shape,
+            _offbeam_apply,
+            lambda ctx: _below_nyquist(1.5 * max(ctx["p"]["omega"]), ctx),
+        )
+    )
+    out.append(
+        Mechanism(
+            "higher-mode",
+            "fixture",
+            0.1,
+            1.0,
+            _fixture_shape,
+            _fixture_apply,
+            lambda ctx: _below_nyquist(1.5 * ctx["p"]["omega"][0], ctx),
+        )
+    )
     return out
 
 

@@ -22,6 +22,7 @@ candidate model of the diagnosis:
 Static curves (:func:`saturation_curve`) give a relative *deficit* ``s(u) - u`` of a
 saturating response ``s`` on the absolute normalised input ``u = value / max|value|``.
 """
+
 from __future__ import annotations
 
 import math
@@ -64,7 +65,8 @@ class Preisach(Operator):
             m_bias, s_bias = rng.uniform(-0.5, 0.5), rng.uniform(0.15, 0.6)
             m_half, s_half = rng.uniform(0.05, 0.6), rng.uniform(0.08, 0.4)
             density = density + rng.uniform(0.3, 1.0) * np.exp(
-                -0.5 * ((bias - m_bias) / s_bias) ** 2 - 0.5 * ((half - m_half) / s_half) ** 2)
+                -0.5 * ((bias - m_bias) / s_bias) ** 2 - 0.5 * ((half - m_half) / s_half) ** 2
+            )
         self.weight = density / density.sum()
         self.state = np.empty_like(self.alpha)
 
@@ -85,8 +87,8 @@ class BoucWen(Operator):
 
     def __init__(self, rng: np.random.Generator):
         self.n = rng.uniform(1.0, 2.5)
-        total = rng.uniform(1.0, 4.0)          # beta + gamma: how fast z saturates over [-1, 1]
-        share = rng.uniform(0.55, 1.0)         # beta / (beta + gamma) > 1/2: z leads u
+        total = rng.uniform(1.0, 4.0)  # beta + gamma: how fast z saturates over [-1, 1]
+        share = rng.uniform(0.55, 1.0)  # beta / (beta + gamma) > 1/2: z leads u
         self.beta, self.gamma = share * total, (1 - share) * total
         self.zmax = (1.0 / total) ** (1 / self.n)
         # complement form u - lam z/zmax lags u (like P behind E); lam keeps it monotone
@@ -105,7 +107,7 @@ class BoucWen(Operator):
         z, n, b, g = self.z, self.n, self.beta, self.gamma
         for _ in range(steps):
             az = abs(z)
-            z += du - b * abs(du) * az ** (n - 1) * z - g * du * az ** n
+            z += du - b * abs(du) * az ** (n - 1) * z - g * du * az**n
         self.z, self.u = z, u
         return u - self.lam * z / self.zmax
 
@@ -187,10 +189,10 @@ def saturation_curve(kind: str, rng: np.random.Generator):
         def deficit(u):
             return (np.tanh(k * u) / k - u) / ref
     elif kind == "polynomial":
-        c2 = rng.uniform(-0.4, 0.4)       # asymmetry: an even u^2 term beside the cubic one
+        c2 = rng.uniform(-0.4, 0.4)  # asymmetry: an even u^2 term beside the cubic one
 
         def deficit(u):
-            return -(u ** 3 + c2 * u ** 2) / (1 + abs(c2))
+            return -(u**3 + c2 * u**2) / (1 + abs(c2))
     elif kind == "piecewise":
         knee = rng.uniform(0.35, 0.75)
         width = 0.03
@@ -201,4 +203,3 @@ def saturation_curve(kind: str, rng: np.random.Generator):
     else:
         raise ValueError(f"unknown saturation curve {kind!r}")
     return deficit
-

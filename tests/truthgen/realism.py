@@ -5,6 +5,7 @@
 * :func:`hold_drift` — the largest change of x over a hold (V within 0.2 % of its range of
   the hold's first value for at least ``min_hold`` seconds), end minus start, over the stroke.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -32,7 +33,7 @@ def hold_drift(t: np.ndarray, V: np.ndarray, x: np.ndarray, min_hold: float = 0.
             stop += 1
         if t[stop - 1] - t[start] >= min_hold:
             k = max(3, (stop - start) // 20)
-            best = max(best, abs(x[stop - k:stop].mean() - x[start:start + k].mean()))
+            best = max(best, abs(x[stop - k : stop].mean() - x[start : start + k].mean()))
         start = stop
     stroke = float(np.ptp(x))
     return best / stroke if stroke > 0 else 0.0

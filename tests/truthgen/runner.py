@@ -4,6 +4,7 @@ subprocess of the installed command line), and score the answer against the trut
 Cause names: the diagnosis' ``electrical-rc`` (or any ``electrical*``) counts as the truth's
 ``electrical``; names are compared lower-case.
 """
+
 from __future__ import annotations
 
 import json
@@ -44,11 +45,29 @@ def _verdicts(out: dict) -> list:
     """Every chain step's candidates in brief (for the analysis of a run): cause, label, gain,
     z, effective samples, gain and z over the reference, gain over the static twin, the second
     fold's z, the optimiser effort when it was fitted again in a close race, passed, seconds."""
-    keys = ("cause", "label", "gain", "z", "n_eff", "gain_reference", "z_reference", "gain_static", "z_second",
-            "effort", "passed", "seconds")
+    keys = (
+        "cause",
+        "label",
+        "gain",
+        "z",
+        "n_eff",
+        "gain_reference",
+        "z_reference",
+        "gain_static",
+        "z_second",
+        "effort",
+        "passed",
+        "seconds",
+    )
     steps = list(out.get("steps") or []) + ([out["stop"]] if out.get("stop") else [])
-    return [[{k: c.get(k) for k in keys} | {"verdict": (c.get("verdict") or c.get("skipped") or "")[:120]}
-             for c in st.get("candidates", []) if not c.get("skipped")] for st in steps]
+    return [
+        [
+            {k: c.get(k) for k in keys} | {"verdict": (c.get("verdict") or c.get("skipped") or "")[:120]}
+            for c in st.get("candidates", [])
+            if not c.get("skipped")
+        ]
+        for st in steps
+    ]
 
 
 def score(truth_causes: tuple, ordered: bool, cause: str, causes: list) -> dict:
@@ -81,18 +100,34 @@ def _end_group(proc: subprocess.Popen) -> None:
             continue
 
 
-def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: float = 600.0,
-                    workers: int = 1, extra: list | None = None, engine: str | os.PathLike | None = None) -> dict:
+def diagnose_record(
+    record,
+    workdir: str | os.PathLike | None = None,
+    timeout: float = 600.0,
+    workers: int = 1,
+    extra: list | None = None,
+    engine: str | os.PathLike | None = None,
+) -> dict:
     """Write ``record`` to CSV, run ``python -m bondgraph diagnose MODEL DATA --json`` on it and
     return the truth, the answer (cause, causes, gains), right/wrong, wall time and any error
     (``timeout``, a non-zero exit with the last stderr line, unreadable JSON).
 
     ``engine``: another source tree of the project (e.g. an exported older commit) whose
     ``bondgraph``, ``library`` and model files are used instead of the installed ones."""
-    result = {"seed": record.seed, "family": record.family, "truth": record.label,
-              "mechanisms": list(record.mechanisms), "samples": len(record.t),
-              "visible_size": [round(v, 1) for v in record.visible_size],
-              "cause": None, "causes": [], "gains": [], "gain": None, "wall": None, "error": None}
+    result = {
+        "seed": record.seed,
+        "family": record.family,
+        "truth": record.label,
+        "mechanisms": list(record.mechanisms),
+        "samples": len(record.t),
+        "visible_size": [round(v, 1) for v in record.visible_size],
+        "cause": None,
+        "causes": [],
+        "gains": [],
+        "gain": None,
+        "wall": None,
+        "error": None,
+    }
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         csv = Path(tmp) / f"truth_{record.seed}.csv"
         record.write_csv(csv)
@@ -100,15 +135,26 @@ def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: f
         env = dict(os.environ)
         if engine:
             env["PYTHONPATH"] = os.pathsep.join([str(root)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
-        cmd = [sys.executable, "-m", "bondgraph", "diagnose", str(root / record.model), str(csv), "--json",
-               "--quiet", "--workers", str(workers)]
+        cmd = [
+            sys.executable,
+            "-m",
+            "bondgraph",
+            "diagnose",
+            str(root / record.model),
+            str(csv),
+            "--json",
+            "--quiet",
+            "--workers",
+            str(workers),
+        ]
         for s in record.cli_sets:
             cmd += ["--set", s]
         cmd += list(extra or [])
         start = time.perf_counter()
         # its own process group, so that a timeout ends the diagnosis *and* its worker pool
-        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp,
-                                env=env, start_new_session=True)
+        proc = subprocess.Popen(
+            cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp, env=env, start_new_session=True
+        )
         try:
             stdout, stderr = proc.communicate(timeout=timeout)
         except subprocess.TimeoutExpired:
@@ -130,7 +176,13 @@ def diagnose_record(record, workdir: str | os.PathLike | None = None, timeout: f
         result.update(right=False, first_right=False)
         return result
     causes, gains = _chain(out)
-    result.update(cause=normalise(out.get("cause")), causes=causes, gains=gains, gain=out.get("gain"),
-                  steps=_verdicts(out), reading=(out.get("data") or {}).get("drive_reading"))
+    result.update(
+        cause=normalise(out.get("cause")),
+        causes=causes,
+        gains=gains,
+        gain=out.get("gain"),
+        steps=_verdicts(out),
+        reading=(out.get("data") or {}).get("drive_reading"),
+    )
     result.update(score(record.causes, record.ordered, result["cause"], causes))
     return result

@@ -21,11 +21,10 @@ field sets on it.  The hidden effects enter as
   ``frame`` (the stack sits on a compliant base), ``sensor`` (the sensor target on a compliant
   bracket, excited by the output acceleration; the sensor reads x plus its deflection).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-
-import numpy as np
 
 from .system import DRIVE, Equations, Lin, System
 from .terms import FieldCharge, OutputForce
@@ -40,10 +39,10 @@ class Effects:
     series_R: float = 0.0
     L: float = 0.0
     amp_tau: float = 0.0
-    creep: list = field(default_factory=list)     # (tau_j, w_j)
-    laws: list = field(default_factory=list)      # FieldLaw on the field e
-    force: object | None = None                   # callable x -> force on the output mass
-    mode: tuple | None = None                     # (kind, {numbers})
+    creep: list = field(default_factory=list)  # (tau_j, w_j)
+    laws: list = field(default_factory=list)  # FieldLaw on the field e
+    force: object | None = None  # callable x -> force on the output mass
+    mode: tuple | None = None  # (kind, {numbers})
 
 
 def system(p: dict, fx: Effects | None = None, probes: bool = False):

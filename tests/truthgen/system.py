@@ -22,6 +22,7 @@ diagonalised and run as first-order recursions by :func:`scipy.signal.lfilter` (
 for the same discretisation).  Memory operators are evaluated once per accepted step, so there
 are no rejected steps to undo.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -127,8 +128,8 @@ class System:
     B: np.ndarray
     C: np.ndarray
     E: np.ndarray | None = None
-    nonlinear: object | None = None     # callable (z, V) -> g, with reset(); evaluated once per step
-    drive_map: object | None = None     # callable V(array) -> V(array): input-side memory effects
+    nonlinear: object | None = None  # callable (z, V) -> g, with reset(); evaluated once per step
+    drive_map: object | None = None  # callable V(array) -> V(array): input-side memory effects
 
     @classmethod
     def build(cls, eq: Equations, output: Lin, terms=()):
@@ -165,10 +166,10 @@ def discretize(A: np.ndarray, BE: np.ndarray, h: float):
     n, k = BE.shape
     M = np.zeros((n + 2 * k, n + 2 * k))
     M[:n, :n] = A * h
-    M[:n, n:n + k] = BE * h
-    M[n:n + k, n + k:] = np.eye(k)
+    M[:n, n : n + k] = BE * h
+    M[n : n + k, n + k :] = np.eye(k)
     X = expm(M)
-    return X[:n, :n], X[:n, n:n + k], X[:n, n + k:]
+    return X[:n, :n], X[:n, n : n + k], X[:n, n + k :]
 
 
 def static_state(A, B, v0: float) -> np.ndarray:
@@ -197,7 +198,7 @@ def _simulate_linear(A, B, C, V, h):
     n = len(B)
     z0 = static_state(A, B, V[0])
     lam, W = np.linalg.eig(A)
-    if np.linalg.cond(W) > 1e9:   # (near-)defective: step the state directly
+    if np.linalg.cond(W) > 1e9:  # (near-)defective: step the state directly
         Phi, G0, G1 = discretize(A, B[:, None], h)
         return _loop_linear(Phi, G0[:, 0], G1[:, 0], C, z0, V)
     b = np.linalg.solve(W, B.astype(complex))
@@ -206,7 +207,7 @@ def _simulate_linear(A, B, C, V, h):
     xs = np.where(small, 1.0, x)
     e = np.exp(x)
     g0 = b * h * np.where(small, 1 + x / 2, np.expm1(xs) / xs)
-    g1 = b * h * np.where(small, 0.5 + x / 6, (np.expm1(xs) - xs) / xs ** 2)
+    g1 = b * h * np.where(small, 0.5 + x / 6, (np.expm1(xs) - xs) / xs**2)
     dV = V - V[0]
     CW = C @ W
     y = np.tile((C @ z0)[:, None], (1, len(V)))

@@ -10,6 +10,7 @@
 * :class:`ModalForces` — forces on bimorph modes from the modal state (softening, nonlinear
   damping, drive-dependent stiffness).
 """
+
 from __future__ import annotations
 
 import numpy as np

@@ -7,6 +7,7 @@ plus a sensor offset; what is left, in units of the record's noise RMS, is the v
 is thus visible only as far as no plausible recalibration absorbs it, and a nonlinear effect
 only beyond its best linear approximation within the model's structure.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -14,9 +15,9 @@ from scipy.optimize import least_squares
 
 from .system import simulate
 
-BOUND = 2.5            # plausible factor on a linear parameter
-DAMPING_BOUND = 12.0   # on viscous damping / damping ratios
-MAX_POINTS = 6000      # residual points used by the refit (evenly spaced)
+BOUND = 2.5  # plausible factor on a linear parameter
+DAMPING_BOUND = 12.0  # on viscous damping / damping ratios
+MAX_POINTS = 6000  # residual points used by the refit (evenly spaced)
 
 
 def _layout(p: dict):
@@ -45,8 +46,7 @@ def _with(p: dict, layout, log_factors):
 
 
 def _log_ratio(p, nominal, layout):
-    return np.array([np.log(p[k] / nominal[k]) if i is None else np.log(p[k][i] / nominal[k][i])
-                     for k, i, _ in layout])
+    return np.array([np.log(p[k] / nominal[k]) if i is None else np.log(p[k][i] / nominal[k][i]) for k, i, _ in layout])
 
 
 def linear_refit(physics, p: dict, nominal: dict, V: np.ndarray, h: float, target: np.ndarray, every: int):
@@ -61,7 +61,7 @@ def linear_refit(physics, p: dict, nominal: dict, V: np.ndarray, h: float, targe
     scale = max(float(np.std(y_t)), 1e-30)
     bounds = np.log([f for *_, f in layout])
 
-    def log_factors(phi):     # unbounded phi -> log factor over nominal within +-bound (MINPACK has no bounds)
+    def log_factors(phi):  # unbounded phi -> log factor over nominal within +-bound (MINPACK has no bounds)
         return bounds * np.tanh(phi / bounds)
 
     def response(phi):
@@ -72,7 +72,8 @@ def linear_refit(physics, p: dict, nominal: dict, V: np.ndarray, h: float, targe
         return (r - r.mean()) / scale
 
     start = bounds * np.arctanh(np.clip(_log_ratio(p, nominal, layout) / bounds, -0.999, 0.999))
-    fit = least_squares(residual, start, x_scale=0.1, diff_step=1e-4,
-                        max_nfev=15 * len(layout), ftol=1e-6, xtol=1e-6, method="lm")
+    fit = least_squares(
+        residual, start, x_scale=0.1, diff_step=1e-4, max_nfev=15 * len(layout), ftol=1e-6, xtol=1e-6, method="lm"
+    )
     y = response(fit.x)
     return y + float(np.mean(target[idx] - y[idx])), _with(nominal, layout, log_factors(fit.x))

@@ -12,13 +12,57 @@ element equals the bond flow, at its tail it is minus the bond flow.  Efforts ar
 sign-flipped.  Laws are given as numbers/sympy expressions (linear) or as Python callables of
 sympy symbols (nonlinear); they may use parameters, inputs, internal states and operator outputs.
 """
-from .base import (DISSIPATION, E, F, FIXED, ONE_PORT, P, Q, RELAY, STORAGE, CausalConflict, Element,
-    EquationBuilder, Port, invert, law, sympify)
+
+from .base import (
+    DISSIPATION,
+    FIXED,
+    ONE_PORT,
+    RELAY,
+    STORAGE,
+    CausalConflict,
+    E,
+    Element,
+    EquationBuilder,
+    F,
+    P,
+    Port,
+    Q,
+    invert,
+    law,
+    sympify,
+)
 from .dissipation import R
 from .sources import Se, Sf
 from .storage import C, CField, I
 from .structure import GY, J0, J1, TF, Junction, TwoPort
 
-__all__ = ["Element", "Port", "EquationBuilder", "CausalConflict", "FIXED", "STORAGE", "DISSIPATION", "RELAY",
-           "Q", "P", "E", "F", "ONE_PORT", "invert", "law", "sympify",
-           "Se", "Sf", "C", "I", "CField", "R", "TF", "GY", "J0", "J1", "Junction", "TwoPort"]
+__all__ = [
+    "Element",
+    "Port",
+    "EquationBuilder",
+    "CausalConflict",
+    "FIXED",
+    "STORAGE",
+    "DISSIPATION",
+    "RELAY",
+    "Q",
+    "P",
+    "E",
+    "F",
+    "ONE_PORT",
+    "invert",
+    "law",
+    "sympify",
+    "Se",
+    "Sf",
+    "C",
+    "I",
+    "CField",
+    "R",
+    "TF",
+    "GY",
+    "J0",
+    "J1",
+    "Junction",
+    "TwoPort",
+]

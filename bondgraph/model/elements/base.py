@@ -34,6 +34,7 @@ Equations (see :mod:`bondgraph.equations`):
 Sign convention: every port uses the *power-in* convention (the flow into the element is
 ``port.f_in``; efforts are never sign-flipped).
 """
+
 from __future__ import annotations
 
 import copy

@@ -1,4 +1,5 @@
 """Resistors (dampers): e = law(f_in) or f_in = law(e); the resistance form is preferred."""
+
 from __future__ import annotations
 
 import sympy as sp
@@ -49,14 +50,18 @@ class R(Element):
         if port.sets_effort:
             law_ = self.effort_of_flow()
             if law_ is None:
-                raise CausalityError(f"{eqs.model_name}: R '{self.name}' must take flow and give effort, but its "
-                                     f"law f(e) cannot be inverted; give it as law=lambda f: ... or change the graph")
+                raise CausalityError(
+                    f"{eqs.model_name}: R '{self.name}' must take flow and give effort, but its "
+                    f"law f(e) cannot be inverted; give it as law=lambda f: ... or change the graph"
+                )
             port.set_effort(law_.xreplace({F: port.f_in}))
         else:
             law_ = self.flow_of_effort()
             if law_ is None:
-                raise CausalityError(f"{eqs.model_name}: R '{self.name}' must take effort and give flow, but its "
-                                     f"law e(f) cannot be inverted; give it as conductance_law=lambda e: ...")
+                raise CausalityError(
+                    f"{eqs.model_name}: R '{self.name}' must take effort and give flow, but its "
+                    f"law e(f) cannot be inverted; give it as conductance_law=lambda e: ..."
+                )
             port.set_flow_in(law_.xreplace({E: port.e}))
 
     def describe(self):

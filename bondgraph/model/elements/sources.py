@@ -1,4 +1,5 @@
 """Sources: an effort or a flow imposed on a bond (modulated when it depends on inputs)."""
+
 from __future__ import annotations
 
 from .base import FIXED, Element, sympify

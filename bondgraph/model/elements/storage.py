@@ -8,6 +8,7 @@ Integral causality (the state is integrated) is preferred; a port forced into th
 *derivative*, causality has no state of its own: its stored quantity follows from the law
 inverted, and the deriver expresses its time derivative through the other states.
 """
+
 from __future__ import annotations
 
 from typing import Callable, Sequence
@@ -15,7 +16,7 @@ from typing import Callable, Sequence
 import sympy as sp
 
 from ...support.errors import CausalityError, ModelError
-from .base import E, F, STORAGE, Element, P, Q, invert, law, sympify
+from .base import STORAGE, E, Element, F, P, Q, invert, law, sympify
 
 
 class _OnePortStorage(Element):
@@ -24,22 +25,24 @@ class _OnePortStorage(Element):
 
     is_storage = True
     causal_class = STORAGE
-    _var: sp.Symbol           # placeholder of the stored quantity (Q or P)
-    _value: sp.Symbol         # placeholder of the port variable the law gives (E or F)
-    _state: str               # "q" or "p"
-    _law_gives_effort: bool   # C: the law gives the effort; I: the flow
-    _modulus: str             # "capacitance" or "inertia"
+    _var: sp.Symbol  # placeholder of the stored quantity (Q or P)
+    _value: sp.Symbol  # placeholder of the port variable the law gives (E or F)
+    _state: str  # "q" or "p"
+    _law_gives_effort: bool  # C: the law gives the effort; I: the flow
+    _modulus: str  # "capacitance" or "inertia"
 
     def __init__(self, name, modulus, law_, energy, x0):
         super().__init__(name)
         given = [x is not None for x in (modulus, law_, energy)]
         if sum(given) != 1:
-            raise ModelError(f"{self.kind} '{name}': give exactly one of {'a' if self.kind == 'C' else 'an'} "
-                             f"{self._modulus}, law= or energy=")
+            raise ModelError(
+                f"{self.kind} '{name}': give exactly one of {'a' if self.kind == 'C' else 'an'} "
+                f"{self._modulus}, law= or energy="
+            )
         v = self._var
         if modulus is not None:
             mod = sympify(modulus, f"{self.kind} '{name}' {self._modulus}")
-            self.law, self.energy, self.linear_modulus = v / mod, v ** 2 / (2 * mod), mod
+            self.law, self.energy, self.linear_modulus = v / mod, v**2 / (2 * mod), mod
         elif law_ is not None:
             self.law, self.energy, self.linear_modulus = law(law_, v, f"{self.kind} '{name}' law"), None, None
         else:
@@ -66,8 +69,9 @@ class _OnePortStorage(Element):
         port = ports["p"]
         gives_effort = self._law_gives_effort
         value, rate = (port.e, port.f_in) if gives_effort else (port.f_in, port.e)
-        set_value, set_rate = (port.set_effort, port.set_flow_in) if gives_effort else \
-            (port.set_flow_in, port.set_effort)
+        set_value, set_rate = (
+            (port.set_effort, port.set_flow_in) if gives_effort else (port.set_flow_in, port.set_effort)
+        )
         if port.sets_effort == gives_effort:  # integral causality
             x = eqs.state(f"{self._state}_{self.name}", self._state, getattr(self, f"{self._state}0"), port.origin)
             set_value(self.law.xreplace({self._var: x}))
@@ -75,9 +79,11 @@ class _OnePortStorage(Element):
         else:
             x = self.stored(value)
             if x is None:
-                raise CausalityError(f"{eqs.model_name}: {self.kind} '{self.name}' is in derivative causality but "
-                                     f"its law cannot be inverted; make it linear or add a compliance/inertia next "
-                                     f"to it")
+                raise CausalityError(
+                    f"{eqs.model_name}: {self.kind} '{self.name}' is in derivative causality but "
+                    f"its law cannot be inverted; make it linear or add a compliance/inertia next "
+                    f"to it"
+                )
             set_rate(eqs.derivative(f"{'f' if gives_effort else 'e'}_in_{self.name}", x, port.origin))
         eqs.quantity(self._state, port.key, x)
 
@@ -119,8 +125,16 @@ class CField(Element):
     is_storage = True
     causal_class = STORAGE
 
-    def __init__(self, name: str, ports: Sequence[str], *, stiffness=None, compliance=None,
-                 energy: Callable | None = None, q0=None):
+    def __init__(
+        self,
+        name: str,
+        ports: Sequence[str],
+        *,
+        stiffness=None,
+        compliance=None,
+        energy: Callable | None = None,
+        q0=None,
+    ):
         super().__init__(name)
         ports = tuple(ports)
         if len(ports) < 2 or len(set(ports)) != len(ports):
@@ -184,7 +198,8 @@ class CField(Element):
                 raise CausalityError(
                     f"{eqs.model_name}: ports {', '.join(deriv)} of C-field '{self.name}' are in derivative "
                     f"causality and its law cannot be inverted for them; make the field linear or add "
-                    f"compliance") from None
+                    f"compliance"
+                ) from None
             for i, pn in enumerate(deriv):
                 q[pn] = sp.simplify(sol[i])
                 sub[self.placeholders[pn]] = q[pn]

@@ -7,6 +7,7 @@
 
 None of them has a causal preference; each passes the causality of one port on to the others.
 """
+
 from __future__ import annotations
 
 import sympy as sp
