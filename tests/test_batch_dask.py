@@ -237,14 +237,14 @@ def scheduler(tmp_path_factory):
 
 
 def readme_cluster_command() -> str:
-    blocks = re.findall(r"```console\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+    blocks = re.findall(r"```console\n(.*?)```", (ROOT / "docs" / "batch.md").read_text(), re.S)
     return next(ln.split("  #")[0].strip() for b in blocks for ln in b.splitlines() if ln.startswith("bondgraph batch"))
 
 
 def test_readme_cluster_example_on_a_scheduler_and_workers_started_here(
     scheduler, records, direct, tmp_path, monkeypatch, capsys
 ):
-    """The README's cluster command, with this scheduler's address and the lot expanded as a
+    """The cluster command of docs/batch.md, with this scheduler's address and the lot expanded as a
     shell would: the broken and the effect-free record."""
     (tmp_path / "lot").mkdir()
     for r in records[1:]:

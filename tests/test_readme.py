@@ -1,6 +1,6 @@
-"""Examples are tests: every command and Python example of README.md runs (a shell block's
-commands in order, in a directory with the README's model file and data), and the numbers
-the README shows are the numbers they give."""
+"""Examples are tests: every command and Python example of README.md and of the user-guide
+pages in docs/ runs (a shell block's commands in order, in a directory with the README's
+model file and data), and the numbers the README shows are the numbers they give."""
 
 import contextlib
 import io
@@ -12,15 +12,16 @@ import pytest
 from conftest import ROOT
 from truth import apa_data
 
-import bondgraph as bg
 from bondgraph.cli import main
 from bondgraph.data import read_csv, write_csv
 
 README = (ROOT / "README.md").read_text()
+#: the user-guide pages whose shell examples run with the README's
+GUIDES = [(ROOT / "docs" / page).read_text() for page in ("papers.md", "batch.md", "fitting.md")]
 
 
-def blocks(lang):
-    return re.findall(rf"```{lang}\n(.*?)```", README, re.S)
+def blocks(lang, texts=(README,)):
+    return [b for text in texts for b in re.findall(rf"```{lang}\n(.*?)```", text, re.S)]
 
 
 def python_block(containing: str) -> str:
@@ -30,7 +31,7 @@ def python_block(containing: str) -> str:
 def readme_commands():
     """The bondgraph commands of each shell block (a block's commands run in order)."""
     out = []
-    for block in blocks("sh"):
+    for block in blocks("sh", (README, *GUIDES)):
         cmds = []
         for line in block.splitlines():
             line = line.split("  #")[0].strip()
@@ -146,22 +147,3 @@ def test_readme_model_file_prints_the_equations_shown(tmp_path, capsys):
     assert shown, "README shows the equations"
     for line in shown:
         assert line in out
-
-
-def test_readme_operator_example_makes_a_backlash_loop(tmp_path, monkeypatch):
-    (tmp_path / "backlash_example.py").write_text(python_block("class Backlash"))
-    monkeypatch.syspath_prepend(str(tmp_path))
-    from backlash_example import Backlash
-
-    g = bg.Model("gap")
-    V = g.input("V")
-    h = g.operator("gap", Backlash(0.5), V)
-    g.add(bg.Se("drive", h), bg.J1("j"), bg.R("r", 1.0))
-    g.bond("drive", "j")
-    g.bond("j", "r")
-    g.output("y", g.effort("r"))
-    t = np.linspace(0, 2, 801)
-    res = bg.simulate(g, t, {"V": bg.Triangle(2.0, 1.0)})
-    up = res["y"][(t > 0.3) & (t < 0.45)] - res["V"][(t > 0.3) & (t < 0.45)]
-    down = res["y"][(t > 0.8) & (t < 0.95)] - res["V"][(t > 0.8) & (t < 0.95)]
-    assert np.allclose(up, -0.5, atol=1e-9) and np.allclose(down, 0.5, atol=1e-9)  # lags by r each way

@@ -13,7 +13,9 @@ import numpy as np
 import scipy.linalg as sla
 import sympy as sp
 
+from ..equations.derivation import derive
 from ..equations.system import Equations
+from ..model.graph import Model
 from ..numerics.checks import check_linear
 from ..support.errors import UsageError, did_you_mean
 
@@ -164,15 +166,43 @@ def symbolic_matrices(eqs: Equations, input: str, output: str, op_gains: dict | 
 
 
 def linearize(
-    eqs: Equations,
+    eqs: Model | Equations,
     input: str | None = None,
     output: str | None = None,
     params: dict | None = None,
     x_op: dict | None = None,
     u_op: dict | None = None,
 ) -> LinearModel:
-    """Linearise the response of ``output`` to ``input`` (default: the model's first declared
-    input and output) around the initial state (or ``x_op``) with inputs at zero (or ``u_op``)."""
+    """Linearise the response of ``output`` to ``input`` around an operating point.
+
+    Parameters
+    ----------
+    eqs : Model or Equations
+        The model, or its derived equations (a model is derived first).
+    input, output : str, optional
+        Names of a declared input and output (default: the model's first of each).
+    params : dict, optional
+        Parameter values by name (default: the model's values).
+    x_op : dict, optional
+        State values by state name (default: the initial state).
+    u_op : dict, optional
+        Input values by name (default: 0); input rates are held at 0 and memory operators
+        are replaced by their small-signal gain from rest.
+
+    Returns
+    -------
+    LinearModel
+        A, B, C, D in SI units of the states, input and output.
+
+    Raises
+    ------
+    UsageError
+        For an unknown input or output.
+    ParameterError
+        When the matrices are not finite at these values.
+    """
+    if isinstance(eqs, Model):
+        eqs = derive(eqs)
     input = input if input is not None else next(iter(eqs.model.inputs), "")
     output = output if output is not None else next(iter(eqs.model.outputs), "")
     table = eqs.model.parameter_table()
