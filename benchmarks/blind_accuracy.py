@@ -42,11 +42,16 @@ def parse_seeds(text: str) -> list[int]:
 
 
 def normalise(cause) -> str:
-    """Lower-case cause name, ``electrical-*`` as ``electrical``; a missing one as ``missing``."""
+    """Lower-case cause name, ``electrical-*`` as ``electrical``, ``friction`` as this
+    generator's ``nonlinear-damping`` (its category for friction); a missing one as ``missing``."""
     if cause is None:
         return "missing"
     name = str(cause).strip().lower()
-    return "electrical" if name.startswith("electrical") else name
+    return "electrical" if name.startswith("electrical") else FINER.get(name, name)
+
+
+#: the diagnosis' names finer than this generator's categories
+FINER = {"friction": "nonlinear-damping"}
 
 
 def _names(causes) -> tuple[list, list]:

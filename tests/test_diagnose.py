@@ -235,7 +235,7 @@ def test_third_party_candidate_named_through_public_contract():
 def test_third_party_candidate_silent_on_effect_free_data(monkeypatch):
     import bondgraph.diagnosis.engine as engine
 
-    monkeypatch.setattr(engine, "load_candidates", lambda: [SquareLaw()])
+    monkeypatch.setattr(engine, "load_candidates", lambda model=None: [SquareLaw()])
     rep = diagnose(lag_model(), lag_record(square=0.0), workers=2)
     assert rep.causes == [] and rep.cause == "none"
     assert rep.steps[0].why.startswith("none")
@@ -640,7 +640,7 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     from bondgraph.diagnosis import View
     from bondgraph.diagnosis.calibration import calibrate
     from bondgraph.diagnosis.context import Context
-    from library.extensions.modes import mode_implausible
+    from bondgraph.diagnosis.modes import mode_implausible
 
     rng = np.random.default_rng(7)
     n, fs = 6000, 500.0

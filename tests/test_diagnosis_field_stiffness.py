@@ -76,6 +76,6 @@ def test_after_a_structural_cause_the_field_is_the_models_input():
     from test_diagnosis_friction import record as friction_record
 
     rep = diagnose(model_file_like(), friction_record(), candidates=[FrictionDamping(), FieldStiffness()], workers=1)
-    assert rep.causes == ["nonlinear-damping"], [s.why for s in rep.steps]
+    assert rep.causes == ["friction"], [s.why for s in rep.steps]
     tried = [c for c in rep.steps[1].candidates if c.label == FieldStiffness.label]
     assert tried and not tried[0].skipped and not tried[0].error

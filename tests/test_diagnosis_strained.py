@@ -61,7 +61,7 @@ def test_a_tone_near_resonance_is_calibrated_to_the_device_and_nothing_is_named(
     assert cal.values["cc"] == pytest.approx(c, rel=0.05)
     assert cal.gain == pytest.approx(1.0, rel=0.01)
     assert not cal.at_bounds
-    modes = [cand for cand in load_candidates() if cand.cause == "higher-mode"]
+    modes = [cand for cand in load_candidates(resonator(38.0, 0.01)) if cand.cause == "higher-mode"]
     rep = diagnose(resonator(38.0, 0.01), record(), candidates=modes, workers=1, chain=False)
     assert rep.cause == "none", rep.steps[0].why
 

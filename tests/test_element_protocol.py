@@ -240,6 +240,6 @@ def test_diagnosis_on_a_model_with_a_new_kind(q0, cause):
     noise = 1e-3 * np.std(res["x"]) * np.random.default_rng(0).standard_normal(t.size)
     data = Dataset(t, {"F": res["F"], "x": res["x"] + noise})
     report = diagnose(
-        oscillator(), data, workers=1, candidates=[c for c in load_candidates() if c.cause == "softening"]
+        oscillator(), data, workers=1, candidates=[c for c in load_candidates(oscillator()) if c.cause == "softening"]
     )
     assert report.causes == cause

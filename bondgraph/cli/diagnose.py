@@ -14,7 +14,8 @@ from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, comm
     MODEL_ARGS
     + DATA_ARGS
     + [
-        arg("--json", action="store_true", help="print one JSON object (causes, gains, every candidate)"),
+        arg("--json", action="store_true", help="print one JSON object (causes, gains, every candidate, equations)"),
+        arg("--equations", action="store_true", help="end the readable report with the extended model's equations"),
         arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="measured vs calibrated vs extended, residuals"),
         arg("--workers", type=int, default=2, help="parallel worker processes (default 2)"),
         arg("--no-chain", action="store_true", help="name one cause only (no compound effects)"),
@@ -51,7 +52,7 @@ def run(args):
         if args.json:
             print(json.dumps(report.as_json()))
         else:
-            sys.stdout.write(report.text())
+            sys.stdout.write(report.text(equations=args.equations))
         if args.plot:
             from ..plotting import plot_diagnosis
 

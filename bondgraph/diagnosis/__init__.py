@@ -47,11 +47,13 @@ public names (:class:`Candidate`, :class:`Extension`, :class:`View`, :mod:`.filt
 :mod:`.rewrite`) and the framework's public API.
 """
 
-from . import filters, rewrite
+from . import filters, laws, modes, rewrite, sites
 from .additive import AdditiveDrive, Term
-from .candidate import LINEAR, NONLINEAR, Candidate, Extension
+from .candidate import LINEAR, NONLINEAR, NOT_A_DRIVE, Candidate, Extension
 from .engine import diagnose, load_candidates, model_file_options
+from .laws import LawTerm
 from .report import CandidateResult, Report, Step
+from .sites import Site
 from .view import DriveFit, View
 
 __all__ = [
@@ -62,6 +64,8 @@ __all__ = [
     "model_file_options",
     "Candidate",
     "Extension",
+    "LawTerm",
+    "Site",
     "View",
     "DriveFit",
     "Report",
@@ -69,6 +73,10 @@ __all__ = [
     "CandidateResult",
     "LINEAR",
     "NONLINEAR",
+    "NOT_A_DRIVE",
     "filters",
+    "laws",
+    "modes",
     "rewrite",
+    "sites",
 ]

@@ -570,6 +570,7 @@ def calibrate(
     gain, offset, rf, rv = score(ctx, raw)
     factors = tolerances(free, tolerance)
     plausible = {n: param_bounds(ctx, n, nominal[n], factors[n]) for n in free}
+    ctx.plausible = plausible
     outside = {
         n: values[n] / nominal[n]
         for n in free

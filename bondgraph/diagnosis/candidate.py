@@ -22,6 +22,10 @@ from ..model.graph import Model
 #: linear structural one must beat the full linear recalibration and be physically plausible
 NONLINEAR, LINEAR = "nonlinear", "linear"
 
+#: why a drive-side candidate does not apply once the model is no drive transform of its
+#: linear core (a cause inside the dynamics was named)
+NOT_A_DRIVE = "acts on the drive, and the model is no longer a transform of its drive"
+
 
 @dataclass
 class Extension:
@@ -59,6 +63,11 @@ class Candidate(ABC):
 
     #: the cause it stands for (e.g. "hysteresis"); several candidates may share one
     cause: str = ""
+    #: where it acts: an element site's name (:mod:`bondgraph.diagnosis.sites`), "output" for
+    #: the sensor, "" for the drive
+    site_name: str = ""
+    #: whether it may be named again once named (a structure may lack several modes)
+    repeatable: bool = False
     #: a short description of the extension
     label: str = ""
     #: NONLINEAR or LINEAR (see the module constants)
@@ -74,6 +83,13 @@ class Candidate(ABC):
     def applies(self, view) -> bool | str:
         """True, or a short reason why the candidate does not apply to this model and data."""
         return True
+
+    def screen(self, view) -> float | None:
+        """The share (0-1) of the current residual that the candidate explains to first order,
+        computed quickly, or None when it cannot say (it is then fitted in full).  When more
+        candidates can say than ``diagnosis.screen_keep``, the engine fits only those that
+        explain most."""
+        return None
 
     def evidence(self, view) -> dict[str, float]:
         """Numbers from the current residual that speak for this cause (shown, not decisive)."""
@@ -105,3 +121,8 @@ class Candidate(ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.cause}: {self.label})"
+
+    def identity(self) -> tuple[str, str]:
+        """(cause, site): once named, candidates of the same identity are not tried again on
+        the extended model unless :attr:`repeatable`."""
+        return self.cause, self.site_name

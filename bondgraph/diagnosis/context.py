@@ -20,6 +20,7 @@ from ..linear.lti import LTI, first_input, first_output
 from ..model.graph import Model
 from ..numerics.simulate import Simulator
 from ..support import config
+from ..support.errors import DataError
 
 SENSOR_GAIN = "sensor.gain"
 
@@ -105,6 +106,7 @@ class Context:
         y = data.column(self.data_output)
         check_varies(u, self.data_input, data.path)
         fs = self.source_rate
+        check_follows(u, y, fs, self.data_input, self.data_output, data.path)
         self.band_hz = drive_band(u, fs)
         self.main_hz = drive_peak(u, fs)
         noise_density = noise_psd(y, u, fs, self.band_hz)
@@ -147,6 +149,8 @@ class Context:
         #: white-noise equivalent of the measurement noise in the (decimated) record
         self.noise_psd = noise_density
         self.noise = math.sqrt(noise_density * fs / 2) if noise_density is not None else None
+        #: |value| bounds of the plausible device by parameter (set by the calibration)
+        self.plausible: dict[str, tuple[float, float]] = {}
         #: equal time blocks of the split (see :func:`drive_sweep`)
         blocks = int(config.get("diagnosis.blocks"))
         sweep = drive_sweep(data.column(self.data_input), fs, blocks)
@@ -429,3 +433,39 @@ def _blocks(mask: np.ndarray) -> list[slice]:
     """Contiguous runs of ``mask`` as slices."""
     d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
     return [slice(a, b) for a, b in zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0])]
+
+
+def check_follows(u: np.ndarray, y: np.ndarray, fs: float, drive: str, output: str, path: str | None = None) -> None:
+    """Refuse an output that does not follow the drive: constant (a dead or unplugged
+    sensor), or with no coherence with the drive where the drive has power (noise unrelated
+    to it: a wrong column, a sensor out of range).  A model can explain nothing in such a
+    record, and an answer of no cause would read as a healthy device.
+
+    The coherence is Welch's magnitude-squared coherence, less its bias for the averaged
+    segments, averaged over the frequencies that hold the drive's power (weighted by it); the
+    record is refused below ``diagnosis.min_coherence``.
+
+    Raises
+    ------
+    DataError
+        With one line naming the column and what to check.
+    """
+    where = f"{path}: " if path else ""
+    scale = max(float(np.max(np.abs(y))), 1e-300)
+    if float(np.ptp(y)) <= 1e-9 * scale:
+        raise DataError(
+            f"{where}output column '{output}' is constant ({y[0]:g}): it does not follow the drive '{drive}'; "
+            f"check the sensor and the column"
+        )
+    nper = welch_length(len(u), 8, 15)
+    f, Puu = welch(u, fs, nper)
+    Pyy, Puy = welch(y, fs, nper)[1], welch(u, fs, nper, y)[1]
+    bias = 1.0 / max(2.0 * len(u) / nper - 1.0, 2.0)
+    coh = np.clip((np.abs(Puy) ** 2 / np.maximum(Puu * Pyy, 1e-300) - bias) / (1 - bias), 0.0, 1.0)
+    w = np.where(f > 0, Puu, 0.0)
+    mean = float(np.sum(coh * w) / np.sum(w)) if np.sum(w) > 0 else 0.0
+    if mean < config.get("diagnosis.min_coherence"):
+        raise DataError(
+            f"{where}output column '{output}' does not follow the drive '{drive}' (coherence {mean:.2g} where the "
+            f"drive has power): noise unrelated to it; check the sensor, its range and the columns"
+        )

@@ -165,6 +165,7 @@ def judge(
     later: bool = False,
     recalibration: str = "",
     need_share: float | None = None,
+    kind_checks: bool = True,
 ) -> Verdict:
     """Apply the rules of the module docstring to one candidate (``later``: in a chain step
     after the first, where ``diagnosis.min_gain_chain`` replaces ``diagnosis.min_gain``;
@@ -178,6 +179,8 @@ def judge(
         return Verdict(False, f"gain {base.gain:.3g} < {min_gain:g}")
     if base.z < min_z:
         return Verdict(False, f"not significant (z = {base.z:.2g} < {min_z:g}, {base.n_eff:.0f} effective samples)")
+    if not kind_checks:
+        return Verdict(True, "passes")
     ref_gain, ref_z = config.get("diagnosis.min_gain_reference"), config.get("diagnosis.min_z_reference")
     vr = versus_reference
     beyond = vr is not None and vr.gain >= ref_gain and vr.z >= ref_z

@@ -15,14 +15,19 @@ from ..data import Dataset
 from ..model.graph import Model
 from ..numerics.simulate import SimulationError
 from ..support import config
-from ..support.errors import BondGraphError, UsageError
+from ..support.errors import BondGraphError
+from .account import account
 from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State, residual_floor
 from .decision import Comparison, Verdict, compare, judge, reference_prediction, regress
+from .laws import law_kinds
+from .modes import mode_kinds
 from .pool import Pool, single_threaded_blas
 from .projection import time_budget
 from .report import CandidateResult, Report, Step
+from .restoring import restoring_kinds
+from .screen import screen_out
 from .view import View
 
 
@@ -52,7 +57,7 @@ def run_candidate(
     (``(state, bounds)``: the calibration within tolerance), and refits within its bounds.
     ``effort``: a factor on its optimisers' evaluation budgets (see :func:`polish_race`)."""
     started = time.time()
-    res = CandidateResult(cand.cause, cand.label, cand.kind, effort=float(effort))
+    res = CandidateResult(cand.cause, cand.label, cand.kind, effort=float(effort), site=cand.site_name)
     if cand.kind == LINEAR and plausible is not None:
         view = View(ctx, plausible[0], calibrated, bounds=plausible[1], effort=effort)
         res.against = "plausible"
@@ -203,6 +208,8 @@ def assess(
         rms_ref,
         [oc.result for oc in outcomes],
         why,
+        winner.result.site if winner else "",
+        winner.result.label if winner else "",
     )
     return step, winner
 
@@ -345,18 +352,17 @@ def advance(ctx: Context, state: State, oc: Outcome, view: View) -> State:
     )
 
 
-def load_candidates() -> list[Candidate]:
-    """Candidates from the ``bondgraph.diagnosis`` entry points (each a callable returning a list)."""
+def load_candidates(model: Model | None = None) -> list[Candidate]:
+    """The candidates a diagnosis of ``model`` tries by default: the framework's own effect
+    kinds at every site of the model (law terms of its springs and dampers, :mod:`.laws`;
+    missing modes, :mod:`.modes`) and the candidates of the ``bondgraph.diagnosis`` entry
+    points (each a callable returning a list; a domain library's).  Without a model, the
+    entry points' only."""
     from importlib.metadata import entry_points
 
-    out: list[Candidate] = []
+    out: list[Candidate] = [] if model is None else law_kinds(model) + restoring_kinds(model) + mode_kinds(model)
     for ep in entry_points(group="bondgraph.diagnosis"):
         out += list(ep.load()())
-    if not out:
-        raise UsageError(
-            "no diagnosis candidates are installed (entry point group 'bondgraph.diagnosis'); "
-            "reinstall with pip install -e ."
-        )
     return out
 
 
@@ -387,7 +393,7 @@ def diagnose(
 ) -> Report:
     """Diagnose what ``model`` misses in ``data`` (see the package docstring).
 
-    ``candidates``: the causes to try (default: the installed entry points);
+    ``candidates``: the causes to try (default: :func:`load_candidates` of the model);
     ``calibrate_first``: parameter names or glob patterns preferred when linear parameters
     cannot be told apart (e.g. the model file's ``CALIBRATE``); ``tolerance``: {pattern: factor}
     of plausible device-to-device spread (the model file's ``TOLERANCE``; others
@@ -512,7 +518,7 @@ def _diagnose(
     started = time.time()
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     tick = getattr(progress, "advance", None)
-    cands = list(candidates) if candidates is not None else load_candidates()
+    cands = list(candidates) if candidates is not None else load_candidates(model)
     ctx = Context(model, data, input, output, data_input, data_output, validation, say, reading)
     state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance, workers)
     plausible = (pstate, cal.plausible) if pstate is not state else None
@@ -534,22 +540,32 @@ def _diagnose(
                 say(note)
                 ctx.notes.append(note)
                 break
-            pending = [i for i, c in enumerate(cands) if c.cause not in state.causes]
+            pending = [i for i, c in enumerate(cands) if c.repeatable or c.cause not in state.causes]
             if not pending:
                 break
             outcomes = {}
             first = plausible if k == 0 else None
+            left_out, shares = screen_out(View(ctx, state, cal.free), cands, pending)
+            for i, why in left_out.items():
+                res = CandidateResult(cands[i].cause, cands[i].label, cands[i].kind, site=cands[i].site_name)
+                res.skipped = why
+                outcomes[i] = Outcome(res)
+            fitted = [i for i in pending if i not in left_out]
+            if left_out:
+                say(f"step {k + 1}: {len(fitted)} of {len(pending)} candidates fitted in full after the screen")
             screen = config.get("diagnosis.screen_effort") if k else 1.0
-            for n, (i, oc) in enumerate(pool.run(state, pending, first, screen), 1):
+            for n, (i, oc) in enumerate(pool.run(state, fitted, first, screen), 1):
+                if i in shares:
+                    oc.result.evidence["first_order_share"] = shares[i]
                 outcomes[i] = oc
                 if tick is not None:
-                    tick(status=_line(k + 1, n, len(pending), oc.result))
+                    tick(status=_line(k + 1, n, len(fitted), oc.result))
                 else:
-                    say(_line(k + 1, n, len(pending), oc.result))
-            redo = [i for i in pending if screen != 1.0 and near_the_bar(ctx, state, outcomes[i])]
+                    say(_line(k + 1, n, len(fitted), oc.result))
+            redo = [i for i in fitted if screen != 1.0 and near_the_bar(ctx, state, outcomes[i])]
             if redo:
                 say(
-                    f"step {k + 1}: {len(redo)} of {len(pending)} candidates screened with {screen:g}× the "
+                    f"step {k + 1}: {len(redo)} of {len(fitted)} candidates screened with {screen:g}× the "
                     f"evaluations come near the bar: fitted with the full budget"
                 )
                 outcomes.update(pool.run(state, redo, first))
@@ -602,8 +618,15 @@ def _diagnose(
             if winner is None:
                 break
             state = advance(ctx, state, winner, view)
+    final_prediction = state.prediction
+    if steps and not any(s.cause != "none" for s in steps) and cal.drift is None:
+        drift = drift_step(ctx, state)
+        if drift is not None:
+            step, final_prediction = drift
+            say(f"step {len(steps) + 1}: {step.why}")
+            steps.append(step)
     causes = [s.cause for s in steps if s.cause != "none"]
-    final_rms = rms((ctx.y - state.prediction)[ctx.ident.val_mask])
+    final_rms = rms((ctx.y - final_prediction)[ctx.ident.val_mask])
     base_rms = cal.rms_plausible if from_plausible and cal.rms_plausible is not None else cal.rms_validation
     report = Report(
         causes,
@@ -631,9 +654,12 @@ def _diagnose(
         list(ctx.notes),
         noise=ctx.noise,
         baseline="plausible" if from_plausible else "calibrated",
+        account=account(ctx.u, ctx.y, final_prediction, ctx.ident.val_mask, ctx.fs, ctx.noise),
     )
     report.predictions = {"t": ctx.t, "u": ctx.u_recorded, "y": ctx.y, "baseline": baseline.prediction}
-    if causes:
+    if causes and causes[-1] == "drift":
+        report.predictions["extended"] = final_prediction
+    elif causes:
         ext_model = state.model.copy()
         ext_model.values.update({k: v for k, v in state.values.items() if k in ext_model.all_parameters()})
         ext_model.values[SENSOR_GAIN] = state.gain
@@ -648,6 +674,38 @@ def _diagnose(
             report.extended_rms_integrated = _integrated(ctx, ext_model, state)
     report.seconds = time.time() - started
     return report
+
+
+def drift_step(ctx: Context, state: State) -> tuple[Step, np.ndarray] | None:
+    """When nothing was named: a slow drift of the output (a quadratic in time, as a sensor's
+    or a thermal drift), fitted to the residual on the fit part, and named ``drift`` at the
+    output when it passes the rules a cause must (``diagnosis.min_gain``, ``diagnosis.min_z``)
+    and removes at least ``diagnosis.drift_share`` of the residual's energy on the validation
+    part.  (The step, the prediction with the drift) or None."""
+    idx, val, y = ctx.ident.fit_idx, ctx.ident.val_mask, ctx.y
+    e_state = y - state.prediction
+    t = (ctx.t - ctx.t[0]) / max(ctx.t[-1] - ctx.t[0], 1e-300)
+    drift = regress(np.column_stack([t, t**2]), e_state, idx)
+    e_drift = e_state - drift
+    cmp = compare(e_state, e_drift, ctx.blocks)
+    before, after = rms(e_state[val]), rms(e_drift[val])
+    removed = 1 - (after / before) ** 2 if before > 0 else 0.0
+    res = CandidateResult("drift", "a slow drift of the output (quadratic in time)", site="output")
+    res.gain, res.z, res.n_eff, res.rms_validation, res.n_params = cmp.gain, cmp.z, cmp.n_eff, after, 3
+    res.params = {"drift.share": removed}
+    verdict = judge("nonlinear", cmp, None, None, [], "", kind_checks=False)
+    if verdict.passed and removed < config.get("diagnosis.drift_share"):
+        verdict = Verdict(
+            False, f"removes {removed:.0%} of the residual's energy (< {config.get('diagnosis.drift_share'):.0%})"
+        )
+    res.passed, res.verdict = verdict.passed, verdict.reason
+    if not res.passed:
+        return None
+    why = (
+        f"named: nothing else explains the record, and a slow drift of the output removes {removed:.0%} of "
+        f"the residual's energy (validation RMS {cmp.gain:.3g}× lower, z = {cmp.z:.1f})"
+    )
+    return Step("drift", cmp.gain, before, after, before, [res], why, "output", res.label), state.prediction + drift
 
 
 def _drift_explains(ctx: Context, state: State, winner: Outcome) -> bool:

@@ -125,6 +125,68 @@ class Lure:
             raise NotConverged("the nonlinear term makes the model diverge (an implicit step did not converge)")
         return Y[:, 0]
 
+    def site_response(self, values: Mapping[str, float], w: np.ndarray, element: str) -> np.ndarray:
+        """The output's response to a series ``w`` added to the law of ``element`` (one of
+        :attr:`elements`), the drive at zero and the nonlinear terms left out: the linear
+        transfer from that site to the output (raw, sensor gain 1).
+
+        Parameters
+        ----------
+        values : mapping
+            Parameter values by name.
+        w : ndarray
+            The series added to the element's law, on the record's samples (the law's units:
+            force for a spring).
+        element : str
+            The element.
+
+        Returns
+        -------
+        ndarray
+        """
+        k = self.elements.index(element)
+        lti = self.lti[(self.inputs[1 + k], self.outputs[0])]
+        return lti.response(self.theta(values), self.dt, np.asarray(w, float)[:, None])[:, 0]
+
+    def hysteretic(
+        self, values: Mapping[str, float], u: np.ndarray, element: str, kh: float, zmax: float
+    ) -> np.ndarray:
+        """Raw output with w = k_h·z in the law of ``element``, z the Bouc–Wen state of the
+        element's own variable (n = 1, β = γ = 1/(2·z_max): see
+        :mod:`bondgraph.diagnosis.restoring`), exact per increment of that variable between
+        samples; the implicit sample equation (x depends on w through the hold's direct term)
+        solved by fixed-point iteration.  Only for a Lur'e system without other terms.
+
+        Raises
+        ------
+        NotConverged
+            When the fixed point is not reached (a term that makes the model unstable).
+        """
+        if self.n != 1 or self.fixed:
+            raise NotConverged("the hysteretic term is stepped alone")
+        th = self.theta(values)
+        A, B, C, D = self._matrices(th)
+        Phi, Gam, G1 = foh(A, B, self.dt)
+        Dd = D + C @ G1
+        u = np.ascontiguousarray(u, float)
+        Y = np.empty(u.size)
+        row = self.outputs.index(f"diag.x:{element}")
+        ok = _step_bouc_wen(
+            np.ascontiguousarray(Phi),
+            np.ascontiguousarray(Gam),
+            np.ascontiguousarray(C),
+            np.ascontiguousarray(Dd),
+            np.ascontiguousarray(G1),
+            u,
+            row,
+            float(kh),
+            float(zmax),
+            Y,
+        )
+        if not ok:
+            raise NotConverged("the hysteretic term makes the model diverge")
+        return Y
+
     def _matrices(self, th: np.ndarray):
         """A, B (inputs: drive, w_0..), C (rows: self.outputs), D of the augmented model."""
         first = self.lti[(self.inputs[0], self.outputs[0])].matrices(th)
@@ -362,6 +424,63 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
                 acc += Gam[i, 1 + l] * w[l]
             for l2 in range(n):
                 acc += Phi[i, l2] * xi[l2]
+            xn[i] = acc
+        for i in range(n):
+            xi[i] = xn[i]
+    return True
+
+
+@njit(cache=True)
+def _bouc_wen_increment(z: float, dx: float, zmax: float) -> float:
+    """The Bouc–Wen state after an increment ``dx`` of its input from ``z`` (n = 1,
+    β = γ = 1/(2·z_max)): slope 1 back toward 0, then an exponential approach to ±z_max."""
+    if dx == 0.0:
+        return z
+    s = 1.0 if dx > 0 else -1.0
+    if s * z < 0.0:
+        nz = z + dx
+        if s * nz <= 0.0:
+            return nz
+        dx, z = nz, 0.0
+    return s * zmax - (s * zmax - z) * np.exp(-abs(dx) / zmax)
+
+
+@njit(cache=True)
+def _step_bouc_wen(Phi, Gam, C, Dd, G1, u, row, kh, zmax, Y):
+    """The Lur'e stepping of :meth:`Lure.hysteretic`: one term w = k_h·z(x) on input 1, x the
+    output row ``row``; False when a sample's fixed point is not reached."""
+    n = Phi.shape[0]
+    xi = np.zeros(n)
+    xn = np.zeros(n)
+    for i in range(n):
+        xi[i] = -G1[i, 0] * u[0]
+    z, xprev, w = 0.0, 0.0, 0.0
+    for k in range(u.shape[0]):
+        y0 = Dd[0, 0] * u[k]
+        x0 = Dd[row, 0] * u[k]
+        for i in range(n):
+            y0 += C[0, i] * xi[i]
+            x0 += C[row, i] * xi[i]
+        zk = z
+        ok = False
+        for _ in range(50):
+            x = x0 + Dd[row, 1] * w
+            zk = _bouc_wen_increment(z, x - xprev, zmax)
+            wn = kh * zk
+            if abs(wn - w) <= 1e-12 * (abs(wn) + kh * zmax):
+                w = wn
+                ok = True
+                break
+            w = wn
+        if not ok or not np.isfinite(w):
+            return False
+        x = x0 + Dd[row, 1] * w
+        z, xprev = zk, x
+        Y[k] = y0 + Dd[0, 1] * w
+        for i in range(n):
+            acc = Gam[i, 0] * u[k] + Gam[i, 1] * w
+            for l in range(n):
+                acc += Phi[i, l] * xi[l]
             xn[i] = acc
         for i in range(n):
             xi[i] = xn[i]

@@ -17,6 +17,9 @@ class CandidateResult:
     cause: str
     label: str
     kind: str = "nonlinear"
+    #: where it acts: an element site (an element, a role, ``*.<local name>``), "output", or
+    #: "" for the drive
+    site: str = ""
     gain: float = 0.0
     rms_fit: float = math.inf
     rms_validation: float = math.inf
@@ -58,6 +61,7 @@ class CandidateResult:
     def as_json(self) -> dict:
         out = {
             "cause": self.cause,
+            "site": self.site or "drive",
             "label": self.label,
             "kind": self.kind,
             "gain": self.gain,
@@ -104,10 +108,15 @@ class Step:
     reference_rms: float
     candidates: list[CandidateResult]
     why: str
+    #: where the named cause acts ("" for none)
+    site: str = ""
+    #: the named candidate's label ("" for none)
+    label: str = ""
 
     def as_json(self) -> dict:
         return {
             "cause": self.cause,
+            "site": (self.site or "drive") if self.cause != "none" else "",
             "gain": self.gain,
             "rms": self.rms,
             "rms_before": self.rms_before,
@@ -139,6 +148,8 @@ class Report:
     #: "plausible" when the first cause is a linear structural one fitted on the plausible device
     #: (the calibration within tolerance), whose implausible values it replaces
     baseline: str = "calibrated"
+    #: what the final model leaves unexplained (:class:`~bondgraph.diagnosis.account.Account`)
+    account: object = None
 
     @property
     def cause(self) -> str:
@@ -182,7 +193,8 @@ class Report:
             "steps": [s.as_json() for s in steps],
             "why": self.steps[-1].why if self.steps else "",
             "stop": self.steps[-1].as_json() if self.steps and self.steps[-1].cause == "none" else None,
-            "noise_rms": self.noise,
+            "site": (steps[0].site or "drive") if steps else "",
+            **(self.account.as_json() if self.account is not None else {"noise_rms": self.noise}),
             "extended_rms_integrated": self.extended_rms_integrated,
             "calibration": self.calibration,
             "unexplained": self.unexplained,
@@ -204,10 +216,41 @@ class Report:
             "equations": self.equations,
         }
 
-    def text(self) -> str:
+    def chain_text(self) -> str:
+        """The named causes with their sites and step gains (``none`` without one)."""
+        named = [s for s in self.steps if s.cause != "none"]
+        if not named:
+            return "none"
+        return " → ".join(f"{s.cause} at {s.site or 'the drive'} (×{s.gain:.3g})" for s in named)
+
+    def summary_lines(self) -> list[str]:
+        """The answer: causes, gain, what stays unexplained, why the chain stopped (a screen)."""
+        d = self.data
+        lines = [f"Diagnosis of {d.get('model', '')} against {d.get('file', '')}", f"  Causes: {self.chain_text()}"]
+        base = "" if self.baseline == "calibrated" else " of the plausible device"
+        if self.causes:
+            lines.append(
+                f"  Gain: {self.gain:.3g} (validation RMS{base} {self.baseline_rms:.4g} → {self.extended_rms:.4g})"
+            )
+        else:
+            lines.append(f"  Calibrated model validation RMS: {self.baseline_rms:.4g}")
+        if self.account is not None:
+            lines.append(f"  Unexplained: {self.account.sentence(bool(self.causes))}")
+        if self.steps:
+            lines.append(f"  Why it stopped: {self.steps[-1].why}" if self.steps[-1].cause == "none" else "")
+        if self.unexplained:
+            lines.append(f"  NOTE: {self.unexplained}")
+        lines += [f"  note: {n}" for n in self.notes]
+        return [ln for ln in lines if ln]
+
+    def text(self, equations: bool = False) -> str:
+        """The readable report: the answer first (:meth:`summary_lines`), then how the data were
+        treated, every chain step's candidates and verdicts, and with ``equations`` the extended
+        model's state equations."""
         d, cal = self.data, self.calibration
-        lines = [
-            f"Diagnosis of {d.get('model', '')} against {d.get('file', '')}",
+        lines = self.summary_lines() + [
+            "",
+            "Data and calibration",
             f"  {d['samples']} samples at {d['rate_hz']:.6g} Hz"
             + (
                 f" (from {d['source_samples']} at {d['source_rate_hz']:.6g} Hz)"
@@ -218,7 +261,6 @@ class Report:
             + (f"{d['blocks']} " if d.get("blocks") else "")
             + "interleaved time blocks held out",
         ]
-        lines += [f"  note: {n}" for n in self.notes]
         free = ", ".join(
             f"{k} = {v:.5g}" + (" (AT BOUND)" if k in cal["at_bounds"] else "") for k, v in cal["params"].items()
         )
@@ -251,24 +293,25 @@ class Report:
             )
         if not cal["success"]:
             lines.append(f"  WARNING: calibration did not converge ({cal['message']})")
-        noise = f", noise floor {self.noise:.3g}" if self.noise else ""
-        lines.append(f"  calibrated model validation RMS: {cal['rms_validation']:.4g}{noise}")
+        if self.account is not None:
+            lines.append(
+                f"  noise floor {self.account.noise_rms:.3g} ({self.account.noise_source}); calibrated model "
+                f"validation RMS {cal['rms_validation']:.4g}"
+            )
+        named: list[str] = []
         for k, s in enumerate(self.steps, 1):
             lines += [
                 "",
                 f"Step {k}: on the model "
-                + (" + ".join(["calibrated"] + self.causes[: k - 1]))
+                + (" + ".join(["calibrated"] + named))
                 + f" (validation RMS {s.rms_before:.4g}; flexible linear reference {s.reference_rms:.4g})",
-                f"  {'cause':<18} {'gain':>7} {'val. RMS':>10} {'z':>6} {'vs ref':>7}  verdict / extension",
+                f"  {'cause':<18} {'site':<12} {'gain':>7} {'val. RMS':>10} {'z':>6} {'vs ref':>7}  verdict / extension",
             ]
-            for c in sorted(s.candidates, key=lambda c: (bool(c.skipped or c.error), -c.gain)):
-                if c.skipped:
-                    lines.append(
-                        f"  {c.cause:<18} {'':>7} {'':>10} {'':>6} {'':>7}  not tried: {c.skipped} ({c.label})"
-                    )
-                    continue
+            tried = [c for c in s.candidates if not c.skipped]
+            for c in sorted(tried, key=lambda c: (bool(c.error), -c.gain)):
+                site = c.site or "drive"
                 if c.error:
-                    lines.append(f"  {c.cause:<18} {'':>7} {'':>10} {'':>6} {'':>7}  FAILED: {c.error} ({c.label})")
+                    lines.append(f"  {c.cause:<18} {site:<12} {'':>7} {'':>10} {'':>6} {'':>7}  FAILED: {c.error}")
                     continue
                 vr = f"{c.gain_reference:.3g}" if c.gain_reference is not None else "-"
                 flag = ("" if c.success else " [optimiser: not converged]") + (
@@ -278,26 +321,28 @@ class Report:
                     if c.effort < 1.0
                     else ""
                 )
+                won = c.passed and c.cause == s.cause and c.label == s.label and (c.site or "") == (s.site or "")
                 lines.append(
-                    f"  {c.cause:<18} {c.gain:>7.3g} {c.rms_validation:>10.4g} {c.z:>6.1f} {vr:>7}  "
-                    f"{'NAMED' if c.passed and c.cause == s.cause else c.verdict}; {c.label}{flag}"
+                    f"  {c.cause:<18} {site:<12} {c.gain:>7.3g} {c.rms_validation:>10.4g} {c.z:>6.1f} {vr:>7}  "
+                    f"{'NAMED' if won else c.verdict}; {c.label}{flag}"
                 )
+            skipped = [c for c in s.candidates if c.skipped]
+            if skipped:
+                lines.append(f"  not fitted: {len(skipped)} (" + "; ".join(_grouped(skipped)) + ")")
             lines.append(f"  → {s.cause}: {s.why}")
-        causes = " → ".join(self.causes) if self.causes else "none"
-        base = "" if self.baseline == "calibrated" else " of the plausible device"
-        lines += [
-            "",
-            f"Causes: {causes}"
-            + (
-                f" (gain {self.gain:.3g}, validation RMS{base} {self.baseline_rms:.4g} → {self.extended_rms:.4g})"
-                if self.causes
-                else ""
-            ),
-        ]
-        if self.unexplained:
-            lines.append(f"  NOTE: {self.unexplained}")
+            if s.cause != "none":
+                named.append(s.cause)
         if self.extended_rms_integrated is not None:
-            lines.append(f"  extended model integrated: validation RMS {self.extended_rms_integrated:.4g}")
-        if self.equations:
+            lines += ["", f"Extended model integrated: validation RMS {self.extended_rms_integrated:.4g}"]
+        if equations and self.equations:
             lines += ["", "Equations of the extended model:", self.equations]
         return "\n".join(lines) + "\n"
+
+
+def _grouped(skipped: list[CandidateResult]) -> list[str]:
+    """Skipped candidates grouped by reason: 'reason: cause at site, ...'."""
+    by: dict[str, list[str]] = {}
+    for c in skipped:
+        reason = c.skipped.split(": explains")[0] if c.skipped.startswith("screened out") else c.skipped
+        by.setdefault(reason, []).append(f"{c.cause} at {c.site or 'drive'}")
+    return [f"{why}: {', '.join(names)}" for why, names in by.items()]

@@ -265,6 +265,18 @@ class View:
             if not p.lower * (1 + 1e-6) < abs(self.values[p.name]) < p.upper * (1 - 1e-6)
         ]
 
+    def implausible(self) -> list[str]:
+        """The calibrated linear parameters whose current value lies outside the plausible
+        device's tolerance: the calibration may have bent the device to mimic an effect, so a
+        fit of that effect should start from the model file's values too."""
+        plausible = self._ctx.plausible
+        return [
+            n
+            for n in self.linear
+            if n in plausible
+            and not plausible[n][0] * (1 - 1e-9) <= abs(self.values[n]) <= plausible[n][1] * (1 + 1e-9)
+        ]
+
     def model_file_values(self) -> dict[str, float]:
         """The model file's values of the calibrated linear parameters."""
         return {n: self.nominal_value(n) for n in self.linear}

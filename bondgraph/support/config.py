@@ -172,6 +172,22 @@ DEFAULTS: dict[str, Default] = {
         "before one is named (a race decided by converged fits, not by which "
         "optimiser got further)",
     ),
+    "diagnosis.min_coherence": Default(
+        0.05,
+        "a record whose output has less coherence with the drive than this, where the drive "
+        "has power (bias removed), is refused: the output does not follow the drive",
+    ),
+    "diagnosis.screen_keep": Default(
+        6,
+        "when more candidates than this can say what they explain to first order (a "
+        "law term at a site), only this many, those explaining most, are fitted in full",
+    ),
+    "diagnosis.drift_share": Default(
+        0.5,
+        "when no cause is named, a slow drift of the output (a quadratic in time) is named "
+        "when it passes the rules a cause must and removes at least this share of the "
+        "residual's energy on the validation part",
+    ),
     "diagnosis.screen_effort": Default(
         0.3,
         "factor on the optimisers' budgets of the chain's later steps "

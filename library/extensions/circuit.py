@@ -9,11 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from bondgraph import I, config
-from bondgraph.diagnosis import LINEAR, Candidate, Extension
+from bondgraph.diagnosis import LINEAR, NOT_A_DRIVE, Candidate, Extension
 from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
 from bondgraph.fit.identify import Spec
-
-from .drive import NOT_A_DRIVE
 
 #: inductances scanned for the start, and the fit's bounds (H): from bond wires to a large
 #: output transformer

@@ -18,11 +18,9 @@ import numpy as np
 import sympy as sp
 
 from bondgraph import J0, J1, C, I, Quantity, R, Se
-from bondgraph.diagnosis import LINEAR, Candidate, Extension, Term
+from bondgraph.diagnosis import LINEAR, NOT_A_DRIVE, Candidate, Extension, Term
 from bondgraph.diagnosis.filters import lowpass, resonator
 from library.hysteresis import PrandtlIshlinskii, bouc_wen_response, play_outputs, threshold_grid
-
-NOT_A_DRIVE = "acts on the drive, and the model is no longer a transform of its drive"
 
 
 def drive_scale(view) -> float:

@@ -1,5 +1,10 @@
-"""A mode the model lacks.  Both candidates keep the model linear, so they are fitted on the
-exact linear route; Ghafarirad et al. (MCMDS 21(2), 2015) superpose bending modes the same way."""
+"""A mode the model lacks: a resonator added on the output (modal superposition, as
+Ghafarirad et al., "Continuous dynamic modelling of bimorph piezoelectric cantilevered
+actuators considering hysteresis effect and dynamic behaviour analysis", Mathematical and
+Computer Modelling of Dynamical Systems 21(2) (2015) 130–152, superpose bending modes), or a
+mass of the model split in two by a spring.  Both keep the model linear, so they are fitted
+on the exact linear route.  Both may be named again in one chain: a structure may lack
+several modes."""
 
 from __future__ import annotations
 
@@ -9,14 +14,14 @@ import numpy as np
 import sympy as sp
 from scipy import signal
 
-from bondgraph import J0, J1, C, I, Quantity, R, Se
-from bondgraph.diagnosis import LINEAR, Candidate, Extension
-from bondgraph.diagnosis.context import welch
-from bondgraph.diagnosis.filters import resonator
-from bondgraph.diagnosis.rewrite import junction_of, law, modify_law
-from bondgraph.fit.identify import Spec
-
-from .drive import NOT_A_DRIVE
+from ..fit.identify import Spec
+from ..model.elements import J0, J1, C, I, R, Se
+from ..model.graph import Quantity
+from .candidate import LINEAR, NOT_A_DRIVE, Candidate, Extension
+from .context import welch
+from .filters import resonator
+from .rewrite import junction_of, law, modify_law
+from .sites import Site, generic_sites
 
 
 def frf_mismatch(view):
@@ -109,13 +114,27 @@ def resonance_trials(view) -> list[tuple[float, float, float]]:
     return sorted(trials)
 
 
+def free_prefix(model, base: str) -> str:
+    """``base``, or ``base2``, ``base3``, ... : the first whose parameters are not in ``model``
+    yet (a mode named before keeps its names)."""
+    known = set(model.all_parameters())
+    k = 1
+    while f"{base if k == 1 else base + str(k)}.omega" in known:
+        k += 1
+    return base if k == 1 else f"{base}{k}"
+
+
 class ParallelMode(Candidate):
-    """A mode the model lacks: a resonator q̈ + 2ζω·q̇ + ω²·q = g·d whose displacement adds to
-    the output (modal superposition)."""
+    """A mode the model lacks: a resonator q̈ + 2ζω·q̇ + ω²·q = g·d driven by the drive d, whose
+    displacement adds to the output (modal superposition).  Its site is the sensor."""
 
     cause = "higher-mode"
     label = "extra resonator (mode) in parallel on the output"
     kind = LINEAR
+    repeatable = True
+
+    def __init__(self, site: Site | None = None):
+        self.site_name = site.name if site is not None else "output"
 
     def applies(self, view):
         return NOT_A_DRIVE if view.drive is None else unresolved(view) or True
@@ -126,6 +145,7 @@ class ParallelMode(Candidate):
         return {"frf_mismatch": float(mis[k]) if mis.size else 0.0, "omega_peak": float(w[k]) if w.size else 0.0}
 
     def fit(self, view):
+        p = free_prefix(view.model, "hm")
         d = np.asarray(view.drive)
         trials = resonance_trials(view)
         _, om, ze = trials[0]
@@ -134,26 +154,26 @@ class ParallelMode(Candidate):
             direct=lambda z: [resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]))],
             z0=[math.log(om), math.log(ze)],
             z_bounds=[(math.log(om / 2), math.log(om * 2)), (math.log(1e-4), math.log(0.5))],
-            z_names=["hm.omega", "hm.zeta"],
+            z_names=[f"{p}.omega", f"{p}.zeta"],
             starts=starts,
         )
         om, ze, g = math.exp(fit.z[0]), math.exp(fit.z[1]), float(fit.direct[0])
         model = view.rewrite()
-        o = model.parameter("hm.omega", om, "rad/s", "natural frequency of the added mode")
-        z = model.parameter("hm.zeta", ze, "", "damping ratio of the added mode")
-        gg = model.parameter("hm.g", g, "", "input gain of the added mode (unit modal mass)")
+        o = model.parameter(f"{p}.omega", om, "rad/s", "natural frequency of the added mode")
+        z = model.parameter(f"{p}.zeta", ze, "", "damping ratio of the added mode")
+        gg = model.parameter(f"{p}.g", g, "", "input gain of the added mode (unit modal mass)")
         model.add(
-            Se("hm.force", gg * view.drive_expr),
-            J1("hm.mode"),
-            I("hm.mass", 1),
-            C("hm.spring", 1 / o**2),
-            R("hm.damper", 2 * z * o),
+            Se(f"{p}.force", gg * view.drive_expr),
+            J1(f"{p}.mode"),
+            I(f"{p}.mass", 1),
+            C(f"{p}.spring", 1 / o**2),
+            R(f"{p}.damper", 2 * z * o),
         )
-        model.bond("hm.force", "hm.mode")
-        for e in ("hm.mass", "hm.spring", "hm.damper"):
-            model.bond("hm.mode", e)
-        view.add_to_output(model, Quantity("q", "hm.spring"))
-        new = {"hm.omega": om, "hm.zeta": ze, "hm.g": g}
+        model.bond(f"{p}.force", f"{p}.mode")
+        for e in ("mass", "spring", "damper"):
+            model.bond(f"{p}.mode", f"{p}.{e}")
+        view.add_to_output(model, Quantity("q", f"{p}.spring"))
+        new = {f"{p}.omega": om, f"{p}.zeta": ze, f"{p}.g": g}
         return Extension(
             model,
             {**fit.values, **new},
@@ -167,57 +187,76 @@ class ParallelMode(Candidate):
         )
 
     def implausible(self, view, ext):
-        return mode_implausible(view, ext.values["hm.omega"], ext.values["hm.zeta"], ext.prediction)
+        p = ext.new[0].rsplit(".", 1)[0]
+        return mode_implausible(view, ext.values[f"{p}.omega"], ext.values[f"{p}.zeta"], ext.prediction)
 
     def mimics_recalibration(self, view, ext):
-        return mode_on_own(view, ext.values["hm.omega"])
+        return mode_on_own(view, ext.values[ext.new[0]])
 
 
 class OutputMode(Candidate):
-    """A mode of the moving mass itself: the element tagged ``inertia`` (mass M, an amplified
-    actuator's shell and output plate) split into m1 = μ·M, driven by the actuator, and
-    m2 = (1 − μ)·M, carrying the sensor, joined by a spring k2 and damper c2 tuned to the
-    two-mass mode ω, ζ: k2 = ω²·m1·m2/M, c2 = 2ζω·m1·m2/M (the total mass is unchanged)."""
+    """A mode of a mass of the model: the mass M at its site (without one, the element tagged
+    ``inertia``: an amplified actuator's shell and output plate) split into m1 = μ·M, driven
+    as before, and m2 = (1 − μ)·M, carrying the sensor, joined by a spring k2 and damper c2
+    tuned to the two-mass mode ω, ζ: k2 = ω²·m1·m2/M, c2 = 2ζω·m1·m2/M (the total mass is
+    unchanged)."""
 
     cause = "higher-mode"
-    label = "compliant moving mass (a share of it on a spring) on the inertia element"
+    label = "compliant mass (a share of it on a spring)"
     kind = LINEAR
+    repeatable = True
+    role = "inertia"
+
+    def __init__(self, site: Site | None = None):
+        self.site = site
+        self.site_name = site.name if site is not None else self.role
+
+    def element(self, model) -> str | None:
+        """The mass it splits in ``model``."""
+        if self.site is not None:
+            return self.site.elements[0] if self.site.present(model) else None
+        return next(iter(model.with_role(self.role)), None)
 
     def applies(self, view):
-        if not view.model.with_role("inertia"):
-            return "no element is tagged 'inertia'"
+        if self.element(view.model) is None:
+            return (
+                f"no element is tagged '{self.role}'"
+                if self.site is None
+                else f"'{self.site_name}' is not in the model"
+            )
         if view.reduced:
-            return "the inertia's dynamics are faster than the data resolve"
+            return "the mass's dynamics are faster than the data resolve"
         if view.drive is None:
             return NOT_A_DRIVE
         return unresolved(view) or True if view.exact else "needs a model linear in its states"
 
-    def build(self, view, model, omega, zeta, mu):
-        """``model`` (the current model or its linear core) with its inertia split."""
-        el = view.model.with_role("inertia")[0]
+    def build(self, view, model, omega, zeta, mu, p: str = "om"):
+        """``model`` (the current model or its linear core) with the mass split."""
+        el = self.element(view.model)
         x = sp.Dummy("p")
         M = 1 / sp.diff(law(model, el)(x), x)
-        om = model.parameter("om.omega", omega, "rad/s", "natural frequency of the two-mass mode")
-        ze = model.parameter("om.zeta", zeta, "", "damping ratio of the two-mass mode")
-        share = model.parameter("om.mu", mu, "", "share of the inertia's mass on the actuator's side of the spring")
+        om = model.parameter(f"{p}.omega", omega, "rad/s", "natural frequency of the two-mass mode")
+        ze = model.parameter(f"{p}.zeta", zeta, "", "damping ratio of the two-mass mode")
+        share = model.parameter(f"{p}.mu", mu, "", f"share of {el}'s mass on the driven side of the spring")
         reduced = share * (1 - share) * M
-        modify_law(model, el, lambda p, old: old / share)
+        modify_law(model, el, lambda q, old: old / share)
         model.add(
-            J0("om.k"),
-            C("om.spring", 1 / (reduced * om**2)),
-            J1("om.plate"),
-            I("om.mass", (1 - share) * M),
-            R("om.damper", 2 * ze * om * reduced),
+            J0(f"{p}.k"),
+            C(f"{p}.spring", 1 / (reduced * om**2)),
+            J1(f"{p}.plate"),
+            I(f"{p}.mass", (1 - share) * M),
+            R(f"{p}.damper", 2 * ze * om * reduced),
         )
-        model.bond(junction_of(model, el), "om.k")
-        model.bond("om.k", "om.spring")
-        model.bond("om.k", "om.plate")
-        model.bond("om.plate", "om.mass")
-        model.bond("om.plate", "om.damper")
-        view.add_to_output(model, -Quantity("q", "om.spring"))  # the sensor sits on the plate
+        model.bond(junction_of(model, el), f"{p}.k")
+        model.bond(f"{p}.k", f"{p}.spring")
+        model.bond(f"{p}.k", f"{p}.plate")
+        model.bond(f"{p}.plate", f"{p}.mass")
+        model.bond(f"{p}.plate", f"{p}.damper")
+        view.add_to_output(model, -Quantity("q", f"{p}.spring"))  # the sensor sits on the plate
         return model
 
     def fit(self, view):
+        p = free_prefix(view.model, "om")
         best = None
         on_core = view.on_core  # fitted on the linear core, driven by what it sees (exact route)
         drive = view.drive if on_core else None
@@ -225,34 +264,40 @@ class OutputMode(Candidate):
         # mismatch peaks, with the mass share that fits best before any refit
         peaks = []
         for _, om, ze in resonance_trials(view):
-            if all(abs(om / p[0] - 1) > 0.2 for p in peaks):
+            if all(abs(om / q[0] - 1) > 0.2 for q in peaks):
                 peaks.append((om, max(ze, 0.01)))
             if len(peaks) == 2:
                 break
         for om, ze in peaks:
-            model = self.build(view, view.core() if on_core else view.rewrite(), om, ze, 0.5)
+            model = self.build(view, view.core() if on_core else view.rewrite(), om, ze, 0.5, p)
             predict, known = view.predictor(model, drive)
             base = {k: v for k, v in view.values.items() if k in known}
             mu = min(
                 (0.1, 0.3, 0.5, 0.8, 0.95),
-                key=lambda m: view.score(predict({**base, "om.omega": om, "om.zeta": ze, "om.mu": m}))[2],
+                key=lambda m: view.score(predict({**base, f"{p}.omega": om, f"{p}.zeta": ze, f"{p}.mu": m}))[2],
             )
             specs = [
-                Spec("om.omega", om, om / 3, om * 3, log=True),
-                Spec("om.zeta", ze, 1e-4, 1.0, log=True),
-                Spec("om.mu", mu, 0.02, 0.98),
+                Spec(f"{p}.omega", om, om / 3, om * 3, log=True),
+                Spec(f"{p}.zeta", ze, 1e-4, 1.0, log=True),
+                Spec(f"{p}.mu", mu, 0.02, 0.98),
             ]
             values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=20, drive=drive)
             rf = view.score(raw)[2]
             if best is None or rf < best[0]:
                 best = (rf, values, raw, ok, msg, at)
         _, values, raw, ok, msg, at = best
-        model = self.build(view, view.rewrite(), values["om.omega"], values["om.zeta"], values["om.mu"])
-        new = ["om.omega", "om.zeta", "om.mu"]
+        model = self.build(view, view.rewrite(), values[f"{p}.omega"], values[f"{p}.zeta"], values[f"{p}.mu"], p)
+        new = [f"{p}.omega", f"{p}.zeta", f"{p}.mu"]
         return Extension(model, values, new, raw, None, None, at, ok, msg)
 
     def implausible(self, view, ext):
-        return mode_implausible(view, ext.values["om.omega"], ext.values["om.zeta"], ext.prediction)
+        p = ext.new[0].rsplit(".", 1)[0]
+        return mode_implausible(view, ext.values[f"{p}.omega"], ext.values[f"{p}.zeta"], ext.prediction)
 
     def mimics_recalibration(self, view, ext):
-        return mode_on_own(view, ext.values["om.omega"])
+        return mode_on_own(view, ext.values[ext.new[0]])
+
+
+def mode_kinds(model) -> list[Candidate]:
+    """A resonator on the output, and a split of every mass at a generic site."""
+    return [ParallelMode()] + [OutputMode(site) for site in generic_sites(model, "I")]

@@ -1,0 +1,467 @@
+"""Effects in an element's own law: a term added to the law of the C or R elements at a site.
+
+Each kind adds law(x) + term(c, r², x, a) to every element of its site, one coefficient c per
+element, where x is the element's own variable (the displacement q of a C, the flow f of an R)
+and a, when the kind has a *partner*, the displacement of another element or the drive.  The
+term is written *centred* where it can be: r² is chosen from the current model's amplitude at
+the element so that the law's describing-function slope at the data's amplitude stays the
+calibrated one, and c only says how the slope moves with amplitude.
+
+When the rest of the model is linear (or a drive transform of its linear core), the extended
+model is a Lur'e system, simulated on the exact linear route
+(:meth:`~bondgraph.diagnosis.view.View.lure`); otherwise, or where that route diverges, with
+the compiled integrator.
+
+**The screen** (:meth:`LawTerm.screen`): around the current model, a small term ε·g(x) at a
+site moves the output by ε times the term's regressor g(x(t)) passed through the linear
+transfer from that site to the output (a first-order, Lur'e view).  One least-squares fit of
+the residual on that filtered regressor says, in the time of two simulations, how much the
+kind could explain there; the engine fully fits only the kinds and sites that explain most.
+
+The kinds (:func:`generic_kinds`): at a C site :class:`Softening`, :class:`Hardening` (a cubic
+term of either sign) and :class:`Clearance` (a gap: little stiffness near the rest position);
+at an R site :class:`NonlinearDamping` (velocity-cubic, or Stanton: with the displacement of a
+stiffness partner) and :class:`Friction` (Coulomb, smoothed).
+"""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+
+import numpy as np
+import sympy as sp
+
+from ..fit.identify import Spec
+from ..model.elements import C
+from ..model.graph import Quantity
+from ..numerics.simulate import SimulationError
+from .candidate import Candidate, Extension
+from .lure import DRIVE, NotConverged
+from .rewrite import modify_law, neighbours, slope
+from .sites import Site, generic_sites
+
+
+def field(view) -> tuple:
+    """(expression, series) of the drive the structure sees: the drive into the linear core,
+    or the model's input once the model is no drive transform of a linear core (a structural
+    cause named before)."""
+    if view.drive_expr is not None and view.drive is not None:
+        return view.drive_expr, np.asarray(view.drive)
+    return view.input_symbol, np.asarray(view.u)
+
+
+class LawTerm(Candidate):
+    """A term in the laws of a site's elements (see the module docstring).
+
+    Parameters
+    ----------
+    site : Site, optional
+        Where it acts.  Without one, the elements tagged :attr:`role` (a domain library's
+        candidate bound to a role).
+
+    Notes
+    -----
+    The coefficient is scanned upwards on a log grid of its scale (:attr:`grid`), each point
+    refitting the linear parameters briefly (a nonlinear resonance moves with the
+    calibration), from the calibrated values and, when the calibration left one on its
+    search bound or outside the plausible device's tolerance
+    (:meth:`~bondgraph.diagnosis.view.View.strained`,
+    :meth:`~bondgraph.diagnosis.view.View.implausible`), from the model file's values too; then fitted with the calibration from the best point.  An element whose
+    coefficient ends on its upper bound (past it the law is no longer plausible) is held at 0
+    and the others are fitted again without it, unless no element would be left.
+    """
+
+    #: the element kind the term acts on ("C" or "R")
+    element_kind = "C"
+    #: without a site: the role whose elements it acts on
+    role = ""
+    #: parameter name prefix
+    prefix = ""
+    #: upper bound of the coefficient, in units of its scale
+    upper = 1.0
+    cost = 3
+    #: the scan of the coefficient, in units of its scale
+    grid = (0.003, 0.01, 0.03, 0.1, 0.3, 1.0)
+    #: the coefficient (in units of its scale) at which the screen evaluates the regressor
+    probe = 1e-3
+
+    def __init__(self, site: Site | None = None):
+        self.site = site
+        self.site_name = site.name if site is not None else self.role
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.cause} at {self.site_name})"
+
+    def elements(self, model) -> list[str]:
+        """The elements it acts on in ``model``."""
+        if self.site is not None:
+            return list(self.site.elements) if self.site.present(model) else []
+        return list(model.with_role(self.role))
+
+    def applies(self, view):
+        if not self.elements(view.model):
+            return (
+                f"no element is tagged '{self.role}'"
+                if self.site is None
+                else f"'{self.site.name}' is not in the model"
+            )
+        if view.reduced:
+            return (
+                f"the elements at {self.site_name} act in modes faster than the data resolve (their "
+                f"quasi-static effect is a drive nonlinearity)"
+            )
+        return True
+
+    @staticmethod
+    @abstractmethod
+    def term(c, r2, x, a):
+        """The term added to the law (sympy arithmetic: it is compiled; ``a`` is None without a
+        partner)."""
+
+    def partner(self, model, el) -> str | None:
+        """The element whose displacement the term of ``el`` uses, :data:`DRIVE`, or None."""
+        return None
+
+    @abstractmethod
+    def refs(self, view, el, x, a) -> tuple[float, float]:
+        """(scale of the coefficient, r²) of element ``el`` from its variable's series ``x``
+        (and the partner's ``a``) in the current model."""
+
+    def build(self, view, coefs: dict, r2s: dict):
+        """The current model with the term on each element of ``coefs``."""
+        model = view.rewrite()
+        for el in coefs:
+            c = model.parameter(f"{self.prefix}_{el}", coefs[el], "", f"{self.label}: {el}", bounds=(0, 1e40))
+            r2 = model.parameter(f"{self.prefix}_r2_{el}", r2s[el], "", f"centring amplitude² of {el}")
+            p = self.partner(model, el)
+            a = field(view)[0] if p == DRIVE else Quantity("q", p) if p else None
+            modify_law(model, el, lambda x, old, c=c, r2=r2, a=a: old + self.term(c, r2, x, a))
+        return model
+
+    def _series(self, view, els, partners):
+        """(lure or None, {el: x}, {el: a}, output series of the current model or None)."""
+        lure = view.lure(view.rewrite(), els, partners)
+        if lure is not None:
+            series = lure.linear_responses(dict(view.values), lure.drive, self.term)
+            xs = {el: series[f"diag.x:{el}"] for el in els}
+            az = {el: series.get(f"diag.a:{el}") for el in els}
+            return lure, xs, az, series[view.output]
+        st = view.states()
+        xs = {el: st[view.state_of(el)] if self.element_kind == "C" else st["output rate"] for el in els}
+        az = {
+            el: field(view)[1] if partners[el] == DRIVE else st[view.state_of(partners[el])] if partners[el] else None
+            for el in els
+        }
+        return None, xs, az, None
+
+    def screen(self, view) -> float | None:
+        """The share (0-1) of the current residual's energy on the fit part that the term
+        explains to first order (module docstring), or None when the model is no Lur'e system
+        (the kind is then fitted in full)."""
+        els = self.elements(view.model)
+        partners = {el: self.partner(view.model, el) for el in els}
+        try:
+            lure, xs, az, base = self._series(view, els, partners)
+        except (NotConverged, SimulationError):
+            return None
+        if lure is None:
+            return None
+        refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
+        coefs = [(self.probe * refs[el][0], refs[el][1]) for el in els]
+        try:
+            moved = lure.simulate(dict(view.values), lure.drive, self.term, coefs)
+        except NotConverged:
+            return None
+        column = (moved - base) * view.gain / self.probe
+        idx = view.fit_idx
+        r = view.residual[idx] - view.residual[idx].mean()
+        q = column[idx] - column[idx].mean()
+        if not np.all(np.isfinite(q)) or float(q @ q) <= 0 or float(r @ r) <= 0:
+            return 0.0
+        return float((q @ r) ** 2 / ((q @ q) * (r @ r)))
+
+    def fit(self, view):
+        els = self.elements(view.model)
+        partners = {el: self.partner(view.model, el) for el in els}
+        names = [f"{self.prefix}_{el}" for el in els]
+        lure, xs, az, base = self._series(view, els, partners)
+        refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
+        r2s = {el: refs[el][1] for el in els}
+        held = self._idle(view, lure, els, refs, r2s, base) if lure is not None and len(els) > 1 else []
+        model = self.build(view, {el: 0.0 for el in els}, r2s)
+        predict = None
+        if lure is not None:
+
+            def predict(values):
+                coefs = [(values[n], r2s[el]) for n, el in zip(names, els)]
+                try:
+                    raw = lure.simulate(values, lure.drive, self.term, coefs)
+                except NotConverged:  # integrate the rewritten model for these values instead,
+                    try:  # within a bounded number of explicit steps
+                        return view.simulate(model, values, max_steps=50 * len(view.y))
+                    except SimulationError:  # it diverges: a fit as bad as no model at all
+                        return np.zeros(len(view.y))
+                return raw if lure.extra is None else raw + lure.extra
+
+        def fitted(specs, nfev, start=None):
+            return view.fit_model(model, specs, max_nfev=nfev, start=start, predict=predict)
+
+        def spec(f, free=False):  # elements whose term cannot matter are held at 0
+            return [
+                Spec(n, 0.0, 0.0, 0.0, scale=refs[el][0])
+                if el in held
+                else Spec(
+                    n,
+                    f * refs[el][0],
+                    0.0 if free else f * refs[el][0],
+                    self.upper * refs[el][0] if free else f * refs[el][0],
+                    scale=refs[el][0],
+                )
+                for n, el in zip(names, els)
+            ]
+
+        best = None
+        # from the calibration; when it left a parameter on its search bound, from the model
+        # file's values too (the calibration may have bent the linear device to mimic this term)
+        for start in [None] + ([view.model_file_values()] if view.strained() or view.implausible() else []):
+            worse = 0
+            for f in self.grid:
+                try:
+                    values, raw, *_ = fitted(spec(f), 3, start)
+                except SimulationError:
+                    break
+                rf = view.score(raw)[2]
+                if best is None or rf < best[0]:
+                    best, worse = (rf, f, values), 0
+                else:
+                    worse += 1
+                    if worse == 2:
+                        break
+        if best is None:
+            raise SimulationError(f"{self.cause}: the extended model could not be simulated")
+        start = {k: v for k, v in best[2].items() if k not in names}
+        values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
+        at = [n for n in at if values[n] > 0]  # a coefficient of 0 is no such effect, not a search limit
+        stuck = [el for n, el in zip(names, els) if n in at]
+        if stuck and len(stuck) + len(held) < len(els):
+            # beyond the bound the term is no longer plausible (a softening whose tangent
+            # stiffness turns negative at the peak): that element's term stands in for something
+            # else, so it is held at 0 and the others are refitted without it
+            held += stuck
+            values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
+            at = [n for n in at if values[n] > 0]
+            msg = (
+                f"{', '.join(f'{self.prefix}_{el}' for el in stuck)} went to "
+                f"{'its search bound and is' if len(stuck) == 1 else 'their search bounds and are'} held at 0; {msg}"
+            )
+        kept = [(n, el) for n, el in zip(names, els) if el not in held]
+        terms = [(el, partners[el], self.term, values[n], r2s[el]) for n, el in kept]
+        return Extension(
+            self.build(view, {el: values[n] for n, el in kept}, r2s),
+            values,
+            [n for n, _ in kept],
+            raw,
+            None,
+            None,
+            at,
+            ok,
+            msg,
+            terms=terms,
+        )
+
+    def _idle(self, view, lure, els, refs, r2s, base) -> list[str]:
+        """Elements whose term, at the top of the scan, moves the output by less than 5 % of the
+        residual's spread where another element's moves it more: held at 0."""
+        effect = {}
+        for el in els:
+            effect[el] = np.inf
+            for f in (self.grid[-1], 0.1 * self.grid[-1]):
+                coefs = [(f * refs[e][0] if e == el else 0.0, r2s[e]) for e in els]
+                try:
+                    raw = lure.simulate(dict(view.values), lure.drive, self.term, coefs)
+                except NotConverged:
+                    continue
+                effect[el] = float(np.std(raw - base))
+                break
+        floor = 0.05 * float(np.std(view.residual)) / max(abs(view.gain), 1e-300)
+        return [el for el in els if effect[el] < floor and effect[el] < max(effect.values())]
+
+
+def _peak(x) -> float:
+    return float(np.max(np.abs(x))) or 1.0
+
+
+class Softening(LawTerm):
+    """A stiffness that falls with amplitude: e = law(q) − k3·q·(q² − r²), r² = 1.5·⟨q²⟩ of the
+    current model, k3 ≥ 0 (a cubic whose describing-function stiffness at the data's amplitude
+    stays the calibrated one)."""
+
+    cause = "softening"
+    label = "cubic softening of the spring law"
+    prefix, upper = "soft.k3", 0.5
+    grid = (0.003, 0.01, 0.03, 0.1, 0.3)
+
+    @staticmethod
+    def term(c, r2, x, a):
+        return -c * x * (x**2 - r2)
+
+    def refs(self, view, el, x, a):
+        return abs(slope(view.model, el, view.values)) / _peak(x) ** 2, 1.5 * float(np.mean(x**2))
+
+
+class Hardening(Softening):
+    """A stiffness that rises with amplitude (a Duffing spring): e = law(q) + k3·q·(q² − r²),
+    centred as :class:`Softening`, k3 ≥ 0; up to many times the linear stiffness at the peak
+    (a hardening spring has no turning point to stop at)."""
+
+    cause = "hardening"
+    label = "cubic hardening of the spring law"
+    prefix, upper = "hard.k3", 30.0
+    grid = (0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0)
+
+    @staticmethod
+    def term(c, r2, x, a):
+        return c * x * (x**2 - r2)
+
+
+class Clearance(LawTerm):
+    """A gap or backlash in a spring: little stiffness within ±d of the rest position, the
+    full stiffness beyond: e = law(q) − k_g·d·tanh(q/d), 0 ≤ k_g ≤ 1.2·k (k_g = k: no
+    stiffness at rest), the half-width d a share of the data's peak displacement (10 %, or
+    3 % or 30 % if these fit better).  Runs on the exact Lur'e route."""
+
+    cause = "clearance"
+    label = "clearance (gap, backlash) in the spring law"
+    prefix, upper = "gap.k", 1.2
+    grid = (0.1, 0.3, 0.6, 1.0)
+    cost = 4
+    #: half-widths tried, as shares of the peak displacement
+    widths = (0.1, 0.03, 0.3)
+
+    def __init__(self, site: Site | None = None, width: float | None = None):
+        super().__init__(site)
+        #: the half-width of this fit (share of the peak); None: try :attr:`widths`
+        self.width = width
+
+    @staticmethod
+    def term(c, r2, x, a):
+        return -c * r2 * sp.tanh(x / r2)
+
+    def refs(self, view, el, x, a):
+        return abs(slope(view.model, el, view.values)), (self.width or self.widths[0]) * _peak(x)
+
+    def fit(self, view):
+        if self.width is not None:
+            return super().fit(view)
+        return _best_of(view, [type(self)(self.site, w) if self.site else type(self)(None, w) for w in self.widths])
+
+
+class NonlinearDamping(LawTerm):
+    """Amplitude-dependent damping: e = (c + μ·(a² − r²))·f with a the displacement of the
+    stiffness element on its junction (Stanton type) or, with ``velocity`` or when there is
+    none, a = f (velocity-cubic); r² = ⟨a²⟩/2 (1.5·⟨f²⟩ for the velocity form) centres it on
+    the data's amplitude; μ ≥ 0."""
+
+    element_kind = "R"
+    cause = "nonlinear-damping"
+    label = "amplitude-dependent (Stanton) damping"
+    prefix, upper = "nld.mu1", 10.0
+
+    def __init__(self, site: Site | None = None, velocity: bool = False):
+        self.velocity = velocity
+        if velocity:
+            self.label = "velocity-cubic damping"
+            self.prefix = "nld.mu1v"
+        super().__init__(site)
+
+    def applies(self, view):
+        ok = super().applies(view)
+        if ok is not True or self.velocity:
+            return ok
+        if not any(self.partner(view.model, el) for el in self.elements(view.model)):
+            return "no damping element has a stiffness partner (the velocity-cubic form covers it)"
+        return True
+
+    def partner(self, model, el):
+        if self.velocity:
+            return None
+        return next((o for o in neighbours(model, el) if _is_spring(model, o)), None)
+
+    @staticmethod
+    def term(c, r2, x, a):
+        return c * ((x if a is None else a) ** 2 - r2) * x
+
+    def refs(self, view, el, x, a):
+        amp = x if a is None else a
+        return (
+            abs(slope(view.model, el, view.values)) / _peak(amp) ** 2,
+            (1.5 if a is None else 0.5) * float(np.mean(amp**2)),
+        )
+
+
+def _is_spring(model, name: str) -> bool:
+    """A C element that acts as a stiffness: tagged so, or untagged (a generic model's)."""
+    el = model.elements[name]
+    return isinstance(el, C) and getattr(el, "role", None) in (None, "stiffness")
+
+
+class Friction(LawTerm):
+    """Friction (Coulomb, smoothed) in a damper: e = law(f) + F·tanh(f/s), F = μ·s, μ ≥ 0 in
+    units of the element's damping; s keeps the law smooth: 3 % of the data's peak velocity,
+    or 10 or 30 % if these fit better (tried only when the first improves the fit part by 2 %
+    or more).  Its equivalent viscous damping 4F/(πV) falls with the velocity amplitude V,
+    where the cubic forms' rises.  Runs on the exact Lur'e route."""
+
+    element_kind = "R"
+    cause = "friction"
+    label = "Coulomb friction (smoothed) in the damper law"
+    prefix = "fr.F"
+    cost = 4
+    upper = 300.0
+    grid = (1.0, 8.0, 64.0)
+    #: smoothing velocities tried, as shares of the data's peak velocity (the best fit is kept)
+    smoothing = (0.03, 0.1, 0.3)
+
+    def __init__(self, site: Site | None = None, velocity_share: float | None = None):
+        super().__init__(site)
+        #: the smoothing velocity of this fit (share of the peak velocity); None: try ``smoothing``
+        self.velocity_share = velocity_share
+
+    @staticmethod
+    def term(c, r2, x, a):
+        return c * r2 * sp.tanh(x / r2)
+
+    def refs(self, view, el, x, a):
+        return abs(slope(view.model, el, view.values)), (self.velocity_share or self.smoothing[0]) * _peak(x)
+
+    def fit(self, view):
+        if self.velocity_share is not None:
+            return super().fit(view)
+        make = [type(self)(self.site, s) for s in self.smoothing]
+        return _best_of(view, make, stop_unless=0.98)
+
+
+def _best_of(view, candidates, stop_unless: float | None = None):
+    """The best fit of several variants of one kind (validation RMS on the fit part); with
+    ``stop_unless``, the later variants only while the best improves the fit part by more than
+    that factor."""
+    before = view.score(view.prediction)[2]
+    best = None
+    for cand in candidates:
+        ext = cand.fit(view)
+        rf = view.score(ext.prediction)[2]
+        if best is None or rf < best[0]:
+            best = (rf, ext)
+        if stop_unless is not None and best[0] > stop_unless * before:
+            break
+    return best[1]
+
+
+def law_kinds(model) -> list[Candidate]:
+    """The law-term kinds at every generic site of ``model`` (:func:`~.sites.generic_sites`)."""
+    out: list[Candidate] = []
+    for site in generic_sites(model, "C"):
+        out += [Softening(site), Hardening(site), Clearance(site)]
+    for site in generic_sites(model, "R"):
+        out += [NonlinearDamping(site, velocity=True), NonlinearDamping(site), Friction(site)]
+    return out
