@@ -74,9 +74,7 @@ def layout(model, stroke_end=None, derivative=()) -> Layout:
         BondMark(b.index, b.tail[0], b.head[0], None if stroke_end is None else stroke_end(b) == b.head)
         for b in model.bonds
     ]
-    labels = {
-        name: el.kind if el.kind in ("0", "1") else f"{el.kind}:{name}" for name, el in model.elements.items()
-    }
+    labels = {name: el.kind if el.kind in ("0", "1") else f"{el.kind}:{name}" for name, el in model.elements.items()}
     return Layout(
         model.name,
         {k: np.asarray(v, float) for k, v in pos.items()},
@@ -127,7 +125,9 @@ def svg(model, stroke_end=None, derivative=(), px: float | None = None) -> str:
     pad, top = 60.0, 24.0
     k = (width - 2 * pad) / span
     height = (hi[1] - lo[1]) * k + 2 * pad + top
-    at = {name: np.array([pad + (p[0] - lo[0]) * k, top + pad + (hi[1] - p[1]) * k]) for name, p in lay.positions.items()}
+    at = {
+        name: np.array([pad + (p[0] - lo[0]) * k, top + pad + (hi[1] - p[1]) * k]) for name, p in lay.positions.items()
+    }
     half = {name: np.array([3.5 * len(label) + 8, 13.0]) for name, label in lay.labels.items()}  # box + margin
 
     def edge(centre, hw, u):  # where the ray from a box's centre along u leaves the box
@@ -156,7 +156,9 @@ def svg(model, stroke_end=None, derivative=(), px: float | None = None) -> str:
             s = z if b.stroke_at_head else a
             out.append(line(s - 8 * nrm, s + 8 * nrm, "#d62728", 3, ' class="stroke"'))
         m = (a + z) / 2 - 9 * nrm
-        out.append(f'<text x="{m[0]:.1f}" y="{m[1] + 4:.1f}" font-size="10" fill="#666" text-anchor="middle">{b.index}</text>')
+        out.append(
+            f'<text x="{m[0]:.1f}" y="{m[1] + 4:.1f}" font-size="10" fill="#666" text-anchor="middle">{b.index}</text>'
+        )
         out.append("</g>")
     for name, (x, y) in at.items():
         label, w = lay.labels[name], 2 * half[name][0] - 6
