@@ -78,6 +78,17 @@ def test_the_residual_after_the_chain_lies_on_the_noise_floor(square):
     assert np.median(pxx[f < square.data["drive_band_hz"]]) > 1e3 * noise_psd(square.noise, fs)  # before: far above
 
 
+def test_a_diagnosis_that_names_nothing_has_its_page_too():
+    """On the effect-free lag record nothing is named: the page shows the calibrated model
+    alone, the chain 'none' and why the chain stopped, and no extended bond graph."""
+    rep = diagnose(lag_model(), lag_record(square=0.0), candidates=[SquareLaw()], workers=1)
+    assert rep.causes == []
+    page = report_page(rep)
+    assert re.search(r'id="chain">Chain: <b>none</b>', page)
+    assert [label for label, _ in curves(rep)] == ["calibrated model"]
+    assert '<tr class="stop"><td>stop</td><td>none</td>' in page and 'class="bondgraph"' not in page
+
+
 def test_fields_a_report_may_carry_are_shown_when_present(square, monkeypatch):
     """The deciding rule, the site, the unexplained shares and a step's noise floor appear
     when the report's JSON has them, and their columns are left out when it does not."""

@@ -147,8 +147,11 @@ def _figures(report, units: dict, limit: int):
         spec.add_layout(Span(location=band, dimension="height", line_color="#888888", line_dash="dotted"))
 
     loops = fig("Residual against the drive", x_axis_label=u_label, y_axis_label=f"{y_label} residual")
+    every = slice(None, None, max(1, -(-len(t) // limit)))  # a loop plot of every k-th sample
     for k, (label, m) in enumerate(models, 1):
-        loops.line(u, y - m, color=PALETTE[k % len(PALETTE)], line_width=0.6, alpha=0.8, legend_label=label)
+        loops.line(
+            u[every], (y - m)[every], color=PALETTE[k % len(PALETTE)], line_width=0.6, alpha=0.8, legend_label=label
+        )
 
     rms = [report.baseline_rms] + [s.rms for s in report.steps if s.cause != "none"]
     names = ["calibrated" if report.baseline == "calibrated" else "plausible"] + [
@@ -192,7 +195,7 @@ def report_page(report, model=None, max_points: int = 20_000) -> str:
         model's, when a cause was named).
     max_points : int
         At most about this many points per time curve (each bucket's minimum and maximum are
-        kept); spectra use every sample.
+        kept) and per loop (every k-th sample); spectra use every sample.
 
     Returns
     -------
