@@ -121,7 +121,7 @@ def svg(model, stroke_end=None, derivative=(), px: float | None = None) -> str:
     pts = np.array(list(lay.positions.values()))
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     span = max((hi - lo).max(), 1e-9)
-    width = px or float(np.clip(160 * n**0.5, 320, 900))
+    width = px or float(max(np.clip(160 * n**0.5, 320, 900), 6.5 * len(caption(lay)) + 10))  # the caption fits
     pad, top = 60.0, 24.0
     k = (width - 2 * pad) / span
     height = (hi[1] - lo[1]) * k + 2 * pad + top
