@@ -57,6 +57,8 @@ def p885_json(tmp_path_factory):
             "--quiet",
             "--plot",
             str(png),
+            "--report",
+            str(png.with_suffix(".html")),
             "--workers",
             "1",
         ],
@@ -132,6 +134,24 @@ def test_cli_json_contract(p885_json):
     assert "at_bounds" in out["calibration"] and "held" in out["calibration"]
     assert out["data"]["blocks"] == config.get("diagnosis.blocks")  # bursts at one frequency: no sweep
     assert out["why"]
+
+
+def test_cli_report_opens_in_headless_chromium(p885_json):
+    """The report the CLI wrote with the JSON (tests/test_html_report.py has the page's
+    contract): the real record's chain, every named step's row, its plots, no console error and
+    no request off the file system."""
+    from browser import assert_plots_drawn, open_page
+
+    out, png = p885_json
+    shot = png.with_name("report.png")
+    with open_page(png.with_suffix(".html")) as (page, log):
+        chain = page.inner_text("#chain")
+        named = page.eval_on_selector_all("#chain-table tr.named", "rs => rs.map(r => r.cells[1].innerText)")
+        page.screenshot(path=str(shot), full_page=True)
+    assert not log.problems(), log.problems()
+    assert chain.startswith("Chain: " + " → ".join(f"{s['cause']} ×{s['gain']:.3g}" for s in out["steps"]))
+    assert named == out["causes"]
+    assert_plots_drawn(shot)
 
 
 @pytest.mark.parametrize("problem,line", [("nan", 5), ("text", 6), ("time", 7)])

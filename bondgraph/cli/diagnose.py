@@ -17,6 +17,12 @@ from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, comm
         arg("--json", action="store_true", help="print one JSON object (causes, gains, every candidate, equations)"),
         arg("--equations", action="store_true", help="end the readable report with the extended model's equations"),
         arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="measured vs calibrated vs extended, residuals"),
+        arg(
+            "--report",
+            metavar="FILE.html",
+            help="one self-contained HTML page: interactive plots (data, models, residuals, spectra against "
+            "the noise floor), the chain with its gains, every candidate, the parameters with units",
+        ),
         arg("--workers", type=int, default=2, help="parallel worker processes (default 2)"),
         arg("--no-chain", action="store_true", help="name one cause only (no compound effects)"),
         arg(
@@ -32,7 +38,7 @@ def run(args):
     from ..diagnosis import diagnose, model_file_options
     from ..support.progress import Progress
 
-    with outputs(args, "plot") as out:  # checked before the work, written only if it all succeeds
+    with outputs(args, "plot", "report") as out:  # checked before the work, written only if it all succeeds
         lm = load(args)
         data = read_data(args)
         with Progress("diagnosing", unit="candidates", mode="quiet" if args.quiet else "auto") as bar:
@@ -58,3 +64,8 @@ def run(args):
 
             with out.path(args.plot) as tmp:
                 plot_diagnosis(report, tmp)
+        if args.report:
+            from ..plotting.html_report import report_page
+
+            with out.open(args.report) as fh:
+                fh.write(report_page(report, lm.model))

@@ -127,7 +127,7 @@ def outputs(args, *dests: str, inputs=()):
     """An :class:`~bondgraph.support.atomic.Outputs` with the output options ``dests`` of ``args``
     (e.g. ``"out", "plot"``) checked now, before any work: directory exists and is writable,
     not an input file of the run, not given twice, a figure format for ``plot``, matplotlib
-    installed for figures.  ``inputs``: further files the run reads."""
+    installed for figures, an ``.html`` name and bokeh for ``report``.  ``inputs``: further files the run reads."""
     from ..support.atomic import Outputs
 
     data = getattr(args, "data", None)
@@ -148,6 +148,11 @@ def outputs(args, *dests: str, inputs=()):
             if dest == "plot":
                 need_matplotlib()
                 out.add(path, option, suffixes=PLOT_SUFFIXES)
+            elif dest == "report":
+                from ..plotting.html_report import need_bokeh
+
+                need_bokeh()
+                out.add(path, option, suffixes=(".html",))
             else:
                 out.add(path, option)
     except BaseException:

@@ -180,6 +180,11 @@ class Report:
             "tolerance says"
         )
 
+    def _repr_html_(self) -> str:
+        from .display import report_html
+
+        return report_html(self)
+
     def as_json(self) -> dict:
         steps = [s for s in self.steps if s.cause != "none"]
         return {

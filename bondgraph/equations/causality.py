@@ -51,6 +51,12 @@ class Causality:
         """The end with the causal stroke (where the effort is an input)."""
         return bond.head if self.effort_from[bond.index] == bond.tail else bond.tail
 
+    def _repr_svg_(self) -> str:
+        """The bond graph with its half-arrows and causal strokes (notebook display)."""
+        from ..model.drawing import svg
+
+        return svg(self.model, self.stroke_end, {e for e, _ in self.derivative})
+
     def table(self) -> list[dict]:
         rows = []
         for b in self.model.bonds:

@@ -89,6 +89,12 @@ class Equations:
                 keep.append(st)
         return keep[::-1], need
 
+    def _repr_latex_(self) -> str:
+        """The state equations as an engineer writes them (notebook display)."""
+        from .printing import latex_display
+
+        return latex_display(self)
+
     def state_equations(self) -> dict[sp.Symbol, sp.Expr]:
         """x' = f(x, u, θ) fully substituted."""
         return self.substituted(self.rates)

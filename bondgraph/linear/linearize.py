@@ -127,6 +127,12 @@ class LinearModel:
         ]
         return "\n".join(lines)
 
+    def _repr_html_(self) -> str:
+        """Poles, zeros, natural frequencies and damping ratios as a table (notebook display)."""
+        from .display import linear_model_html
+
+        return linear_model_html(self)
+
     def summary(self) -> dict:
         """The JSON object of ``bondgraph linearize --json``."""
         z = self.zeros

@@ -436,3 +436,10 @@ class Model(Component):
 
     def storage_elements(self):
         return [e for e in self.elements.values() if e.is_storage]
+
+    def _repr_svg_(self) -> str:
+        """The bond graph with its power half-arrows (notebook display); the causal strokes
+        are drawn by the display of ``bg.assign_causality(model)``."""
+        from .drawing import svg
+
+        return svg(self)
