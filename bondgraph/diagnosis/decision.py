@@ -24,32 +24,34 @@ combination of the others, and such a direction, unresolved by the fit part, wou
 carry huge cancelling coefficients that blow up wherever the columns differ slightly (the
 record's ends) and make the reference worse than the model it extends.
 
-**Rules** (thresholds in :mod:`bondgraph.config`, section ``diagnosis``): a candidate passes
-when it lowers the validation error significantly (``min_z``) and by a useful factor
-(``min_gain``; ``min_gain_chain`` after the first step of a chain, whose residual holds what
-the named extension, never quite the physics, left), its optimiser did not leave a new
-parameter on a search bound, and
-
-* a nonlinear or memory cause, given the reference's freedom too, beats the reference by
-  ``min_gain_reference`` with z ≥ ``min_z_reference`` (a second-stage test: that it explains
-  something is established against the calibrated model; this asks that it is not linear);
-* a linear structural cause explains at least ``linear_share`` of what the reference
-  explains (more if the candidate asks: one of the reference's own form, lags of the drive),
-  and its fitted values are physically plausible (the candidate says); one that may
-  be the model's own structure recalibrated (a mode placed on one of the model's modes: the
-  candidate says) must also beat the reference as a nonlinear cause must, since the free
-  calibration under the reference has had every chance to recalibrate that structure.
+**Rules** (:data:`RULES`, thresholds in :mod:`bondgraph.config`, section ``diagnosis``): named
+rule objects, checked in order; the first that refuses a candidate is its verdict's ``rule``:
+``on-bound`` (no new parameter on a search bound), ``useful-gain`` (``min_gain``;
+``min_gain_chain`` after the first step of a chain, whose residual holds what the named
+extension, never quite the physics, left), ``significant`` (``min_z``), then for a nonlinear or
+memory cause ``beyond-linear`` (given the reference's freedom too, it beats the reference by
+``min_gain_reference`` with z ≥ ``min_z_reference``: that it explains something is
+established against the calibrated model; this asks that it is not linear) and
+``beyond-static`` (a memory effect beats its twin without memory the same way), and for a
+linear structural cause ``linear-share`` (it explains at least ``linear_share`` of what the
+reference explains, more if the candidate asks), ``plausible`` (its fitted values are
+physically plausible: the candidate says) and ``not-a-recalibration`` (one that may be the
+model's own structure recalibrated, a mode placed on one of the model's modes, must also beat
+the reference as a nonlinear cause must).
 
 Of the passing candidates, the one that explains most when the reference's freedom is
-allowed too (its gain over the reference) is named, then the one with the larger own gain: a
-linear cause gains little over the reference, so an effect beyond any linear one is named
-first and the linear remainder is left to the next step of the chain.
+allowed too (its gain over the reference) is named, then the one with the larger own gain
+(rule ``most-beyond-linear``): a linear cause gains little over the reference, so an effect
+beyond any linear one is named first and the linear remainder is left to the next step of the
+chain; of those the data cannot tell from it, the one with the fewest parameters
+(``simplest-of-equivalent``).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -149,10 +151,151 @@ def regress(columns: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
 
 @dataclass
 class Verdict:
-    """Why a candidate passed or not."""
+    """Why a candidate passed or not: ``rule`` is the name of the rule that refused it ('' when
+    it passed)."""
 
     passed: bool
     reason: str
+    rule: str = ""
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """What the rules see of one candidate (see :data:`RULES`)."""
+
+    kind: str
+    base: Comparison
+    versus_reference: Comparison | None
+    share: float | None
+    at_bounds: list
+    implausible: str
+    later: bool = False
+    recalibration: str = ""
+    need_share: float | None = None
+    versus_static: Comparison | None = None
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A named decision rule: it applies to candidates of ``kinds`` and ``check`` returns why
+    it refuses one ('' when it does not).  ``why`` is the rule's reason, as docs/diagnosis.md
+    gives it."""
+
+    name: str
+    kinds: tuple[str, ...]
+    why: str
+    check: Callable[[Evidence], str]
+
+
+def _on_bound(e: Evidence) -> str:
+    return f"{', '.join(e.at_bounds)} on a search bound" if e.at_bounds else ""
+
+
+def _useful(e: Evidence) -> str:
+    need = config.get("diagnosis.min_gain_chain" if e.later else "diagnosis.min_gain")
+    return f"gain {e.base.gain:.3g} < {need:g}" if e.base.gain < need else ""
+
+
+def _significant(e: Evidence) -> str:
+    need = config.get("diagnosis.min_z")
+    if e.base.z < need:
+        return f"not significant (z = {e.base.z:.2g} < {need:g}, {e.base.n_eff:.0f} effective samples)"
+    return ""
+
+
+def _beyond(vr: Comparison | None) -> bool:
+    return (
+        vr is not None
+        and vr.gain >= config.get("diagnosis.min_gain_reference")
+        and vr.z >= config.get("diagnosis.min_z_reference")
+    )
+
+
+def _beyond_linear(e: Evidence) -> str:
+    vr = e.versus_reference
+    if _beyond(vr):
+        return ""
+    return "does not beat the linear reference" + (f" (gain {vr.gain:.3g}, z = {vr.z:.2g})" if vr is not None else "")
+
+
+def _linear_share(e: Evidence) -> str:
+    need = config.get("diagnosis.linear_share") if e.need_share is None else e.need_share
+    if e.share is not None and e.share < need:
+        return f"explains {e.share:.0%} of the linear mismatch (< {need:.0%})"
+    return ""
+
+
+def _plausible(e: Evidence) -> str:
+    return f"implausible: {e.implausible}" if e.implausible else ""
+
+
+def _not_recalibration(e: Evidence) -> str:
+    if e.recalibration and not _beyond(e.versus_reference):
+        vr = e.versus_reference
+        return f"{e.recalibration} and does not beat the linear reference" + (
+            f" (gain {vr.gain:.3g}, z = {vr.z:.2g})" if vr is not None else ""
+        )
+    return ""
+
+
+def _beyond_static(e: Evidence) -> str:
+    if e.versus_static is None or _beyond(e.versus_static):
+        return ""
+    vs = e.versus_static
+    return f"its loops explain no more than a static curve (gain {vs.gain:.3g}, z = {vs.z:.2g})"
+
+
+#: the rules a candidate must pass, in the order they are checked (docs/diagnosis.md)
+RULES = (
+    Rule(
+        "on-bound",
+        ("nonlinear", "linear"),
+        "a new parameter on its search bound stands in for something the kind cannot express",
+        _on_bound,
+    ),
+    Rule(
+        "useful-gain",
+        ("nonlinear", "linear"),
+        "the validation RMS must fall by a useful factor (diagnosis.min_gain, min_gain_chain after the first step)",
+        _useful,
+    ),
+    Rule(
+        "significant",
+        ("nonlinear", "linear"),
+        "the fall must be significant on the effective number of independent batches (diagnosis.min_z)",
+        _significant,
+    ),
+    Rule(
+        "beyond-linear",
+        ("nonlinear",),
+        "a nonlinear or memory effect must explain something no linear correction of the model does",
+        _beyond_linear,
+    ),
+    Rule(
+        "linear-share",
+        ("linear",),
+        "a linear structural cause must explain most of what a flexible linear correction explains",
+        _linear_share,
+    ),
+    Rule(
+        "plausible",
+        ("linear",),
+        "a linear structural cause must have physically plausible values (the candidate says)",
+        _plausible,
+    ),
+    Rule(
+        "not-a-recalibration",
+        ("linear",),
+        "a cause that may be the model's own structure recalibrated must beat the linear reference too",
+        _not_recalibration,
+    ),
+    Rule(
+        "beyond-static",
+        ("nonlinear",),
+        "a memory effect must beat a static curve with the same freedom: loops, not a curve",
+        _beyond_static,
+    ),
+)
 
 
 def judge(
@@ -165,41 +308,36 @@ def judge(
     later: bool = False,
     recalibration: str = "",
     need_share: float | None = None,
-    kind_checks: bool = True,
+    versus_static: Comparison | None = None,
+    rules: tuple[Rule, ...] = RULES,
 ) -> Verdict:
-    """Apply the rules of the module docstring to one candidate (``later``: in a chain step
-    after the first, where ``diagnosis.min_gain_chain`` replaces ``diagnosis.min_gain``;
-    ``recalibration``: why a linear cause may be the model's own structure recalibrated;
-    ``need_share``: the candidate's own ``linear_share``, if it has one)."""
-    min_z = config.get("diagnosis.min_z")
-    min_gain = config.get("diagnosis.min_gain_chain" if later else "diagnosis.min_gain")
-    if at_bounds:
-        return Verdict(False, f"{', '.join(at_bounds)} on a search bound")
-    if base.gain < min_gain:
-        return Verdict(False, f"gain {base.gain:.3g} < {min_gain:g}")
-    if base.z < min_z:
-        return Verdict(False, f"not significant (z = {base.z:.2g} < {min_z:g}, {base.n_eff:.0f} effective samples)")
-    if not kind_checks:
-        return Verdict(True, "passes")
-    ref_gain, ref_z = config.get("diagnosis.min_gain_reference"), config.get("diagnosis.min_z_reference")
-    vr = versus_reference
-    beyond = vr is not None and vr.gain >= ref_gain and vr.z >= ref_z
-    if kind == "nonlinear":
-        if not beyond:
-            return Verdict(False, f"does not beat the linear reference (gain {vr.gain:.3g}, z = {vr.z:.2g})")
-    else:
-        need = config.get("diagnosis.linear_share") if need_share is None else need_share
-        if share is not None and share < need:
-            return Verdict(False, f"explains {share:.0%} of the linear mismatch (< {need:.0%})")
-        if implausible:
-            return Verdict(False, f"implausible: {implausible}")
-        if recalibration and not beyond:
-            return Verdict(
-                False,
-                f"{recalibration} and does not beat the linear reference"
-                + (f" (gain {vr.gain:.3g}, z = {vr.z:.2g})" if vr is not None else ""),
-            )
+    """Apply :data:`RULES` (or ``rules``) to one candidate; the first rule that refuses it
+    decides (``later``: a chain step after the first, where ``diagnosis.min_gain_chain``
+    replaces ``diagnosis.min_gain``; ``recalibration``: why a linear cause may be the model's
+    own structure recalibrated; ``need_share``: the candidate's own ``linear_share``;
+    ``versus_static``: a memory effect against its twin without memory)."""
+    e = Evidence(
+        kind,
+        base,
+        versus_reference,
+        share,
+        list(at_bounds),
+        implausible,
+        later,
+        recalibration,
+        need_share,
+        versus_static,
+    )
+    for rule in rules:
+        if kind in rule.kinds:
+            reason = rule.check(e)
+            if reason:
+                return Verdict(False, reason, rule.name)
     return Verdict(True, "passes")
+
+
+#: the rules that apply to every cause (a drift of the output has no linear reference)
+BASIC = tuple(r for r in RULES if r.name in ("on-bound", "useful-gain", "significant"))
 
 
 def reference_prediction(

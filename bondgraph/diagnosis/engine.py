@@ -20,7 +20,7 @@ from .account import account
 from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State, residual_floor
-from .decision import Comparison, Verdict, compare, judge, reference_prediction, regress
+from .decision import BASIC, Comparison, Verdict, compare, judge, reference_prediction, regress
 from .laws import law_kinds
 from .modes import mode_kinds
 from .pool import Pool, single_threaded_blas
@@ -174,6 +174,12 @@ def assess(
         before = rms(before[val])
         explained_ref = before**2 - min(rms_ref, rms_state) ** 2
         r.share = (before**2 - r.rms_validation**2) / explained_ref if explained_ref > 0 else None
+        vs = None
+        if oc.static is not None and np.all(np.isfinite(oc.static)):
+            # both with the reference's freedom: loops that only mimic a linear lag are no memory
+            e_static = y - regress(np.column_stack([oc.static, ref_cols]), y, idx)
+            vs = compare(e_static, e_both, ctx.blocks)
+            r.gain_static = vs.gain
         v = judge(
             r.kind,
             base,
@@ -184,20 +190,15 @@ def assess(
             later=bool(state.causes),
             recalibration=r.recalibration,
             need_share=r.need_share,
+            versus_static=vs,
         )
-        if v.passed and oc.static is not None and np.all(np.isfinite(oc.static)):
-            # both with the reference's freedom: loops that only mimic a linear lag are no memory
-            e_static = y - regress(np.column_stack([oc.static, ref_cols]), y, idx)
-            vs = compare(e_static, e_both, ctx.blocks)
-            r.gain_static = vs.gain
-            if vs.gain < config.get("diagnosis.min_gain_reference") or vs.z < config.get("diagnosis.min_z_reference"):
-                v = Verdict(
-                    False, f"its loops explain no more than a static curve (gain {vs.gain:.3g}, z = {vs.z:.2g})"
-                )
-        r.passed, r.verdict = v.passed, v.reason
+        r.passed, r.verdict, r.rule = v.passed, v.reason, v.rule
         if not r.success and r.passed:
             r.verdict += " (optimiser not converged)"
-    winner = _simplest_of_best([oc for oc in outcomes if oc.result.passed])
+    winner, rule = _simplest_of_best([oc for oc in outcomes if oc.result.passed])
+    if winner is None:
+        tried = [oc.result for oc in outcomes if oc.raw is not None]
+        rule = max(tried, key=lambda r: r.gain).rule if tried else "no-candidate"
     why = _why(winner, outcomes, rms_state, rms_ref, ctx.noise)
     before = rms_plaus if winner is not None and winner.result.against == "plausible" else rms_state
     step = Step(
@@ -210,6 +211,7 @@ def assess(
         why,
         winner.result.site if winner else "",
         winner.result.label if winner else "",
+        rule,
     )
     return step, winner
 
@@ -266,7 +268,7 @@ def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
     return [oc for oc in race if not oc.result.success]
 
 
-def _simplest_of_best(passing: list[Outcome]) -> Outcome | None:
+def _simplest_of_best(passing: list[Outcome]) -> tuple[Outcome | None, str]:
     """The passing candidate to name: the best ranks by what it explains when every linear
     correction is allowed too (a linear cause gains little over the reference, an effect beyond
     any linear one more), then by its own gain; of the candidates the data cannot tell from the
@@ -274,7 +276,7 @@ def _simplest_of_best(passing: list[Outcome]) -> Outcome | None:
     reproduces is a saturation, not hysteresis), provided it also explains about as much as the
     best beyond the flexible linear reference (a lag that mimics a loop at one rate does not)."""
     if not passing:
-        return None
+        return None, ""
     best = max(passing, key=lambda oc: (round(oc.result.gain_reference, 2), oc.result.gain))
     margin = config.get("diagnosis.equivalent")
     tied = [
@@ -286,7 +288,8 @@ def _simplest_of_best(passing: list[Outcome]) -> Outcome | None:
             and oc.result.rms_validation <= margin * best.result.rms_validation
         )
     ]
-    return min(tied, key=lambda oc: (oc.result.n_params, -oc.result.gain))
+    chosen = min(tied, key=lambda oc: (oc.result.n_params, -oc.result.gain))
+    return chosen, "most-beyond-linear" if chosen is best else "simplest-of-equivalent"
 
 
 def _why(winner, outcomes, rms_state, rms_ref, noise) -> str:
@@ -619,8 +622,8 @@ def _diagnose(
                 break
             state = advance(ctx, state, winner, view)
     final_prediction = state.prediction
-    if steps and not any(s.cause != "none" for s in steps) and cal.drift is None:
-        drift = drift_step(ctx, state)
+    if steps and not any(s.cause != "none" for s in steps):
+        drift = drift_step(ctx, state, cal.drift)
         if drift is not None:
             step, final_prediction = drift
             say(f"step {len(steps) + 1}: {step.why}")
@@ -628,6 +631,8 @@ def _diagnose(
     causes = [s.cause for s in steps if s.cause != "none"]
     final_rms = rms((ctx.y - final_prediction)[ctx.ident.val_mask])
     base_rms = cal.rms_plausible if from_plausible and cal.rms_plausible is not None else cal.rms_validation
+    if causes == ["drift"]:  # against the record as measured, the drift the calibration removed included
+        base_rms = steps[-1].rms_before
     report = Report(
         causes,
         base_rms / max(final_rms, 1e-300) if causes else 1.0,
@@ -676,36 +681,51 @@ def _diagnose(
     return report
 
 
-def drift_step(ctx: Context, state: State) -> tuple[Step, np.ndarray] | None:
-    """When nothing was named: a slow drift of the output (a quadratic in time, as a sensor's
-    or a thermal drift), fitted to the residual on the fit part, and named ``drift`` at the
-    output when it passes the rules a cause must (``diagnosis.min_gain``, ``diagnosis.min_z``)
-    and removes at least ``diagnosis.drift_share`` of the residual's energy on the validation
-    part.  (The step, the prediction with the drift) or None."""
-    idx, val, y = ctx.ident.fit_idx, ctx.ident.val_mask, ctx.y
+def drift_step(ctx: Context, state: State, solved: float | None) -> tuple[Step, np.ndarray] | None:
+    """When nothing else was named: a slow drift of the output named ``drift`` at the output
+    (rule ``drift-when-nothing``), or None.
+
+    The drift is a quadratic in time fitted to the residual on the fit part, plus the linear
+    sensor drift the calibration solved and removed from the record (``solved``, output units
+    per second), if any.  It is named when, put back into the record, it passes the rules every
+    cause must (``on-bound``, ``useful-gain``, ``significant``) and its RMS is at least
+    ``diagnosis.drift_share`` of the output's: a drift that large is a finding about the
+    measurement, where a smaller one is removed as a nuisance (and said in a note).
+
+    Returns
+    -------
+    (Step, ndarray) or None
+        The step and the prediction of the record as it was measured, drift included.
+    """
+    idx, val = ctx.ident.fit_idx, ctx.ident.val_mask
+    removed = 0.0 if solved is None else solved * 0.5 * (ctx.t[-1] - ctx.t[0]) * ctx.trend
+    y = ctx.y + removed  # the record as measured
     e_state = y - state.prediction
     t = (ctx.t - ctx.t[0]) / max(ctx.t[-1] - ctx.t[0], 1e-300)
     drift = regress(np.column_stack([t, t**2]), e_state, idx)
     e_drift = e_state - drift
     cmp = compare(e_state, e_drift, ctx.blocks)
     before, after = rms(e_state[val]), rms(e_drift[val])
-    removed = 1 - (after / before) ** 2 if before > 0 else 0.0
+    size = float(np.std(drift)) / max(float(np.std(y)), 1e-300)
     res = CandidateResult("drift", "a slow drift of the output (quadratic in time)", site="output")
     res.gain, res.z, res.n_eff, res.rms_validation, res.n_params = cmp.gain, cmp.z, cmp.n_eff, after, 3
-    res.params = {"drift.share": removed}
-    verdict = judge("nonlinear", cmp, None, None, [], "", kind_checks=False)
-    if verdict.passed and removed < config.get("diagnosis.drift_share"):
+    res.params = {"drift.rms_share": size}
+    verdict = judge("nonlinear", cmp, None, None, [], "", rules=BASIC)
+    if verdict.passed and size < config.get("diagnosis.drift_share"):
         verdict = Verdict(
-            False, f"removes {removed:.0%} of the residual's energy (< {config.get('diagnosis.drift_share'):.0%})"
+            False,
+            f"its RMS is {size:.1%} of the output's (< {config.get('diagnosis.drift_share'):.0%}): a nuisance, not a finding",
+            "drift-size",
         )
-    res.passed, res.verdict = verdict.passed, verdict.reason
+    res.passed, res.verdict, res.rule = verdict.passed, verdict.reason, verdict.rule
     if not res.passed:
         return None
     why = (
-        f"named: nothing else explains the record, and a slow drift of the output removes {removed:.0%} of "
-        f"the residual's energy (validation RMS {cmp.gain:.3g}× lower, z = {cmp.z:.1f})"
+        f"named: nothing else explains the record, and a slow drift of the output, {size:.0%} of its RMS, "
+        f"lowers the validation RMS {cmp.gain:.3g}× (z = {cmp.z:.1f})"
     )
-    return Step("drift", cmp.gain, before, after, before, [res], why, "output", res.label), state.prediction + drift
+    step = Step("drift", cmp.gain, before, after, before, [res], why, "output", res.label, "drift-when-nothing")
+    return step, state.prediction + drift - removed
 
 
 def _drift_explains(ctx: Context, state: State, winner: Outcome) -> bool:

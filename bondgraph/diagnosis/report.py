@@ -37,6 +37,8 @@ class CandidateResult:
     skipped: str = ""
     error: str = ""
     verdict: str = ""
+    #: the name of the rule that refused it ('' when it passed or was not judged)
+    rule: str = ""
     passed: bool = False
     seconds: float = 0.0
     #: "plausible" when fitted from, and compared with, the plausible device (the calibration
@@ -80,6 +82,7 @@ class CandidateResult:
             "message": self.message,
             "passed": self.passed,
             "verdict": self.verdict,
+            "rule": self.rule,
             "seconds": round(self.seconds, 2),
         }
         if self.against:
@@ -112,11 +115,15 @@ class Step:
     site: str = ""
     #: the named candidate's label ("" for none)
     label: str = ""
+    #: the rule that decided the step: how the winner was chosen, or for none the rule that
+    #: refused the best candidate
+    rule: str = ""
 
     def as_json(self) -> dict:
         return {
             "cause": self.cause,
             "site": (self.site or "drive") if self.cause != "none" else "",
+            "rule": self.rule,
             "gain": self.gain,
             "rms": self.rms,
             "rms_before": self.rms_before,
@@ -242,7 +249,8 @@ class Report:
         if self.account is not None:
             lines.append(f"  Unexplained: {self.account.sentence(bool(self.causes))}")
         if self.steps:
-            lines.append(f"  Why it stopped: {self.steps[-1].why}" if self.steps[-1].cause == "none" else "")
+            last = self.steps[-1]
+            lines.append(f"  Decided by rule '{last.rule}': {last.why}" if last.rule else f"  Decided: {last.why}")
         if self.unexplained:
             lines.append(f"  NOTE: {self.unexplained}")
         lines += [f"  note: {n}" for n in self.notes]
@@ -334,7 +342,7 @@ class Report:
             skipped = [c for c in s.candidates if c.skipped]
             if skipped:
                 lines.append(f"  not fitted: {len(skipped)} (" + "; ".join(_grouped(skipped)) + ")")
-            lines.append(f"  → {s.cause}: {s.why}")
+            lines.append(f"  → {s.cause}" + (f" (rule '{s.rule}')" if s.rule else "") + f": {s.why}")
             if s.cause != "none":
                 named.append(s.cause)
         if self.extended_rms_integrated is not None:

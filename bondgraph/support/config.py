@@ -183,10 +183,10 @@ DEFAULTS: dict[str, Default] = {
         "law term at a site), only this many, those explaining most, are fitted in full",
     ),
     "diagnosis.drift_share": Default(
-        0.5,
-        "when no cause is named, a slow drift of the output (a quadratic in time) is named "
-        "when it passes the rules a cause must and removes at least this share of the "
-        "residual's energy on the validation part",
+        0.1,
+        "when no cause is named, a slow drift of the output (a quadratic in time, with the "
+        "sensor drift the calibration solved) is named when it passes the rules a cause "
+        "must and its RMS is at least this share of the output's",
     ),
     "diagnosis.screen_effort": Default(
         0.3,
