@@ -4,7 +4,7 @@ The force acts on the outer mass (mass2); the sensor reads the displacement of t
 mass (mass1), so the response is non-collocated (modes near 31 Hz and 62 Hz).
 """
 
-from bondgraph import C, J0, J1, Experiment, I, Model, Parameter, R, Se, Step
+from bondgraph import J0, J1, C, Experiment, I, Model, Parameter, R, Se, Step
 
 PARAMETERS = [
     Parameter("m1", 0.4, "kg", "inner mass", bounds=(1e-4, 1e3)),

@@ -4,7 +4,7 @@ The force acts on the inner mass (mass1); the sensor reads the displacement of t
 mass (mass3), the far end of the chain (modes near 30, 68 and 88 Hz).
 """
 
-from bondgraph import C, J0, J1, Experiment, I, Model, Parameter, R, Se, Step
+from bondgraph import J0, J1, C, Experiment, I, Model, Parameter, R, Se, Step
 
 PARAMETERS = [
     Parameter("m1", 0.3, "kg", "inner mass", bounds=(1e-4, 1e3)),

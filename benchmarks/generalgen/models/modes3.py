@@ -5,7 +5,7 @@ the displacement of the drive point, the sum of the modal displacements (modes n
 210 and 520 Hz, 2 % of critical damping).
 """
 
-from bondgraph import C, J0, J1, Experiment, I, Model, Parameter, R, Se, Step
+from bondgraph import J0, J1, C, Experiment, I, Model, Parameter, R, Se, Step
 
 #: (modal mass kg, stiffness N/m, damping N*s/m) of the three modes
 _MODES = ((0.05, 7.1e3, 0.75), (0.08, 1.4e5, 4.2), (0.15, 1.6e6, 19.6))

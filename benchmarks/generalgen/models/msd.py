@@ -4,7 +4,7 @@ A generic single-degree-of-freedom oscillator (natural frequency about 32 Hz, 2.
 critical damping), the simplest model a user writes for a mounted payload.
 """
 
-from bondgraph import C, Experiment, I, J1, Model, Parameter, R, Se, Step
+from bondgraph import J1, C, Experiment, I, Model, Parameter, R, Se, Step
 
 PARAMETERS = [
     Parameter("m1", 0.5, "kg", "moving mass", bounds=(1e-4, 1e3)),

@@ -3,7 +3,7 @@
 The sensor reads the capacitor voltage (resonance near 156 Hz, 5 % of critical damping).
 """
 
-from bondgraph import C, Experiment, I, J1, Model, Parameter, R, Se, Step
+from bondgraph import J1, C, Experiment, I, Model, Parameter, R, Se, Step
 
 PARAMETERS = [
     Parameter("R", 4.7, "ohm", "series resistance (resistor and winding)", bounds=(1e-4, 1e6)),
