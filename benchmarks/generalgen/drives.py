@@ -126,11 +126,11 @@ class Drive:
         return (self.offset + wave) * _raised_step(t / self.fade)
 
     def _harmonics(self, dt: float, n: int, q: int) -> np.ndarray:
-        """Sum of ``amps[k] cos(2 pi h[k] t / Tp + phases[k])`` over one period ``Tp`` of
-        ``n/periods`` samples, evaluated by an inverse FFT and repeated."""
+        """Sum of ``amps[k] cos(2 pi h[k] t / Tp + phases[k])`` over one period ``Tp = T/periods``,
+        evaluated by an inverse FFT on the grid ``dt/q`` (which divides ``Tp``: ``T`` is a whole
+        number of samples, a multiple of 8) and repeated."""
         p = self.par
-        per = n // p["periods"]
-        L = per * q
+        L = int(round(self.T / p["periods"] / (dt / q)))
         X = np.zeros(L // 2 + 1, complex)
         X[p["harmonics"]] = p["amps"] * np.exp(1j * p["phases"]) * (L / 2)
         one = scipy.fft.irfft(X, n=L)

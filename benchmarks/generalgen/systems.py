@@ -11,6 +11,7 @@ parameters the two routes give the same output (``tests/test_generalgen.py``).
 from __future__ import annotations
 
 import ast
+import functools
 from dataclasses import dataclass
 from fnmatch import fnmatchcase
 from pathlib import Path
@@ -22,6 +23,7 @@ from .network import Link, Network
 MODELS = Path(__file__).resolve().parent / "models"
 
 
+@functools.cache
 def _literal(path: Path, name: str):
     """The literal value assigned to ``name`` at the top of a model file (no import of it)."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
@@ -31,6 +33,7 @@ def _literal(path: Path, name: str):
     raise KeyError(f"{path.name} assigns no {name}")
 
 
+@functools.cache
 def _defaults(path: Path) -> dict[str, float]:
     """The model file's parameter defaults, read by loading its ``PARAMETERS`` (the files
     import only ``bondgraph``, whose import is cheap)."""
@@ -78,8 +81,8 @@ class System:
         return MODELS / f"{self.name}.py"
 
     def defaults(self) -> dict[str, float]:
-        """The model file's parameter values."""
-        return _defaults(self.model_file)
+        """The model file's parameter values (a fresh dict)."""
+        return dict(_defaults(self.model_file))
 
     def tolerance(self, name: str) -> float:
         """The ×/÷ factor the model file's ``TOLERANCE`` declares for parameter ``name``."""
