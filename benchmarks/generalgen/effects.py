@@ -232,8 +232,9 @@ def _damper_effect(net: Network, li: int, form: str, cause: str, sc: Scales, rng
         cp = ratio * link.c * v / v**p
         link.damper_law, link.damper_par = "power", (cp, p)
         return {"law": "power", "c_p": cp, "p": p, "ratio_at_v99": ratio}
-    # dry friction scaled to the spring force the link carries
-    f_ref = link.k * float(sc.elongation[li])
+    # dry friction scaled to the smaller of the spring force the link carries and the drive
+    # (at resonance the spring force is Q times the drive: a level scaled to it would stick)
+    f_ref = min(link.k * float(sc.elongation[li]), sc.drive)
     fc = min(_u(rng, 0.03, 0.12) * b, 0.5) * f_ref
     fs = fc * (_u(rng, 1.3, 2.0) if form == "stribeck" else 1.0)
     vs = v * _u(rng, 0.02, 0.2)
@@ -328,7 +329,8 @@ def _missing_modes(net: Network, eff: EffectDraw, fs: float, rng, b: float) -> A
     if eff.form == "modal":
         top = int(np.argmax([lk.k / net.masses[lk.a] for lk in net.links]))
         m_top = net.masses[net.links[top].a]
-        extra = [(m_top * _u(rng, 0.5, 2.5) / b, o, zeta) for o in om]
+        # effective masses at the drive point from a fifth of the top mode's to two and a half times
+        extra = [(m_top * float(np.exp(rng.uniform(np.log(0.2), np.log(2.5)))) / b, o, zeta) for o in om]
         truth = _modal(net, extra)
         par["modal_masses_kg"] = [e[0] for e in extra]
         partial = [_modal(net, [e]) for e in extra] if eff.count == 2 else []
