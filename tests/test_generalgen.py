@@ -197,3 +197,18 @@ def test_scoring_rule():
     ]
     s = summarise(rows)
     assert (s["scored"], s["invisible"], s["right"], s["false_alarms"]) == (2, 1, 2, 0)
+
+
+def test_the_readme_counts_are_the_draws():
+    """benchmarks/README.md shows the causes drawn for both seed sets: they are the draws'."""
+    text = (ROOT / "benchmarks" / "README.md").read_text()
+    section = text.split("### Causes drawn", 1)[1].split("###", 1)[0]
+    shown = {}
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if len(cells) == 3 and cells[0].split(" ")[0] in VOCABULARY:
+            shown[cells[0].split(" ")[0]] = (int(cells[1].split()[0]), int(cells[2].split()[0]))
+    assert set(shown) == set(VOCABULARY)
+    for column, seeds in ((0, range(100)), (1, range(1000, 1200))):
+        causes = [draw(s).effect.cause for s in seeds]
+        assert {c: causes.count(c) for c in VOCABULARY} == {c: v[column] for c, v in shown.items()}
