@@ -180,9 +180,8 @@ def realize(d: Draw) -> Record:
     delta = nz["jitter_s"] * rz.standard_normal(n)
 
     eff = d.effect
-    vis: dict = {"rule": f"unexplained RMS >= {RATIO:g} x noise RMS", "attempts": 0}
-    parameters: dict = {}
-    network = net0
+    vis: dict = {"rule": f"unexplained RMS >= {RATIO:g} x noise RMS", "attempts": 0, "diverged": 0}
+    kept = None  # the last attempt whose simulation stayed finite
     for attempt in range(ATTEMPTS if eff.cause != "none" else 1):
         boost = BOOST**attempt
         app = apply_effect(net0, eff, sc, t, fs, dt / os0, _rng(d.seed, 4, attempt), boost)
@@ -190,14 +189,16 @@ def realize(d: Draw) -> Record:
         if os1 not in drives:
             drives[os1] = d.drive.evaluate(dt, n, 2 * os1)
         tr = lin if eff.cause in ("none", "drift") else integrate(app.network, drives[os1], dt / os1, os1)
-        y_eff = tr.y[:n]
-        clean = gain * y_eff + offset + (app.drift if app.drift is not None else 0.0)
+        clean = gain * tr.y[:n] + offset + (app.drift if app.drift is not None else 0.0)
         noise = base_noise + gain * delta * tr.y_rate()[:n]
+        vis.update(attempts=attempt + 1, boost=boost)
+        if not (np.all(np.isfinite(clean)) and np.all(np.isfinite(noise))):
+            vis["diverged"] += 1  # a redraw, like an invisible one
+            continue
         noise_rms = float(np.sqrt(np.mean(noise**2)))
-        parameters, network = app.parameters, app.network
-        vis.update(attempts=attempt + 1, boost=boost, noise_rms=noise_rms)
-        if eff.cause == "none" or not np.all(np.isfinite(clean)):
-            vis["finite"] = bool(np.all(np.isfinite(clean)))
+        kept = (clean, noise, noise_rms, app)
+        vis["noise_rms"] = noise_rms
+        if eff.cause == "none":
             break
         if eff.cause == "higher-mode":
             f_top = max(d.drive.top_frequency(), app.network.modes()[0][-1] / (2 * np.pi))
@@ -219,10 +220,12 @@ def realize(d: Draw) -> Record:
         vis["ratio"] = ratio
         if ratio >= RATIO:
             break
-    visible = eff.cause == "none" or (vis.get("ratio", 0.0) >= RATIO and vis.get("finite", True))
-    vis["visible"] = bool(visible)
+    if kept is None:
+        raise RuntimeError(f"seed {d.seed}: the truth's simulation diverged on every attempt")
+    clean, noise, noise_rms, app = kept
+    vis["visible"] = bool(eff.cause == "none" or vis.get("ratio", 0.0) >= RATIO)
     y = clean + noise
-    truth = _truth(d, eff, parameters, network, net0, vis, noise_rms, base_noise, delta)
+    truth = _truth(d, eff, app.parameters, app.network, vis, noise_rms, delta)
     return Record(t, u, y, truth)
 
 
@@ -230,7 +233,7 @@ def _hz(w) -> list:
     return [float(x) / (2 * np.pi) for x in w]
 
 
-def _truth(d: Draw, eff: EffectDraw, parameters, network, net0, vis, noise_rms, base_noise, delta) -> dict:
+def _truth(d: Draw, eff: EffectDraw, parameters, network, vis, noise_rms, delta) -> dict:
     sysm = d.system
     truth = {
         "record": d.name,
