@@ -300,3 +300,60 @@ def build(p):
     m.output("E", field, "V/m", "bending field (+-V/t_p in the two plates)")
     m.output("F_a", F_a, "N", "piezoelectric blocked force")
     return m
+
+
+def response_family(load):
+    """Figs. 17-18: the response family against the drive field, its Q and its peak."""
+    import math
+
+    import numpy as np
+
+    from bondgraph import derive
+    from bondgraph.linear.linearize import linearize
+    from bondgraph.plotting.panels import Curve, Figure, Panel
+
+    f = np.linspace(20.0, 3000.0, 3000)
+    curves, fields, Q, peaks, numbers = [], [], [], [], {}
+    for Vb in FIG17_BIAS:
+        lm = load(field=Vb / lm_t_p_um(load))
+        lin = linearize(derive(lm.model), "V", "x")
+        amp = np.abs(lin.frequency_response(2 * math.pi * f)) * Vb / 2 * 1e6
+        fn = lin.natural_frequencies[-1]
+        fine = np.abs(lin.frequency_response(np.linspace(0.5, 1.3, 4001) * fn)) * Vb / 2 * 1e6
+        curves.append(Curve(f / 1e3, amp, f"V_b = {Vb:.0f} V"))
+        fields.append(Vb / lm_t_p_um(load))
+        Q.append(1 / (2 * lin.damping_ratios()[-1]))
+        peaks.append(float(fine.max()))
+        numbers[f"peak at {Vb:.0f} V (um)"] = peaks[-1]
+        numbers[f"Q at {Vb:.0f} V"] = Q[-1]
+        numbers[f"resonance at {Vb:.0f} V (Hz)"] = fn / (2 * math.pi)
+    peaks = np.array(peaks)
+    return Figure(
+        "high-field bender (Wood, Steltz & Fearing 2005): Figs. 17-18",
+        [
+            Panel(
+                curves,
+                "Fig. 17: tip deflection amplitude, full swing V_b/2 +- V_b/2",
+                "drive frequency (kHz)",
+                "tip deflection (um)",
+                note="Fig. 17's axis ends at 350 um",
+            ),
+            Panel([Curve(fields, Q, "model", "o-")], "Fig. 18a: quality factor", "peak field V_b/t_p (V/um)", "Q"),
+            Panel(
+                [Curve(fields, peaks / peaks.max(), "model", "o-")],
+                "Fig. 18b: peak displacement, normalised",
+                "peak field V_b/t_p (V/um)",
+                "peak / largest peak",
+            ),
+        ],
+        numbers,
+        columns=3,
+    )
+
+
+def lm_t_p_um(load) -> float:
+    """The plate thickness (um) of the model ``load()`` builds (fields of the family = V_b / t_p)."""
+    return load().params.t_p * 1e6
+
+
+FIGURES = {"response": response_family}
