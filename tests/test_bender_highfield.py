@@ -411,3 +411,20 @@ def test_eq17_power_to_a_resonant_load():
     best = best_load_damping(F, b_a, omega, limit)
     allowed = grid[F / (omega * (b_a + grid)) <= limit * (1 + 1e-12)]
     assert best > b_a and best == pytest.approx(allowed[np.argmax(load_power(F, b_a, allowed))], rel=5e-3)
+
+
+def test_figure_response_against_field(capsys, tmp_path):
+    """The figure of docs/papers.md (one command): Fig. 17's family for V_b = 50-300 V and
+    Fig. 18's Q and peak against field, with the numbers of the tests above."""
+    import json
+
+    from bondgraph.cli import main
+
+    png = tmp_path / "bender.png"
+    assert main(["figure", str(BENDER), "response", "--plot", str(png), "--json"]) == 0
+    n = json.loads(capsys.readouterr().out)["numbers"]
+    peaks = [n[f"peak at {Vb:.0f} V (um)"] for Vb in FIG17_BIAS]
+    np.testing.assert_allclose(peaks, [221, 280, 205, 227, 254, 293], atol=2)
+    assert n["Q at 50 V"] == pytest.approx(10.0, abs=0.1) and n["Q at 300 V"] == pytest.approx(2.87, abs=0.05)
+    assert n["resonance at 300 V (Hz)"] == pytest.approx(1460, abs=2)
+    assert png.stat().st_size > 10000

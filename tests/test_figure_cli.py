@@ -48,3 +48,22 @@ def test_bad_figure_requests_are_one_line_errors(oscillator, tmp_path, capsys):
     wrong.write_text(open(oscillator).read() + "\nFIGURES = {'x': lambda load: 3}\n")
     assert main(["figure", str(wrong), "x", "--json"]) == 2
     assert "not a Figure" in capsys.readouterr().err
+
+
+def test_every_figure_command_of_the_papers_page_names_a_declared_figure():
+    """docs/papers.md shows one `bondgraph figure MODEL NAME` per paper; each names a model file
+    that exists and a figure it declares (the paper tests run them and check their numbers)."""
+    import re
+
+    from conftest import ROOT
+
+    from bondgraph.model.modelfile import read_model_module
+
+    text = (ROOT / "docs" / "papers.md").read_text()
+    commands = re.findall(r"^bondgraph figure (\S+) (\S+) --plot (\S+)$", text, re.M)
+    assert len(commands) == 5
+    for model, name, png in commands:
+        module, _ = read_model_module(ROOT / model)
+        assert name in module.FIGURES
+        assert f"](img/{png})" in text and (ROOT / "docs" / "img" / png).stat().st_size < 100_000
+    assert (ROOT / "docs" / "img" / "p885_compensation.png").exists()
