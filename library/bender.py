@@ -20,6 +20,10 @@ velocity (m/s); the tip deflection delta (m) is taken at the end of the rigid ex
   :func:`thermoelastic_loss`), realised in the time domain as a Zener (standard linear solid)
   relaxation arm (:func:`thermoelastic_arm`), whose loss factor is eq. 14 to first order in the
   relaxation strength;
+* the gain and loss of a saturating drive at a field amplitude (:func:`secant_gain`,
+  :func:`loss_factor`), for a model linear at each field as the paper's Figs. 17-18;
+* the plate fields of the alternating bias drive (Sec. I-A-1; :func:`bias_drive_fields`);
+* the power delivered to a resonant load, eq. 17 (:func:`load_power`, :func:`best_load_damping`);
 * eq. 16, m_eff delta'' + b_a(f, E) delta' + k_a(E) delta = F_a + F_ext (:func:`bending_actuator`;
   F_a counted positive along delta, the opposite of the paper's sign).
 """
@@ -118,19 +122,63 @@ def load_enhancement(F, gain, F_peak):
     return 1 + gain * s * (math.e ** (1 - s) if isinstance(s, (int, float)) else np.exp(1 - s))
 
 
+def bias_drive_fields(V_c, V_b, t_p):
+    """The fields (V/m) in the two plates of a bimorph under the alternating bias drive of Sec.
+    I-A-1: one outer electrode grounded, the other at the bias V_b, the centre electrode at V_c
+    (0 <= V_c <= V_b); both plates poled along the bias field, so neither is reverse biased.
+    Returns (E_1, E_2), the field in the plate between ground and centre and in the plate between
+    centre and bias, each positive along its poling: E_1 = V_c / t_p, E_2 = (V_b - V_c) / t_p.
+    Their mean V_b / (2 t_p) strains both plates alike (no bending in a symmetric laminate); the
+    bending part is +-(E_1 - E_2)/2 = +-(V_c - V_b/2) / t_p, i.e. +-V/t_p with V the centre
+    electrode's voltage from the neutral position V_b/2, at most V_b / (2 t_p): half the peak
+    plate field V_b / t_p that the paper quotes as the drive field. Numbers or sympy."""
+    return V_c / t_p, (V_b - V_c) / t_p
+
+
+def _quasi_static_loop(op: MemoryOperator, amplitude: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The second of two cycles of ``op`` driven by v = A sin (input, output)."""
+    if not amplitude > 0:
+        raise ValueError("a quasi-static loop needs a positive amplitude")
+    v = amplitude * np.sin(np.linspace(0.0, 4.0 * np.pi, 2 * n + 1))
+    return v[n:], op.run(v)[n:]
+
+
 def loss_factor(op: MemoryOperator, amplitude: float, n: int = 400) -> float:
     """Loss factor eta = Delta W / (2 pi W) of the quasi-static loop of operator ``op`` driven by
     v = A sin over two cycles (the second is measured): Delta W the loop area, W = (half range
     of y)(A)/2 the peak energy of the secant spring (Sec. IV: loss per cycle from the area of the
     hysteresis loop, Figs. 15-16). Units-free; damping ratio zeta = eta/2."""
-    if not amplitude > 0:
-        raise ValueError("loss factor needs a positive amplitude")
-    v = amplitude * np.sin(np.linspace(0.0, 4.0 * np.pi, 2 * n + 1))
-    y = op.run(v)
-    v2, y2 = v[n:], y[n:]
-    area = abs(float(np.sum(0.5 * (y2[1:] + y2[:-1]) * np.diff(v2))))
-    w = 0.5 * (0.5 * np.ptp(y2)) * amplitude
+    v, y = _quasi_static_loop(op, amplitude, n)
+    area = abs(float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(v))))
+    w = 0.5 * (0.5 * np.ptp(y)) * amplitude
     return area / (2 * math.pi * w) if w > 0 else 0.0
+
+
+def secant_gain(op: MemoryOperator, amplitude: float, n: int = 400) -> float:
+    """(half range of y) / A of the quasi-static loop of ``op`` at amplitude A (units of y/v):
+    the slope of the loop's secant, the gain a linear model at that amplitude keeps (Sec. II-B:
+    a saturating drive delivers less than its small-signal gain)."""
+    v, y = _quasi_static_loop(op, amplitude, n)
+    return 0.5 * float(np.ptp(y)) / amplitude
+
+
+def load_power(F, b_a, b_l):
+    """Eq. 17: the power (W) delivered at resonance to a load damper b_l (N s/m) by an actuator
+    of damping b_a (N s/m) and peak blocked force F (N), P_l = F^2 b_l / (2 (b_l + b_a)^2): at
+    resonance mass and stiffness cancel, the velocity amplitude is F / (b_a + b_l) and the load
+    takes b_l v^2 / 2 on average. Numbers or arrays."""
+    return 0.5 * F**2 * b_l / (b_l + b_a) ** 2
+
+
+def best_load_damping(F: float, b_a: float, omega: float, deflection_limit: float | None = None) -> float:
+    """The load damping (N s/m) that maximises eq. 17, with the resonant deflection amplitude
+    F / (omega (b_a + b_l)) (m) kept within ``deflection_limit``: b_l = b_a (matched) when that
+    keeps within the limit, else the smallest b_l that does, F / (omega delta_max) - b_a (Sec. VI:
+    lowering the load damping to match the actuator raises the Q and may exceed the strain
+    limit at resonance)."""
+    if deflection_limit is None:
+        return float(b_a)
+    return float(max(b_a, F / (omega * deflection_limit) - b_a))
 
 
 def bending_actuator(

@@ -169,3 +169,68 @@ def seed(p, data):
     l, a, T = p.value("l"), p.value("a"), p.value("T")
     s = bouc_wen_seed(data.column("x") * l / (a * T), data.column("V") / l, p.value("kx"))
     return {"kw": s["kw"], "q_bw": s["q"], "r_bw": s["r"], "n_bw": s["n"]}
+
+
+def loops_and_compensation(load):
+    """The E-P hysteresis seen as x(V) loops, and feedforward compensation of the modified PI."""
+    import numpy as np
+
+    from bondgraph import Simulator
+    from bondgraph.fit.compensate import feedforward
+    from bondgraph.plotting.panels import Curve, Figure, Panel
+    from library.identification import loop_width
+
+    runs = {}
+    for name in ("none", "bouc-wen", "pi"):
+        lm = load(hysteresis=name)
+        t = lm.experiment.times()
+        runs[name] = (lm, t, Simulator(lm.model).run(t, lm.experiment.inputs))
+    loops, numbers = [], {}
+    for name, label in (("none", "linear"), ("bouc-wen", "Bouc-Wen (Table 2)"), ("pi", "modified PI (Table 3)")):
+        _, t, r = runs[name]
+        last = t >= t[-1] / 2  # the second period of the 5 Hz drive
+        width = loop_width(r["V"][last], r["x"][last]) if name != "none" else 0.0
+        loops.append(
+            Curve(r["V"][last], 1e6 * r["x"][last], f"{label}" + (f", {100 * width:.1f} % wide" if width else ""))
+        )
+        numbers[f"loop width {name} (%)"] = 100 * width
+        numbers[f"stroke {name} (um)"] = 1e6 * float(np.ptp(r["x"][last]))
+    lm, t, ref = runs["none"]
+    comp = feedforward(runs["pi"][0].model, t, ref["x"])
+    numbers["largest error with compensation (um)"] = 1e6 * comp.error
+    numbers["largest error with the linear inverse (um)"] = 1e6 * comp.linear_error
+    return Figure(
+        "APA-120ML (Rodriguez-Fortun et al. 2010): hysteresis loops and feedforward compensation",
+        [
+            Panel(loops, "x(V) at 5 Hz, 0-120 V (second period)", "V (V)", "x (um)"),
+            Panel(
+                [
+                    Curve(t, 1e6 * ref["x"], "reference (the linear model's response)", "k", 2.0),
+                    Curve(t, 1e6 * comp.linear_predicted, "modified PI, linear-inverse drive"),
+                    Curve(t, 1e6 * comp.predicted, "modified PI, compensated drive", "--"),
+                ],
+                "tracking the reference",
+                "t (s)",
+                "x (um)",
+            ),
+            Panel(
+                [
+                    Curve(t, 1e6 * (comp.linear_predicted - ref["x"]), "linear-inverse drive"),
+                    Curve(t, 1e6 * (comp.predicted - ref["x"]), "compensated drive"),
+                ],
+                "tracking error (predicted by the model)",
+                "t (s)",
+                "x error (um)",
+            ),
+            Panel(
+                [Curve(t, comp.linear_drive, "linear inverse"), Curve(t, comp.drive, "compensated")],
+                "drive",
+                "t (s)",
+                "V (V)",
+            ),
+        ],
+        numbers,
+    )
+
+
+FIGURES = {"loops": loops_and_compensation}

@@ -83,3 +83,57 @@ def build(p):
     hyst = pi_operator(PI_THRESHOLDS, PI_WEIGHTS) if p.hysteresis == "pi" else None
     add_bimorph_modes(m, beam, p.modes, p.target, alpha=p.alpha, beta=p.beta, hysteresis=hyst, source=T1)
     return m
+
+
+def bode_nmp(load):
+    """Bode diagrams at 0.95, 0.9 and 0.7 L and the right-half-plane zero against the target."""
+    import numpy as np
+    from scipy.optimize import brentq
+
+    from bondgraph import derive
+    from bondgraph.linear.linearize import linearize
+    from bondgraph.plotting.panels import Curve, Figure, Panel
+
+    w = np.geomspace(500.0, 60000.0, 2000)
+    mag, phase, numbers = [], [], {}
+    for target in (0.95, 0.9, 0.7):
+        lin = linearize(derive(load(target=target, hysteresis="none").model), "V", "x")
+        H = lin.frequency_response(w)
+        rhp = [z for z in lin.zeros if z.real > 0]
+        label = f"{target:g} L" + (f" (RHP zero {rhp[0].real:.0f} rad/s)" if rhp else " (minimum phase)")
+        mag.append(Curve(w, np.abs(H), label))
+        phase.append(Curve(w, np.degrees(np.unwrap(np.angle(H))), label))
+        numbers[f"RHP zeros at {target:g} L"] = len(rhp)
+        if rhp:
+            numbers[f"RHP zero at {target:g} L (rad/s)"] = rhp[0].real
+    lm = load(hysteresis="none")
+    p = lm.params
+    beam = Bimorph(L=p.L, b=p.b, t_p=p.t_p, t_b=p.t_b, rho_p=p.rho_p, rho_b=p.rho_b, c_p=p.c_p, c_b=p.c_b, e31=p.e31)
+    modes = beam.modes(2)
+    g = modes.input_gains
+
+    def a1(f):  # eq. 38: the numerator's coefficient whose sign change moves the zero across
+        return 1 + g[1] * modes.shape(1, f * beam.L) / (g[0] * modes.shape(0, f * beam.L))
+
+    boundary = brentq(a1, 0.5, 0.95, xtol=1e-12)
+    numbers["minimum-phase boundary (fraction of L)"] = boundary
+    targets = np.linspace(0.5, 1.0, 101)
+    a = [a1(f) for f in targets]
+    return Figure(
+        "T215-A4-103X, two modes (Ghafarirad et al. 2015): Bode and the non-minimum-phase zero",
+        [
+            Panel(mag, "|w(l_t)/V|", "frequency (rad/s)", "m/V", "log", "log"),
+            Panel(phase, "phase of w(l_t)/V", "frequency (rad/s)", "deg", "log"),
+            Panel(
+                [Curve(targets, a, "a1(l_t)"), Curve([boundary], [0.0], f"boundary {boundary:.4f} L", "ko")],
+                "eq. 38: a1 < 0 puts a zero in the right half plane",
+                "target l_t / L",
+                "a1 = 1 + m_p2 phi2 / (m_p1 phi1)",
+            ),
+        ],
+        numbers,
+        columns=3,
+    )
+
+
+FIGURES = {"bode": bode_nmp}

@@ -70,10 +70,12 @@ def run(args):
             if not sep:
                 raise UsageError(f"bad --input {item!r}: expected NAME=SIGNAL, e.g. F=0")
             others[name.strip()] = parse_signal(spec, base_dir=str(Path(args.model).parent))
+        # a fit file's sensor zero: the model follows reference - offset (measured = model + offset)
+        offset = lm.offsets.get(args.model_output, lm.offsets.get(None, 0.0))
         res = feedforward(
             lm.model,
             ref.t,
-            ref.columns[col],
+            ref.columns[col] - offset,
             input=args.model_input,
             output=args.model_output,
             inputs=others,
@@ -84,10 +86,10 @@ def run(args):
         u, y = args.model_input, args.model_output
         columns = {
             u: res.drive,
-            f"{y}_ref": res.reference,
-            f"{y}_pred": res.predicted,
+            f"{y}_ref": res.reference + offset,
+            f"{y}_pred": res.predicted + offset,
             f"{u}_linear": res.linear_drive,
-            f"{y}_pred_linear": res.linear_predicted,
+            f"{y}_pred_linear": res.linear_predicted + offset,
         }
         summary = res.summary()
         meta = {

@@ -1,0 +1,107 @@
+"""Figures that a model file declares itself: curves in panels, and the numbers they show.
+
+A model file's ``FIGURES`` maps a figure's name to a function that returns a :class:`Figure`
+(see ``bondgraph figure``). The classes only hold numbers (no matplotlib until :func:`render`),
+so a model file builds them without the ``plot`` extra and a test reads ``Figure.numbers``.
+
+    Figure("response against field", [
+        Panel([Curve(f, amp, "50 V"), Curve(f, amp2, "100 V")], xlabel="f (Hz)", ylabel="x (um)"),
+    ], numbers={"peak at 50 V (um)": 221.0})
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..support.errors import ModelError
+
+SCALES = ("linear", "log", "symlog")
+
+
+@dataclass
+class Curve:
+    """One line or set of markers: ``x``, ``y`` (equal lengths), a legend ``label`` (none if
+    empty), a matplotlib format ``style`` ("-", "--", "o", "k:", ...) and a line ``width``."""
+
+    x: object
+    y: object
+    label: str = ""
+    style: str = "-"
+    width: float = 1.3
+
+    def __post_init__(self):
+        self.x = np.asarray(self.x, float).ravel()
+        self.y = np.asarray(self.y, float).ravel()
+        if self.x.size != self.y.size or self.x.size == 0:
+            raise ModelError(f"figure curve {self.label!r}: x and y need the same, non-zero length")
+
+
+@dataclass
+class Panel:
+    """One set of axes: ``curves``, a ``title``, axis labels, axis scales (linear, log, symlog),
+    ``equal`` for equal x and y scales (an x-y path), and a ``note`` written in a corner."""
+
+    curves: list
+    title: str = ""
+    xlabel: str = ""
+    ylabel: str = ""
+    xscale: str = "linear"
+    yscale: str = "linear"
+    equal: bool = False
+    note: str = ""
+
+    def __post_init__(self):
+        for s in (self.xscale, self.yscale):
+            if s not in SCALES:
+                raise ModelError(f"figure panel {self.title!r}: scale {s!r} is not one of {', '.join(SCALES)}")
+        if not all(isinstance(c, Curve) for c in self.curves):
+            raise ModelError(f"figure panel {self.title!r}: curves must be bondgraph.plotting.panels.Curve")
+
+
+@dataclass
+class Figure:
+    """A figure: ``panels`` laid out ``columns`` wide, a ``title``, and ``numbers``, the values
+    the figure shows that a reader (and a test) checks, name -> number."""
+
+    title: str
+    panels: list
+    numbers: dict = field(default_factory=dict)
+    columns: int = 2
+
+    def __post_init__(self):
+        if not self.panels or not all(isinstance(p, Panel) for p in self.panels):
+            raise ModelError(f"figure {self.title!r}: give one or more bondgraph.plotting.panels.Panel")
+        self.numbers = {str(k): float(v) for k, v in self.numbers.items()}
+
+
+def render(figure: Figure, path: str) -> None:
+    """Draw ``figure`` and write it atomically to ``path`` (png, pdf or svg)."""
+    from .figures import pyplot, save
+
+    plt = pyplot()
+    n = len(figure.panels)
+    cols = max(1, min(figure.columns, n))
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 3.9 * rows), squeeze=False)
+    for ax, panel in zip(axes.ravel(), figure.panels):
+        for c in panel.curves:
+            ax.plot(c.x, c.y, c.style, lw=c.width, ms=4, label=c.label or None)
+        ax.set_xscale(panel.xscale)
+        ax.set_yscale(panel.yscale)
+        ax.set_xlabel(panel.xlabel)
+        ax.set_ylabel(panel.ylabel)
+        ax.set_title(panel.title, fontsize=10)
+        if panel.equal:
+            ax.set_aspect("equal", adjustable="datalim")
+        if any(c.label for c in panel.curves):
+            ax.legend(fontsize=7)
+        if panel.note:
+            ax.text(0.02, 0.98, panel.note, transform=ax.transAxes, va="top", fontsize=7, family="monospace")
+        ax.grid(alpha=0.3, which="both")
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    fig.suptitle(figure.title, fontsize=11)
+    fig.tight_layout()
+    save(fig, path)
