@@ -16,8 +16,9 @@ from bondgraph.cli import main
 from bondgraph.data import read_csv, write_csv
 
 README = (ROOT / "README.md").read_text()
-#: the user-guide pages whose shell examples run with the README's
-GUIDES = [(ROOT / "docs" / page).read_text() for page in ("papers.md", "batch.md", "fitting.md")]
+#: the user-guide pages whose shell examples run with the README's (docs/papers.md's figure
+#: commands run, with their numbers asserted, in the tests of each paper's model)
+GUIDES = [(ROOT / "docs" / page).read_text() for page in ("batch.md", "fitting.md")]
 
 
 def blocks(lang, texts=(README,)):
