@@ -529,6 +529,7 @@ def _diagnose(
     floor = ctx.noise or residual_floor(ctx.y - state.prediction, ctx.fs)
     say(f"calibrated in {time.time() - started:.1f} s: validation RMS {cal.rms_validation:.4g}")
     steps: list[Step] = []
+    step_predictions: list[np.ndarray] = []  # the model's prediction after each named step
     folds: list[Context] = []  # the second fold's context, made when first needed
     baseline, from_plausible = state, False
     with Pool(run_candidate, ctx, cal.free, cands, workers) as pool:
@@ -621,6 +622,7 @@ def _diagnose(
             if winner is None:
                 break
             state = advance(ctx, state, winner, view)
+            step_predictions.append(state.prediction)
     final_prediction = state.prediction
     if steps and not any(s.cause != "none" for s in steps):
         drift = drift_step(ctx, state, cal.drift)
@@ -662,6 +664,7 @@ def _diagnose(
         account=account(ctx.u, ctx.y, final_prediction, ctx.ident.val_mask, ctx.fs, ctx.noise),
     )
     report.predictions = {"t": ctx.t, "u": ctx.u_recorded, "y": ctx.y, "baseline": baseline.prediction}
+    report.predictions["steps"] = step_predictions + ([final_prediction] if causes[-1:] == ["drift"] else [])
     if causes and causes[-1] == "drift":
         report.predictions["extended"] = final_prediction
     elif causes:
