@@ -118,7 +118,10 @@ def public_modules() -> set[str]:
             if isinstance(node, ast.Assign) and any(
                 isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets
             ):
-                names = ast.literal_eval(node.value)
+                try:
+                    names = ast.literal_eval(node.value)
+                except ValueError:  # computed (the face's lazy exports): no submodule listed
+                    names = []
         if names is None:
             continue
         public.add(module)
