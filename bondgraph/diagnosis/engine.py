@@ -407,9 +407,9 @@ def diagnose(
     :class:`bondgraph.support.progress.Progress` (one count per candidate fitted, notes for the
     stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
     the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
-    settings = {} if drift is None else {"diagnosis.drift": bool(drift)}
+    drift = bool(config.get("diagnosis.drift")) if drift is None else bool(drift)
 
-    def run(reading: str, chain: bool = chain, decide=None):
+    def run(reading: str, drift: bool, chain: bool = chain, decide=None):
         return _diagnose(
             model,
             data,
@@ -427,6 +427,7 @@ def diagnose(
             equations,
             tolerance,
             reading,
+            drift,
             decide,
             started,
         )
@@ -450,11 +451,11 @@ def diagnose(
             chosen["keep"], chosen["why"] = _better_reading(step, linear_step)
             return chosen["keep"] == 1
 
-        chosen["probe"] = _with_drift(functools.partial(run, decide=linear_goes_on), "linear")
+        chosen["probe"] = _with_drift(functools.partial(run, decide=linear_goes_on), "linear", drift)
         return chosen["keep"] == 0
 
-    with single_threaded_blas(), config.override(settings):
-        first = _with_drift(functools.partial(run, decide=decide), "band-limited")
+    with single_threaded_blas():
+        first = _with_drift(functools.partial(run, decide=decide), "band-limited", drift)
         if not chosen:
             return first
         rep = first if chosen["keep"] == 0 else chosen["probe"]
@@ -463,12 +464,12 @@ def diagnose(
         return rep
 
 
-def _with_drift(run, reading: str) -> Report:
-    """``run(reading)``, again with a sensor drift solved when a drift passed for the first cause."""
-    out = run(reading)
+def _with_drift(run, reading: str, drift: bool) -> Report:
+    """``run(reading, drift)``; when it answers that a sensor drift explains the record as well
+    as its first cause (a note), run again with the drift solved (the second hypothesis)."""
+    out = run(reading, drift)
     if isinstance(out, str):
-        with config.override({"diagnosis.drift": True}):
-            rep = run(reading)
+        rep = run(reading, True)
         rep.notes.append(out)
         return rep
     return out
@@ -509,6 +510,7 @@ def _diagnose(
     equations,
     tolerance,
     reading,
+    drift: bool = False,
     decide=None,
     since: float | None = None,
 ) -> Report | str:
@@ -523,7 +525,7 @@ def _diagnose(
     tick = getattr(progress, "advance", None)
     cands = list(candidates) if candidates is not None else load_candidates(model)
     ctx = Context(model, data, input, output, data_input, data_output, validation, say, reading)
-    state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance, workers)
+    state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance, workers, drift=drift)
     plausible = (pstate, cal.plausible) if pstate is not state else None
     gap = ctx.reading_gap(state.values, state.gain)
     floor = ctx.noise or residual_floor(ctx.y - state.prediction, ctx.fs)
@@ -602,12 +604,7 @@ def _diagnose(
                 of = {id(outcomes[i]): cands[i] for i in pending}
                 efforts = {id(outcomes[i]): effort for i in redo}
                 step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
-            if (
-                k == 0
-                and winner is not None
-                and not config.get("diagnosis.drift")
-                and _drift_explains(ctx, state, winner)
-            ):
+            if k == 0 and winner is not None and not drift and _drift_explains(ctx, state, winner):
                 say("a linear drift explains the record as well as the best candidate: solved as a sensor drift")
                 return (
                     f"a linear drift of the output explained the record as well as {winner.result.cause} "
