@@ -104,3 +104,46 @@ def test_the_checker_sees_a_circle_hidden_in_a_function(tmp_path, monkeypatch):
     monkeypatch.setattr(__import__(__name__), "MODULES", _modules())
     with pytest.raises(AssertionError, match="support.a"):
         test_no_import_circle()
+
+
+def public_modules() -> set[str]:
+    """The framework's public modules: the face, every package that declares ``__all__``, and
+    the submodules a package lists in its ``__all__``."""
+    public = {"bondgraph"}
+    for module, (path, package) in MODULES.items():
+        if not package:
+            continue
+        names = None
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.Assign) and any(
+                isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets
+            ):
+                try:
+                    names = ast.literal_eval(node.value)
+                except ValueError:  # computed (the face's lazy exports): no submodule listed
+                    names = []
+        if names is None:
+            continue
+        public.add(module)
+        public.update(f"{module}.{n}" for n in names if f"{module}.{n}" in MODULES)
+    return public
+
+
+def test_the_library_and_models_use_the_public_api_only():
+    """``library/`` and ``models/`` are built from the framework's public API: an import from
+    any other module of ``bondgraph`` is a private one."""
+    public = public_modules()
+    private = []
+    for folder in ("library", "models"):
+        for path in sorted((ROOT.parent / folder).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").startswith("bondgraph"):
+                    if node.module not in public:
+                        private.append(f"{path.relative_to(ROOT.parent)}: {node.module}")
+                elif isinstance(node, ast.Import):
+                    private += [
+                        f"{path.relative_to(ROOT.parent)}: {a.name}"
+                        for a in node.names
+                        if a.name.startswith("bondgraph.") and a.name not in public
+                    ]
+    assert not private, "private imports: " + ", ".join(private)

@@ -41,17 +41,22 @@ The engine, in order:
    ``diagnosis.chain_seconds``.
 6. **Report** (:mod:`.report`): every step, every candidate's verdict, why ``none``.
 
-Candidates are found through the entry point group ``bondgraph.diagnosis`` (``library``
-provides the piezoelectric ones) or passed as ``candidates=``; they use only this package's
-public names (:class:`Candidate`, :class:`Extension`, :class:`View`, :mod:`.filters`,
-:mod:`.rewrite`) and the framework's public API.
+Candidates are the framework's effect kinds at the model's sites (:mod:`.laws`,
+:mod:`.restoring`, :mod:`.modes`, :mod:`.sites`), those of the entry point group
+``bondgraph.diagnosis`` (``library`` provides the piezoelectric ones), or passed as
+``candidates=``; they use only this package's public names (``__all__``: :class:`Candidate`,
+:class:`Extension`, :class:`View`, :class:`LawTerm`, :class:`Spec`, :mod:`.filters`,
+:mod:`.rewrite`, ...) and the framework's public API (``tests/test_layout.py`` checks the
+library).
 """
 
+from ..fit.identify import Spec
 from . import filters, laws, modes, rewrite, sites
 from .additive import AdditiveDrive, Term
 from .candidate import LINEAR, NONLINEAR, NOT_A_DRIVE, Candidate, Extension
 from .engine import diagnose, load_candidates, model_file_options
 from .laws import LawTerm
+from .lure import DRIVE
 from .report import CandidateResult, Report, Step
 from .sites import Site
 from .view import DriveFit, View
@@ -74,6 +79,8 @@ __all__ = [
     "LINEAR",
     "NONLINEAR",
     "NOT_A_DRIVE",
+    "DRIVE",
+    "Spec",
     "filters",
     "laws",
     "modes",

@@ -75,7 +75,7 @@ class Calibration:
     #: the linear parameters
     delay: float = 0.0
     #: linear sensor drift solved with the parameters and removed from the record (output
-    #: units per second), when asked for (setting ``diagnosis.drift``)
+    #: units per second), when asked for (``drift``)
     drift: float | None = None
     notes: list[str] = field(default_factory=list)
 
@@ -506,11 +506,13 @@ def calibrate(
     say=None,
     tolerance: Mapping[str, float] | None = None,
     workers: int = 1,
+    drift: bool = False,
 ) -> tuple[State, Calibration, State]:
     """Calibrate every identifiable linear parameter (see the module docstring): the best linear
     explanation within ×/÷ ``diagnosis.spread`` (the null), and the plausible device within each
     parameter's tolerance (:func:`tolerances`), which linear structural causes must beat.
-    ``workers``: processes for the multi-start fits (the result is the same with one).
+    ``workers``: processes for the multi-start fits (the result is the same with one);
+    ``drift``: solve a linear sensor drift with the parameters and remove it from the record.
     Returns (null state, its calibration, plausible state)."""
     say = say or (lambda s: None)
     names = linear_parameters(ctx)
@@ -537,7 +539,6 @@ def calibrate(
     with_delay = ctx.lti is not None and _delay_identifiable(ctx, S, names, free, nominal, raw0, scale)
     if ctx.lti is not None and not with_delay:
         held["output delay"] = "not separable from the calibrated parameters"
-    drift = bool(config.get("diagnosis.drift"))
     values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, delay=with_delay, drift=drift, workers=workers)
     if with_delay and abs(delay) >= 0.99 * max_delay(ctx):  # a model error the delay mimics: not a delay
         held["output delay"] = (

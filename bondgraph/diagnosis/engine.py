@@ -407,9 +407,9 @@ def diagnose(
     :class:`bondgraph.support.progress.Progress` (one count per candidate fitted, notes for the
     stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
     the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
-    settings = {} if drift is None else {"diagnosis.drift": bool(drift)}
+    drift = bool(config.get("diagnosis.drift")) if drift is None else bool(drift)
 
-    def run(reading: str, chain: bool = chain, decide=None):
+    def run(reading: str, drift: bool, chain: bool = chain, decide=None):
         return _diagnose(
             model,
             data,
@@ -427,6 +427,7 @@ def diagnose(
             equations,
             tolerance,
             reading,
+            drift,
             decide,
             started,
         )
@@ -450,11 +451,11 @@ def diagnose(
             chosen["keep"], chosen["why"] = _better_reading(step, linear_step)
             return chosen["keep"] == 1
 
-        chosen["probe"] = _with_drift(functools.partial(run, decide=linear_goes_on), "linear")
+        chosen["probe"] = _with_drift(functools.partial(run, decide=linear_goes_on), "linear", drift)
         return chosen["keep"] == 0
 
-    with single_threaded_blas(), config.override(settings):
-        first = _with_drift(functools.partial(run, decide=decide), "band-limited")
+    with single_threaded_blas():
+        first = _with_drift(functools.partial(run, decide=decide), "band-limited", drift)
         if not chosen:
             return first
         rep = first if chosen["keep"] == 0 else chosen["probe"]
@@ -463,12 +464,12 @@ def diagnose(
         return rep
 
 
-def _with_drift(run, reading: str) -> Report:
-    """``run(reading)``, again with a sensor drift solved when a drift passed for the first cause."""
-    out = run(reading)
+def _with_drift(run, reading: str, drift: bool) -> Report:
+    """``run(reading, drift)``; when it answers that a sensor drift explains the record as well
+    as its first cause (a note), run again with the drift solved (the second hypothesis)."""
+    out = run(reading, drift)
     if isinstance(out, str):
-        with config.override({"diagnosis.drift": True}):
-            rep = run(reading)
+        rep = run(reading, True)
         rep.notes.append(out)
         return rep
     return out
@@ -509,6 +510,7 @@ def _diagnose(
     equations,
     tolerance,
     reading,
+    drift: bool = False,
     decide=None,
     since: float | None = None,
 ) -> Report | str:
@@ -523,12 +525,13 @@ def _diagnose(
     tick = getattr(progress, "advance", None)
     cands = list(candidates) if candidates is not None else load_candidates(model)
     ctx = Context(model, data, input, output, data_input, data_output, validation, say, reading)
-    state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance, workers)
+    state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance, workers, drift=drift)
     plausible = (pstate, cal.plausible) if pstate is not state else None
     gap = ctx.reading_gap(state.values, state.gain)
     floor = ctx.noise or residual_floor(ctx.y - state.prediction, ctx.fs)
     say(f"calibrated in {time.time() - started:.1f} s: validation RMS {cal.rms_validation:.4g}")
     steps: list[Step] = []
+    step_predictions: list[np.ndarray] = []  # the model's prediction after each named step
     folds: list[Context] = []  # the second fold's context, made when first needed
     baseline, from_plausible = state, False
     with Pool(run_candidate, ctx, cal.free, cands, workers) as pool:
@@ -601,12 +604,7 @@ def _diagnose(
                 of = {id(outcomes[i]): cands[i] for i in pending}
                 efforts = {id(outcomes[i]): effort for i in redo}
                 step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
-            if (
-                k == 0
-                and winner is not None
-                and not config.get("diagnosis.drift")
-                and _drift_explains(ctx, state, winner)
-            ):
+            if k == 0 and winner is not None and not drift and _drift_explains(ctx, state, winner):
                 say("a linear drift explains the record as well as the best candidate: solved as a sensor drift")
                 return (
                     f"a linear drift of the output explained the record as well as {winner.result.cause} "
@@ -621,6 +619,7 @@ def _diagnose(
             if winner is None:
                 break
             state = advance(ctx, state, winner, view)
+            step_predictions.append(state.prediction)
     final_prediction = state.prediction
     if steps and not any(s.cause != "none" for s in steps):
         drift = drift_step(ctx, state, cal.drift)
@@ -662,6 +661,7 @@ def _diagnose(
         account=account(ctx.u, ctx.y, final_prediction, ctx.ident.val_mask, ctx.fs, ctx.noise),
     )
     report.predictions = {"t": ctx.t, "u": ctx.u_recorded, "y": ctx.y, "baseline": baseline.prediction}
+    report.predictions["steps"] = step_predictions + ([final_prediction] if causes[-1:] == ["drift"] else [])
     if causes and causes[-1] == "drift":
         report.predictions["extended"] = final_prediction
     elif causes:

@@ -9,9 +9,8 @@ from __future__ import annotations
 import numpy as np
 
 from bondgraph import I, config
-from bondgraph.diagnosis import LINEAR, NOT_A_DRIVE, Candidate, Extension
+from bondgraph.diagnosis import LINEAR, NOT_A_DRIVE, Candidate, Extension, Spec
 from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
-from bondgraph.fit.identify import Spec
 
 #: inductances scanned for the start, and the fit's bounds (H): from bond wires to a large
 #: output transformer

@@ -17,8 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.diagnosis import LawTerm, laws
-from bondgraph.diagnosis.lure import DRIVE
+from bondgraph.diagnosis import DRIVE, LawTerm, laws
 from bondgraph.diagnosis.rewrite import slope
 
 
