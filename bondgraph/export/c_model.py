@@ -145,18 +145,19 @@ def operator_sources(eqs: Equations) -> list[CSource]:
 _HELPER_NAME = re.compile(r"\b([A-Za-z_]\w*)\s*\(")
 
 
-def _helpers(sources: list[CSource], eqs: Equations) -> list[str]:
-    """The operators' helper definitions, each text once; ModelError if one name carries two texts."""
+def helpers(sources: list[CSource], names: list[str]) -> list[str]:
+    """The operators' helper definitions, each text once; ModelError if one name carries two
+    texts (``names``: the operators', for the message)."""
     seen: dict[str, str] = {}
     out = []
-    for ob, src in zip(eqs.operators, sources):
+    for who, src in zip(names, sources):
         for text in src.helpers:
             m = _HELPER_NAME.search(text)
             name = m.group(1) if m else text
             if name in seen and seen[name] != text:
                 raise ModelError(
-                    f"{eqs.model.name}: memory operator '{ob.symbol}' defines the C helper {name} differently "
-                    f"from another operator; give one of them another name"
+                    f"memory operator '{who}' defines the C helper {name} differently from another operator; "
+                    f"give one of them another name"
                 )
             if name not in seen:
                 seen[name] = text
@@ -200,34 +201,25 @@ def model_source(eqs: Equations, header: str) -> ModelC:
         body = program([e for e, _ in targets])
         body += [f"    out[{i}] = {c(e, where)};" for i, (e, where) in enumerate(targets)]
         head = f"void {name}({ARGS}, {mem} *mem, double *out)"
-        return ["", head, "{", "    (void)t; (void)x; (void)u; (void)du; (void)th; (void)mem;", *body, *(tail or []), "}"]
+        return [
+            "",
+            head,
+            "{",
+            "    (void)t; (void)x; (void)u; (void)du; (void)th; (void)mem;",
+            *body,
+            *(tail or []),
+            "}",
+        ]
 
     states = eqs.state_symbols
     origin = {s.symbol: s.origin for s in eqs.states}
     ops = [st for st in eqs.program if st.op is not None]
     lines = [header, "#include <math.h>", '#include "bg_model.h"', ""]
-    lines += _helpers(sources, eqs)
+    lines += helpers(sources, [str(ob.symbol) for ob in eqs.operators])
     for k, (ob, src) in enumerate(zip(eqs.operators, sources)):
-        sig = "int n_mem, const double *prm, int n_prm"
-        lines += [
-            "",
-            f"/* operator {ob.symbol}: {type(ob.operator).__module__}.{type(ob.operator).__qualname__} */",
-            f"static double op{k}_output(double v, const double *mem, {sig})",
-            "{",
-            "    (void)v; (void)mem; (void)n_mem; (void)prm; (void)n_prm;",
-            _indent(src.output),
-            "}",
-            f"static void op{k}_commit(double v, double *mem, {sig})",
-            "{",
-            "    (void)v; (void)mem; (void)n_mem; (void)prm; (void)n_prm;",
-            _indent(src.commit),
-            "}",
-            f"static void op{k}_initial(double v0, double *mem, {sig})",
-            "{",
-            "    (void)v0; (void)mem; (void)n_mem; (void)prm; (void)n_prm;",
-            _indent(src.initial),
-            "}",
-        ]
+        lines += operator_functions(
+            k, f"{ob.symbol}: {type(ob.operator).__module__}.{type(ob.operator).__qualname__}", src
+        )
     lines += function("bg_rhs", "const double", [(eqs.rates[s], origin[s]) for s in states])
     lines += function("bg_output", "const double", [(e, f"output {n}") for n, e in eqs.outputs.items()])
     lines += function("bg_opin", "const double", [(st.expr, st.origin) for st in ops])
@@ -248,6 +240,31 @@ def model_source(eqs: Equations, header: str) -> ModelC:
         "}",
     ]
     return ModelC("\n".join(lines) + "\n", lay)
+
+
+def operator_functions(k: int, title: str, src: CSource) -> list[str]:
+    """C lines of ``op<k>_output``, ``op<k>_commit`` and ``op<k>_initial`` from ``src``."""
+    sig = "int n_mem, const double *prm, int n_prm"
+    unused = "    (void)mem; (void)n_mem; (void)prm; (void)n_prm;"
+    return [
+        "",
+        f"/* operator {title} */",
+        f"static double op{k}_output(double v, const double *mem, {sig})",
+        "{",
+        "    (void)v;" + unused,
+        _indent(src.output),
+        "}",
+        f"static void op{k}_commit(double v, double *mem, {sig})",
+        "{",
+        "    (void)v;" + unused,
+        _indent(src.commit),
+        "}",
+        f"static void op{k}_initial(double v0, double *mem, {sig})",
+        "{",
+        "    (void)v0;" + unused,
+        _indent(src.initial),
+        "}",
+    ]
 
 
 def _indent(body: str) -> str:

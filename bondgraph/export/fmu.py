@@ -20,8 +20,6 @@ import hashlib
 import math
 import os
 import platform
-import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -47,6 +45,7 @@ from ..support import config
 from ..support.atomic import atomic_write
 from ..support.errors import ModelError, SignalError, UsageError
 from .c_model import model_source, refuse_input_rates
+from .compiler import build_shared, find_compiler
 from .units import BASE, base_unit
 
 #: the model-independent C files shipped in every FMU's sources/
@@ -136,7 +135,7 @@ def export_fmu(
     if unknown:
         raise SignalError(f"the model has no input {unknown[0]!r}; inputs: {', '.join(names) or 'none'}")
     refuse_input_rates(eqs, set(names) - set(signals))
-    compiler = _compiler(cc)
+    compiler = find_compiler(cc)
     folder, suffix = _platform()
     if nominals is None and experiment is not None:
         nominals = estimate_nominals(eqs, experiment, signals)
@@ -209,14 +208,6 @@ def model_identifier(name: str) -> str:
     return f"bg_{ident}" if ident[0].isdigit() else ident
 
 
-def _compiler(cc: str | None) -> str:
-    cc = cc or os.environ.get("CC") or "cc"
-    found = shutil.which(cc)
-    if found is None:
-        raise UsageError(f"no C compiler '{cc}' found: install one (e.g. apt-get install gcc) or set CC")
-    return found
-
-
 def _platform() -> tuple[str, str]:
     """The FMI 2.0 binaries folder and library suffix of this machine."""
     machine = platform.machine().lower()
@@ -231,13 +222,11 @@ def _platform() -> tuple[str, str]:
 
 
 def _compile(cc: str, src: Path, binary: Path, eqs: Equations) -> None:
-    cmd = [cc, "-std=c99", "-O2", "-fPIC", "-shared", "-o", str(binary), "bg_fmu.c", "bg_model.c", "-lm"]
-    proc = subprocess.run(cmd, cwd=src, capture_output=True, text=True)
-    if proc.returncode != 0:
-        errors = [ln for ln in proc.stderr.splitlines() if "error" in ln] or proc.stderr.splitlines() or ["?"]
+    error = build_shared(cc, src, ["bg_fmu.c", "bg_model.c"], binary)
+    if error is not None:
         ops = ", ".join(f"'{ob.symbol}'" for ob in eqs.operators)
         hint = f" (check the C source of the memory operators {ops})" if ops else ""
-        raise ModelError(f"{eqs.model.name}: the C compiler refused the exported code: {errors[0].strip()}{hint}")
+        raise ModelError(f"{eqs.model.name}: the C compiler refused the exported code: {error}{hint}")
 
 
 # ---- variables ------------------------------------------------------------------------------
@@ -288,7 +277,9 @@ def _variables(eqs: Equations, signals: Mapping[str, Signal], nominal: list[floa
         )
     for k, s in enumerate(eqs.states):
         out.append(
-            _Variable(f"der({s.symbol})", "local", "continuous", description=f"rate of {s.symbol}", derivative=first_state + k)
+            _Variable(
+                f"der({s.symbol})", "local", "continuous", description=f"rate of {s.symbol}", derivative=first_state + k
+            )
         )
     for u in eqs.inputs:
         spec = eqs.model.inputs[str(u)]
@@ -322,7 +313,7 @@ def _model_description(eqs: Equations, ident: str, guid: str, variables: list[_V
             "fmiVersion": "2.0",
             "modelName": eqs.model.name,
             "guid": guid,
-            "description": (eqs.model.doc or eqs.model.name).splitlines()[0] if (eqs.model.doc or "").strip() else eqs.model.name,
+            "description": " ".join((eqs.model.doc or "").strip().split("\n\n")[0].split()) or eqs.model.name,
             "generationTool": tool,
             "variableNamingConvention": "flat",
             "numberOfEventIndicators": "0",
@@ -408,21 +399,24 @@ def _model_description(eqs: Equations, ident: str, guid: str, variables: list[_V
         return " ".join(str(i) for i in sorted(knowns[s] for s in reached if s in knowns))
 
     ms = ET.SubElement(root, "ModelStructure")
-    outs = ET.SubElement(ms, "Outputs")
-    for name, expr in eqs.outputs.items():
-        ET.SubElement(outs, "Unknown", {"index": str(index[name]), "dependencies": deps(expr)})
-    ders = ET.SubElement(ms, "Derivatives")
-    for s in eqs.state_symbols:
-        ET.SubElement(ders, "Unknown", {"index": str(index[f"der({s})"]), "dependencies": deps(eqs.rates[s])})
-    initial = sorted(
+    if eqs.outputs:  # an empty list is left out (the schema wants at least one entry)
+        outs = ET.SubElement(ms, "Outputs")
+        for name, expr in eqs.outputs.items():
+            ET.SubElement(outs, "Unknown", {"index": str(index[name]), "dependencies": deps(expr)})
+    if eqs.states:
+        ders = ET.SubElement(ms, "Derivatives")
+        for s in eqs.state_symbols:
+            ET.SubElement(ders, "Unknown", {"index": str(index[f"der({s})"]), "dependencies": deps(eqs.rates[s])})
+    initial = {
         k + 1
         for k, v in enumerate(variables)
-        if v.initial == "calculated" and (v.causality == "output" or v.derivative is not None or v.nominal is not None)
-    )
-    initial += [index[f"der({s})"] for s in eqs.state_symbols]
-    inits = ET.SubElement(ms, "InitialUnknowns")
-    for i in sorted(set(initial)):
-        ET.SubElement(inits, "Unknown", {"index": str(i)})
+        if v.initial == "calculated" and (v.causality == "output" or v.nominal is not None)
+    }
+    initial |= {index[f"der({s})"] for s in eqs.state_symbols}
+    if initial:
+        inits = ET.SubElement(ms, "InitialUnknowns")
+        for i in sorted(initial):
+            ET.SubElement(inits, "Unknown", {"index": str(i)})
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
@@ -473,7 +467,6 @@ def _header(eqs: Equations, ident: str, guid: str, signals: Mapping[str, Signal]
         "#ifndef BG_MODEL_H",
         "#define BG_MODEL_H",
         "",
-
         *(f"#define {k} {v}" for k, v in defs.items()),
         "",
         "extern const double bg_theta0[BG_NP1];      /* parameter vector at its defaults */",

@@ -53,6 +53,7 @@ typedef struct {
     double peak[BG_NX1], K[BG_NS + 1][BG_NX1], Q[4][BG_NX1];
     double xs[BG_NX1], xn[BG_NX1], xd[BG_NX1], w[BG_NX1];
     double v0[BG_NOPS1], v1[BG_NOPS1], vt[BG_NOPS1], y[BG_NY1];
+    double v_last[BG_NOPS1], dir[BG_NOPS1]; /* operator inputs at the last commit, their direction */
     long steps, rejected;
 } Instance;
 
@@ -185,11 +186,24 @@ static void inputs_at(Instance *c, double t)
     }
 }
 
-static void commit(Instance *c, double t, const double *x)
+/* commit the operators' memory at (t, x); returns 1 if an operator input turned back since the
+   last commit (a reversal: Model Exchange then asks for an event, so the solver restarts) */
+static int commit(Instance *c, double t, const double *x)
 {
-    if (BG_NOPS == 0) return;
+    int turned = 0;
+    if (BG_NOPS == 0) return 0;
     inputs_at(c, t);
     bg_commit(t, x, c->u, c->du, c->th, c->mem, c->v1);
+    for (int j = 0; j < BG_NOPS; j++) {
+        double d = c->v1[j] - c->v_last[j], tol = 1e-9 * (fabs(c->v1[j]) + fabs(c->v_last[j])) + 1e-300;
+        double dir = d > tol ? 1.0 : (d < -tol ? -1.0 : 0.0);
+        if (dir != 0.0) {
+            if (dir * c->dir[j] < 0.0) turned = 1;
+            c->dir[j] = dir;
+        }
+        c->v_last[j] = c->v1[j];
+    }
+    return turned;
 }
 
 /* an input breakpoint reached at time t: commit from the left, pass it, commit from the right */
@@ -295,6 +309,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
     c->pending = next_break(c->t);
     inputs_at(c, c->t);
     bg_init_memory(c->t, c->x, c->u, c->du, c->th, c->mem);
+    bg_opin(c->t, c->x, c->u, c->du, c->th, c->mem, c->v_last);
+    memset(c->dir, 0, sizeof c->dir);
     commit(c, c->t, c->x); /* as the native integrator does at its first point */
     c->mode = c->type == fmi2ModelExchange ? MODE_EVENT : MODE_STEP;
     return fmi2OK;
@@ -497,8 +513,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetFMUS
 {
     Instance *c = (Instance *)comp;
     (void)noSetFMUStatePriorToCurrentPoint;
-    commit(c, c->t, c->x);
-    *enterEventMode = fmi2False;
+    *enterEventMode = commit(c, c->t, c->x) ? fmi2True : fmi2False;
     *terminateSimulation = fmi2False;
     return fmi2OK;
 }
