@@ -26,12 +26,15 @@ sides at relative tolerance 1e-8:
 from __future__ import annotations
 
 import dataclasses
+import json
+import re
+import shlex
 import zipfile
 
 import numpy as np
 import pytest
 import sympy as sp
-from conftest import MODELS
+from conftest import MODELS, ROOT
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -305,18 +308,41 @@ def test_a_law_without_c_translation_is_refused(tmp_path):
 # ---- the command line ----------------------------------------------------------------------------
 
 
-def test_export_command_writes_a_self_contained_fmu(tmp_path, capsys):
-    out = tmp_path / "t226.fmu"
-    assert main(["export", str(MODELS / "bimorph_t226.py"), "--fmu", str(out), "--experiment"]) == 0
-    assert "1 parameters" not in capsys.readouterr().err
-    md = fmpy.read_model_description(str(out))
+def _commands(page: str) -> list[list[str]]:
+    """The ``bondgraph ...`` command lines of the sh blocks of a docs page, as argument lists."""
+    blocks = re.findall(r"```sh\n(.*?)```", (ROOT / "docs" / page).read_text(), re.S)
+    return [shlex.split(line)[1:] for block in blocks for line in block.splitlines() if line.startswith("bondgraph ")]
+
+
+def test_the_documented_export_commands_work(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(ROOT)
+    runs = _commands("fmi.md")
+    assert [r[0] for r in runs] == ["export", "export"]
+    for args in runs:
+        args[args.index("--fmu") + 1] = str(tmp_path / args[args.index("--fmu") + 1])
+        assert main(args) == 0
+    assert "inputs: V, F, outputs: x, i, p, E" in capsys.readouterr().err
+    for name in ("apa.fmu", "apa-test.fmu"):
+        assert validate_fmu(str(tmp_path / name)) == []
+    md = fmpy.read_model_description(str(tmp_path / "apa-test.fmu"))
     var = {v.name: v for v in md.modelVariables}
-    assert var["V"].causality == "local" and "sine(amplitude=2.5" in var["V"].description
-    assert md.defaultExperiment.stopTime == "0.2" and md.defaultExperiment.tolerance == "1e-06"
-    res = simulate_fmu(str(out), fmi_type="CoSimulation", stop_time=0.02)
-    lm = load_model(MODELS / "bimorph_t226.py")
+    assert var["V"].causality == "local" and "sine(amplitude=60" in var["V"].description
+    assert md.defaultExperiment.stopTime == "0.4" and md.defaultExperiment.tolerance == "1e-06"
+    res = simulate_fmu(str(tmp_path / "apa-test.fmu"), fmi_type="CoSimulation", stop_time=0.15)
+    lm = load_model(MODELS / "apa120ml.py", {"hysteresis": "pi"})
     native = bg.simulate(lm.model, res["time"], lm.experiment.inputs, rtol=1e-6)
-    assert np.max(np.abs(res["x"] - native["x"])) < 1e-4 * np.max(np.abs(native["x"]))
+    assert np.max(np.abs(res["x"] - native["x"])) < 1e-5 * np.max(np.abs(native["x"]))
+
+
+def test_export_command_takes_a_fit_file(tmp_path):
+    fit = tmp_path / "fit.json"
+    fit.write_text(json.dumps({"params": {"zeta_1": 0.02}, "output": "x", "offset": 1e-3}))
+    out = tmp_path / "t226.fmu"
+    assert main(["export", str(MODELS / "bimorph_t226.py"), "--params-file", str(fit), "--fmu", str(out)]) == 0
+    var = {v.name: v for v in fmpy.read_model_description(str(out)).modelVariables}
+    assert var["zeta_1"].start == "0.02"
+    res = simulate_fmu(str(out), fmi_type="CoSimulation", stop_time=1e-3)
+    assert res["x"][0] == pytest.approx(1e-3, rel=1e-12)  # at rest: the sensor zero alone
 
 
 def test_export_command_needs_an_fmu_name(tmp_path, capsys):
@@ -378,3 +404,22 @@ def test_units_become_fmi_base_units(unit, factor, exponents):
 
 def test_a_unit_that_does_not_parse_has_no_base_unit():
     assert base_unit("furlong/fortnight") is None and base_unit("m/") is None
+
+
+# ---- the examples of docs/fmi.md ----------------------------------------------------------------
+
+
+def _python_blocks() -> list[str]:
+    return re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "fmi.md").read_text(), re.S)
+
+
+def test_docs_operator_example_runs_in_c(capsys):
+    exec(compile(_python_blocks()[0], "docs/fmi.md", "exec"), {"__name__": "fmi_operator"})
+    assert capsys.readouterr().out.split() == ["0.0"]
+
+
+def test_docs_fmpy_example(tmp_path, monkeypatch, capsys):
+    code = _python_blocks()[1].replace('"models/', f'"{MODELS}/')
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code, "docs/fmi.md", "exec"), {"__name__": "fmi_fmpy"})
+    assert capsys.readouterr().out.splitlines() == ["stack_of_20_layers_lumped 3 []", "x = 94.80 um"]

@@ -6,10 +6,13 @@
 
    Memory operators (hysteresis) follow one contract: inside an integrator step their memory is
    frozen; it is committed only after an accepted step.  Model Exchange: the memory is committed
-   in fmi2CompletedIntegratorStep (and at time events, on both sides of an input jump).
+   in fmi2CompletedIntegratorStep (and at time events, on both sides of an input jump); when an
+   operator's input has turned back since the last commit, the FMU asks for an event, so the
+   solver restarts instead of extrapolating a history computed with the old memory.
    Co-Simulation: fmi2DoStep integrates with the Dormand-Prince 5(4) pair of the native
    integrator (bondgraph.numerics.integrators.dopri5: same tableau, error weights, step control
-   and reversal check), committing after each accepted step.
+   and reversal check: a step inside which an operator input turns back is retried up to the
+   turning point), committing after each accepted step.
 
    Inputs: an input the FMU receives is held at its value in Model Exchange; in Co-Simulation
    it is extrapolated linearly with the derivative given by fmi2SetRealInputDerivatives (reset
