@@ -29,6 +29,7 @@ import dataclasses
 import json
 import re
 import shlex
+import types
 import zipfile
 
 import numpy as np
@@ -305,6 +306,18 @@ def test_a_law_without_c_translation_is_refused(tmp_path):
         export_fmu(g, tmp_path / "b.fmu")
 
 
+def test_a_name_used_twice_is_refused(tmp_path):
+    g = bg.Model("twice")
+    V = g.input("V", "V")
+    g.add(bg.Se("s", V), bg.J1("j"), bg.R("r", 1.0), bg.I("m", 1.0))
+    g.chain("s", "j")
+    g.bond("j", "r")
+    g.bond("j", "m")
+    g.output("V", g.flow("m"), "A")
+    with pytest.raises(bg.ModelError, match=r"the name 'V' is both"):
+        export_fmu(g, tmp_path / "t.fmu")
+
+
 # ---- the command line ----------------------------------------------------------------------------
 
 
@@ -414,12 +427,13 @@ def _python_blocks() -> list[str]:
 
 
 def test_docs_operator_example_runs_in_c(capsys):
-    exec(compile(_python_blocks()[0], "docs/fmi.md", "exec"), {"__name__": "fmi_operator"})
+    module = types.ModuleType("fmi_operator")
+    exec(compile(_python_blocks()[0], "docs/fmi_operator.md", "exec"), module.__dict__)
     assert capsys.readouterr().out.split() == ["0.0"]
 
 
 def test_docs_fmpy_example(tmp_path, monkeypatch, capsys):
     code = _python_blocks()[1].replace('"models/', f'"{MODELS}/')
     monkeypatch.chdir(tmp_path)
-    exec(compile(code, "docs/fmi.md", "exec"), {"__name__": "fmi_fmpy"})
+    exec(compile(code, "docs/fmi_fmpy.md", "exec"), types.ModuleType("fmi_fmpy").__dict__)
     assert capsys.readouterr().out.splitlines() == ["stack_of_20_layers_lumped 3 []", "x = 94.80 um"]

@@ -248,7 +248,7 @@ def operator_functions(k: int, title: str, src: CSource) -> list[str]:
     unused = "    (void)mem; (void)n_mem; (void)prm; (void)n_prm;"
     return [
         "",
-        f"/* operator {title} */",
+        comment(f"operator {title}"),
         f"static double op{k}_output(double v, const double *mem, {sig})",
         "{",
         "    (void)v;" + unused,
@@ -265,6 +265,11 @@ def operator_functions(k: int, title: str, src: CSource) -> list[str]:
         _indent(src.initial),
         "}",
     ]
+
+
+def comment(text: str) -> str:
+    """``text`` as a one-line C comment (a ``*/`` inside it is broken up)."""
+    return "/* " + " ".join(text.replace("*/", "* /").split()) + " */"
 
 
 def _indent(body: str) -> str:
