@@ -223,11 +223,12 @@ def model_source(eqs: Equations, header: str) -> ModelC:
     lines += function("bg_rhs", "const double", [(eqs.rates[s], origin[s]) for s in states])
     lines += function("bg_output", "const double", [(e, f"output {n}") for n, e in eqs.outputs.items()])
     lines += function("bg_opin", "const double", [(st.expr, st.origin) for st in ops])
-    commits = [f"    op{j}_commit(out[{j}], {slices(j)});" for j in range(len(ops))]
+    kernel = [op_index[st.var] for st in ops]  # the j-th operator input feeds operator kernel[j]
+    commits = [f"    op{k}_commit(out[{j}], {slices(k)});" for j, k in enumerate(kernel)]
     lines += function("bg_commit", "double", [(st.expr, st.origin) for st in ops], commits)
     x0 = [f"    x[{i}] = {c(s.x0, s.origin)};" for i, s in enumerate(eqs.states)]
     lines += ["", "void bg_x0(const double *th, double *x)", "{", "    (void)th; (void)x;", *x0, "}"]
-    init = [f"        op{j}_initial(vin[{j}], {slices(j)});" for j in range(len(ops))]
+    init = [f"        op{k}_initial(vin[{j}], {slices(k)});" for j, k in enumerate(kernel)]
     lines += [
         "",
         f"void bg_init_memory({ARGS}, double *mem)",

@@ -455,7 +455,8 @@ def _uses_input_rates(eqs: Equations) -> bool:
 
 
 def _header(eqs: Equations, ident: str, guid: str, signals: Mapping[str, Signal], n_exposed: int) -> str:
-    nx, nu, ny, npar, nops = len(eqs.states), len(eqs.inputs), len(eqs.outputs), len(eqs.params), len(eqs.operators)
+    nops = sum(st.op is not None for st in eqs.program)  # operator inputs the program computes
+    nx, nu, ny, npar = len(eqs.states), len(eqs.inputs), len(eqs.outputs), len(eqs.params)
     nmem = sum(ob.operator.n_memory for ob in eqs.operators)
     bank = SignalBank({str(u): signals[str(u)] for u in eqs.inputs if str(u) in signals})
     h_max = config.get("simulate.table_steps") * bank.table_spacing()
@@ -479,7 +480,7 @@ def _header(eqs: Equations, ident: str, guid: str, signals: Mapping[str, Signal]
         "BG_VR_U": n_exposed + 2 * nx,
         "BG_VR_Y": n_exposed + 2 * nx + nu,
         "BG_VR_END": n_exposed + 2 * nx + nu + ny,
-        "BG_KINKS": int(_uses_input_rates(eqs) or bool(eqs.operators)),
+        "BG_KINKS": int(_uses_input_rates(eqs) or bool(nops)),
         "BG_RTOL": repr(float(config.get("simulate.rtol"))),
         "BG_ATOL": repr(float(config.get("simulate.atol_floor"))),
         "BG_HMAX": repr(float(h_max)) if math.isfinite(h_max) else "INFINITY",
