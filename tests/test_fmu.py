@@ -164,15 +164,12 @@ def test_inputs_are_fmu_inputs_with_units_and_dependencies(apa_with_inputs):
     assert deps["x"] == {"q_stack.K", "q_stack.C_NL"}
 
 
-def test_cosimulation_interpolates_the_inputs_it_receives(apa_with_inputs):
-    """A co-simulation master sets V and its slope at each communication point (FMPy's own
-    loop, FMU2Slave: its simulate_fmu cannot set the derivatives of two inputs); the FMU
-    follows the straight line between the points, as the native run on the same table does."""
+def _cosimulate(path, lm, t, drive, params=None) -> np.ndarray:
+    """The outputs at times ``t`` of a co-simulation in which the master sets V and its slope at
+    each communication point, after setting ``params`` (FMPy's FMU2Slave, step by step: its
+    simulate_fmu cannot set the derivatives of two inputs)."""
     from fmpy.fmi2 import FMU2Slave
 
-    lm, exp, path, _ = apa_with_inputs
-    t = exp.times()
-    drive = bg.Simulator(lm.model).signal_bank(exp.inputs).sample(t)[:, 0]
     md = fmpy.read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     fmu = FMU2Slave(
@@ -183,6 +180,7 @@ def test_cosimulation_interpolates_the_inputs_it_receives(apa_with_inputs):
     )
     fmu.instantiate()
     fmu.setupExperiment(tolerance=RTOL, startTime=0.0)
+    fmu.setReal([vr[name] for name in params or {}], list((params or {}).values()))
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
     outputs = [vr[name] for name in lm.model.outputs]
@@ -194,8 +192,18 @@ def test_cosimulation_interpolates_the_inputs_it_receives(apa_with_inputs):
         got.append(fmu.getReal(outputs))
     fmu.terminate()
     fmu.freeInstance()
-    got = np.array(got)
-    native = bg.simulate(lm.model, t, {"V": bg.PiecewiseLinear(t, drive)}, rtol=RTOL)
+    return np.array(got)
+
+
+@pytest.mark.parametrize("params", [None, {"c": 2000.0, "stack.C_NL.H.w2": -1.0e12}], ids=["defaults", "set"])
+def test_cosimulation_interpolates_the_inputs_it_receives(apa_with_inputs, params):
+    """The FMU follows the straight line between the communication points, as the native run
+    on the same table does, with the parameters set through the FMU."""
+    lm, exp, path, _ = apa_with_inputs
+    t = exp.times()
+    drive = bg.Simulator(lm.model).signal_bank(exp.inputs).sample(t)[:, 0]
+    got = _cosimulate(path, lm, t, drive, params)
+    native = bg.simulate(lm.model, t, {"V": bg.PiecewiseLinear(t, drive)}, params=params, rtol=RTOL)
     for j, name in enumerate(lm.model.outputs):
         assert np.max(np.abs(got[:, j] - native[name])) < TOL_CS * np.max(np.abs(native[name])), name
 
@@ -232,9 +240,10 @@ def test_a_law_on_an_input_rate_needs_the_input_inside(tmp_path):
     export_fmu(_rc_on_source(), path, signals={"V": bg.Sine(2.0, 50.0)})
     assert validate_fmu(str(path)) == []
     for kind in ("ModelExchange", "CoSimulation"):
-        res = simulate_fmu(str(path), fmi_type=kind, stop_time=0.04, output_interval=1e-4)
-        exact = 2e-6 * 2.0 * 2 * np.pi * 50.0 * np.cos(2 * np.pi * 50.0 * res["time"])  # C dV/dt
-        assert np.allclose(res["i"], exact, rtol=0, atol=1e-12), kind
+        for c in (2e-6, 5e-6):  # the default capacitance, and one set as a start value
+            res = simulate_fmu(str(path), fmi_type=kind, stop_time=0.04, output_interval=1e-4, start_values={"Cc": c})
+            exact = c * 2.0 * 2 * np.pi * 50.0 * np.cos(2 * np.pi * 50.0 * res["time"])  # C dV/dt
+            assert np.allclose(res["i"], exact, rtol=0, atol=1e-12), (kind, c)
 
 
 # ---- what cannot be carried is refused ----------------------------------------------------------
