@@ -35,16 +35,14 @@ from .registry import MODEL_ARGS, QUIET_ARG, arg, command, load, outputs
     ],
 )
 def run(args):
-    from types import SimpleNamespace
-
     from ..export import export_fmu
     from ..model.signals import parse_signal
-    from .simulate import _offsets
+    from .simulate import output_offsets
 
     with outputs(args) as out:
         out.add(args.fmu, "--fmu", suffixes=(".fmu",))
         lm = load(args)
-        for name, offset in _offsets(lm, SimpleNamespace(outputs=lm.model.outputs)).items():
+        for name, offset in output_offsets(lm, lm.model.outputs).items():
             lm.model.outputs[name].expr += offset  # a fit file's sensor zero, as simulate adds it
         signals = dict(lm.experiment.inputs) if args.experiment else {}
         given = set()
