@@ -246,6 +246,47 @@ def test_a_law_on_an_input_rate_needs_the_input_inside(tmp_path):
             assert np.allclose(res["i"], exact, rtol=0, atol=1e-12), (kind, c)
 
 
+def test_model_exchange_asks_for_an_event_when_an_operator_input_turns_back(tmp_path):
+    """Stepping a play-operator model by hand (FMPy's FMU2Model): fmi2CompletedIntegratorStep
+    asks for an event at the first step after each turning point of the operator's input (a
+    1 Hz sine driven inside the FMU: t = 0.25 s and 0.75 s), and at no other step."""
+    from fmpy.fmi2 import FMU2Model
+
+    g = bg.Model("play")
+    h = g.operator("H", hy.PrandtlIshlinskii([0.0, 0.2], [1.0, 0.5]), g.input("V"))
+    g.add(bg.Se("s", h), bg.J1("j"), bg.I("m", 1.0), bg.R("r", 10.0))
+    g.chain("s", "j")
+    g.bond("j", "m")
+    g.bond("j", "r")
+    g.output("v", g.flow("m"))
+    path = tmp_path / "play.fmu"
+    export_fmu(g, path, signals={"V": bg.Sine(1.0, 1.0)})
+    md = fmpy.read_model_description(str(path))
+    fmu = FMU2Model(
+        guid=md.guid,
+        unzipDirectory=fmpy.extract(str(path)),
+        modelIdentifier=md.modelExchange.modelIdentifier,
+        instanceName="play",
+    )
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    events = []
+    for t in np.arange(1, 101) * 0.01:
+        fmu.setTime(t)
+        if fmu.completedIntegratorStep()[0]:
+            events.append(round(t, 2))
+            fmu.enterEventMode()
+            fmu.newDiscreteStates()
+            fmu.enterContinuousTimeMode()
+    fmu.terminate()
+    fmu.freeInstance()
+    assert events == [0.26, 0.76]
+
+
 # ---- what cannot be carried is refused ----------------------------------------------------------
 
 
