@@ -25,6 +25,7 @@ sides at relative tolerance 1e-8:
 
 from __future__ import annotations
 
+import ctypes
 import dataclasses
 import json
 import re
@@ -119,8 +120,13 @@ def test_fmu_passes_fmpy_validation(exported):
     assert validate_fmu(str(path)) == []
     with zipfile.ZipFile(path) as zf:
         files = set(zf.namelist())
-    assert f"binaries/linux64/{report.model_identifier}.so" in files
+    binary = f"binaries/linux64/{report.model_identifier}.so"
+    assert binary in files
     assert {"sources/bg_fmu.c", "sources/bg_model.c", "sources/fmi2Functions.h"} <= files
+    with zipfile.ZipFile(path) as zf:
+        lib = ctypes.CDLL(zf.extract(binary, path.parent / report.model_identifier))
+    # the binary exports the FMI functions only: two FMUs in one process never call into each other
+    assert hasattr(lib, "fmi2Instantiate") and not hasattr(lib, "bg_rhs") and not hasattr(lib, "bg_theta0")
 
 
 def test_cosimulation_matches_native(exported):

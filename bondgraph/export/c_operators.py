@@ -40,11 +40,13 @@ def c_runs(operators: Sequence[MemoryOperator], cc: str | None = None) -> list[C
             raise ModelError(f"memory operator {type(op).__qualname__} (kind '{op.kind}') has no C source")
         sources.append(src)
     names = [type(op).__qualname__ for op in operators]
-    lines = ["#include <math.h>", ""] + helpers(sources, names)
+    lines = ["#include <math.h>", '#define BG_EXPORT __attribute__((visibility("default")))', ""]
+    lines += helpers(sources, names)
     for k, (name, src) in enumerate(zip(names, sources)):
         lines += operator_functions(k, name, src)
         lines += [
-            f"void run{k}(const double *v, long n, double *mem, int n_mem, const double *prm, int n_prm, double *y)",
+            f"BG_EXPORT void run{k}(const double *v, long n, double *mem, int n_mem, const double *prm, int n_prm,"
+            " double *y)",
             "{",
             f"    op{k}_initial(v[0], mem, n_mem, prm, n_prm);",
             "    for (long i = 0; i < n; i++) {",

@@ -9,8 +9,9 @@ from pathlib import Path
 
 from ..support.errors import UsageError
 
-#: flags of every build: C99, optimised, position-independent shared library
-FLAGS = ("-std=c99", "-O2", "-fPIC", "-shared")
+#: flags of every build: C99, optimised, a position-independent shared library that exports
+#: only the fmi2 functions (so two FMUs in one process never call into each other)
+FLAGS = ("-std=c99", "-O2", "-fPIC", "-shared", "-fvisibility=hidden")
 
 
 def find_compiler(cc: str | None = None) -> str:
