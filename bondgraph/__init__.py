@@ -48,6 +48,7 @@ _EXPORTS = {
     "Model": "model.graph",
     "Quantity": "model.graph",
     "MemoryOperator": "model.memory",
+    "CSource": "model.memory",
     "Parameter": "model.parameters",
     "Chirp": "model.signals",
     "Constant": "model.signals",

@@ -17,7 +17,20 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1] / "bondgraph"
 
 #: the pipeline, first to last: a stage may import itself and the stages before it
-STAGES = ["support", "data", "model", "equations", "numerics", "linear", "fit", "diagnosis", "plotting", "batch", "cli"]
+STAGES = [
+    "support",
+    "data",
+    "model",
+    "equations",
+    "numerics",
+    "linear",
+    "export",
+    "fit",
+    "diagnosis",
+    "plotting",
+    "batch",
+    "cli",
+]
 
 
 def _modules() -> dict[str, tuple[Path, bool]]:

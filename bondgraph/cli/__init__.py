@@ -24,6 +24,7 @@ from . import (  # noqa: F401 - importing a command's module registers it
     compensate,
     diagnose,
     equations,
+    export,
     figure,
     fit,
     linearize,

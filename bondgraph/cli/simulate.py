@@ -103,7 +103,7 @@ def run(args):
         for name, value in lm.model.values.items():
             meta[f"param {name}"] = repr(value)
         notes = []
-        for name, offset in _offsets(lm, res).items():
+        for name, offset in output_offsets(lm, res.outputs).items():
             cols[name] = cols[name] + offset
             meta[f"offset {name}"] = repr(offset)
             notes.append(f"{name} includes the output offset {offset:.4g} from {args.params_file}")
@@ -164,17 +164,18 @@ def _times(args, exp, tables):
     return start + args.dt * np.arange(n + 1)
 
 
-def _offsets(lm, res) -> dict:
-    """The fit file's output offsets, by output name (an unnamed one is the first output's)."""
+def output_offsets(lm, outputs) -> dict:
+    """The fit file's output offsets, by output name (an unnamed one is the first of ``outputs``,
+    the model's output names)."""
     out = {}
     for name, offset in lm.offsets.items():
-        name = name if name is not None else next(iter(res.outputs), None)
-        if name in res.outputs:
+        name = name if name is not None else next(iter(outputs), None)
+        if name in outputs:
             out[name] = offset
         elif name is not None:
             raise UsageError(
                 f"the parameter file's offset is for output {name!r}, which the model does not have "
-                f"(outputs: {', '.join(res.outputs)})"
+                f"(outputs: {', '.join(outputs)})"
             )
     return out
 

@@ -27,17 +27,49 @@ with their helpers, when numba refuses them); ``output = staticmethod(f)`` and
 :class:`~bondgraph.support.errors.ModelError` naming the operator, the function and the rule it broke.
 Subclass :class:`MemoryOperator` to add an operator; see ``library/hysteresis/`` for the
 play/stop (Prandtl–Ishlinskii) and Maxwell-slip banks.
+
+An exported model (an FMU, :mod:`bondgraph.export`) runs without Python, so it carries the
+operator in C: :meth:`MemoryOperator.c_source` gives the C twins of ``output``, ``commit`` and
+``initial_memory`` as a :class:`CSource`.  The default gives none, and the exporter then
+refuses the model, naming the operator.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 if TYPE_CHECKING:
     from .operator_kernels import OperatorKernels
+
+
+@dataclass(frozen=True)
+class CSource:
+    """C twins of an operator's kernels, for models exported to C (:mod:`bondgraph.export`).
+
+    Each of ``output``, ``commit`` and ``initial`` is the *body* (C99 statements) of a function
+    with the arguments ``v`` (the input; ``v0`` for ``initial``), ``mem`` (the memory,
+    ``n_mem`` doubles), ``prm`` (the operator's parameters, ``n_prm`` doubles):
+
+    * ``double output(double v, const double *mem, int n_mem, const double *prm, int n_prm)``:
+      returns what :meth:`MemoryOperator.output` returns; must not write ``mem``;
+    * ``void commit(double v, double *mem, int n_mem, const double *prm, int n_prm)``:
+      advances ``mem`` as :meth:`MemoryOperator.commit` does;
+    * ``void initial(double v0, double *mem, int n_mem, const double *prm, int n_prm)``:
+      writes the memory at rest at ``v0``, as :meth:`MemoryOperator.initial_memory` returns it.
+
+    ``helpers`` are complete C definitions (``static`` functions) the bodies call; a helper
+    shared by several operators is emitted once, so one name must always carry the same text.
+    ``<math.h>`` is included.
+    """
+
+    output: str
+    commit: str
+    initial: str
+    helpers: tuple[str, ...] = ()
 
 
 class MemoryOperator(ABC):
@@ -85,6 +117,11 @@ class MemoryOperator(ABC):
         """Optional: an operator G with G[H[v]] = v from rest (the exact inverse), for feedforward
         compensation (:mod:`bondgraph.fit.compensate`). The default None means "no closed form": the
         compensation then inverts ``output``/``commit`` numerically, sample by sample."""
+        return None
+
+    def c_source(self) -> CSource | None:
+        """Optional: the operator's kernels in C (:class:`CSource`), for exported models. The
+        default None means "not available": the exporter refuses a model that applies it."""
         return None
 
     # --- used by the framework -------------------------------------------------------

@@ -9,6 +9,7 @@ import numpy as np
 
 from bondgraph import ParameterError
 
+from . import c_kernels
 from .base import VectorOperator, _indexed, _kuhnen_inverse, _merge_zero, _vector, _virgin_plays
 
 
@@ -90,6 +91,10 @@ class PrandtlIshlinskii(_PlayBank):
 
     kind = "pi"
 
+    def c_source(self):
+        """The kernels in C, for exported models."""
+        return c_kernels.PI
+
     def __init__(self, thresholds, weights, prior: float | None = None):
         super().__init__(thresholds, weights)
         if prior is not None:
@@ -133,6 +138,10 @@ class PIStop(_PlayBank):
     """
 
     kind = "pi_stop"
+
+    def c_source(self):
+        """The kernels in C, for exported models."""
+        return c_kernels.PI_STOP
 
     @staticmethod
     def output(v, mem, prm):
@@ -190,6 +199,10 @@ class ModifiedPI(_DeadZonePI):
 
     kind = "modified_pi"
 
+    def c_source(self):
+        """The kernels in C, for exported models."""
+        return c_kernels.MODIFIED_PI
+
     @staticmethod
     def output(v, mem, prm):
         """Dead-zone superposition of the PI sum, with the plays h frozen."""
@@ -214,6 +227,10 @@ class InverseModifiedPI(_DeadZonePI):
     as returned by :meth:`ModifiedPI.inverse`). Memory: the n play outputs (units of x)."""
 
     kind = "modified_pi_inverse"
+
+    def c_source(self):
+        """The kernels in C, for exported models."""
+        return c_kernels.INVERSE_MODIFIED_PI
 
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         """Plays at rest after a monotone approach from 0 to the mapped input x(v0)."""
@@ -270,6 +287,10 @@ class RelativeModifiedPI(_RelativeDeadZones):
 
     kind = "modified_pi_relative"
 
+    def c_source(self):
+        """The kernels in C, for exported models."""
+        return c_kernels.RELATIVE_MODIFIED_PI
+
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         n = self.thresholds.size
         h = _virgin_plays(v0, np.asarray(prm[:n], dtype=np.float64))
@@ -319,6 +340,10 @@ class InverseRelativeModifiedPI(_RelativeDeadZones):
     :meth:`RelativeModifiedPI.inverse`); memory = [h_1..h_n, v_r, x_r, s, v_last]."""
 
     kind = "modified_pi_relative_inverse"
+
+    def c_source(self):
+        """The kernels in C, for exported models."""
+        return c_kernels.INVERSE_RELATIVE_MODIFIED_PI
 
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
         n = self.thresholds.size

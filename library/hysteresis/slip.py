@@ -6,6 +6,7 @@ import numpy as np
 
 from bondgraph import ParameterError
 
+from . import c_kernels
 from .base import VectorOperator, _indexed, _vector, _virgin_plays
 from .play import PIStop
 
@@ -22,6 +23,10 @@ class MaxwellSlip(VectorOperator):
 
     kind = "maxwell_slip"
     vectors = ("stiffnesses", "breakaway_forces")
+
+    def c_source(self):
+        """The kernels in C, for exported models."""
+        return c_kernels.MAXWELL_SLIP
 
     def __init__(self, stiffnesses, breakaway_forces):
         self.stiffnesses = _vector("stiffnesses", stiffnesses)
