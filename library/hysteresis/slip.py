@@ -22,6 +22,7 @@ class MaxwellSlip(VectorOperator):
 
     kind = "maxwell_slip"
     vectors = ("stiffnesses", "breakaway_forces")
+    vector_units = {"stiffnesses": (-1, 1), "breakaway_forces": (0, 1)}
 
     def __init__(self, stiffnesses, breakaway_forces):
         self.stiffnesses = _vector("stiffnesses", stiffnesses)
