@@ -102,8 +102,8 @@ class UnitEntry:
 
     @property
     def unit(self) -> str:
-        if self.status == "declared":
-            return self.declared
+        if self.status in ("declared", "not in the equations"):
+            return self.declared or "-"
         return "?" if self.dim is None else format_dim(self.dim)
 
 
@@ -244,12 +244,14 @@ class _Solver:
         lhs, rhs = rel.lhs, rel.rhs
         dl = self.dims.get(lhs) if lhs.is_Symbol else self.side(lhs)
         dr = self.dims.get(rhs) if rhs.is_Symbol else self.side(rhs)
-        if dl is WILD or dr is WILD:
-            if dl is WILD and dr is not WILD and dr is not None:
-                self.note_float(rel.lhs, dr, rel.shift)
+        shift = tuple(x * rel.shift for x in SECOND) if rel.shift else None
+        if dl is WILD or dr is WILD:  # a number that takes any unit: note which (for the report)
+            if dr is WILD and dl is not WILD and dl is not None:
+                self.float_factor(rhs, div(dl, shift) if shift else dl)
+            elif dl is WILD and dr is not WILD and dr is not None:
+                self.float_factor(lhs, mul(dr, shift) if shift else dr)
             self.done.add(i)
             return
-        shift = tuple(x * rel.shift for x in SECOND) if rel.shift else None
         if dr is not None and shift:
             dr = mul(dr, shift)
         if dl is not None and dr is not None:
@@ -269,10 +271,8 @@ class _Solver:
             return
         self.done.add(i)
 
-    def note_float(self, e, dim, shift=0):
-        if shift:
-            dim = div(dim, tuple(x * shift for x in SECOND))
-        if e.is_Float and dim != ONE:
+    def note_float(self, e, dim):
+        if dim != ONE:
             self.floats.setdefault((self.who, float(e)), dim)
 
     # ---- expressions ---------------------------------------------------------------------------
@@ -348,10 +348,11 @@ class _Solver:
 
     def alike(self, args, what):
         """Arguments that share one unit (terms of a sum, Max, branches): checked, unknown ones inferred."""
-        known, first, pending = None, None, []
+        known, first, pending, wild = None, None, [], []
         for t in args:
             d = self.eval(t)
             if d is WILD:
+                wild.append(t)
                 continue
             if d is None:
                 pending.append(t)
@@ -363,6 +364,8 @@ class _Solver:
             return None if pending else WILD
         for t in pending:
             self.infer(t, known)
+        for t in wild:
+            self.float_factor(t, known)
         return known
 
     def require_one(self, e, what):
@@ -378,8 +381,7 @@ class _Solver:
         get their unit (a product's one unknown factor, every unknown term of a sum, ...)."""
         d = self.eval(e)
         if d is WILD:
-            if e.is_Mul:
-                self.float_factor(e, target)
+            self.float_factor(e, target)
             return
         if d is not None:
             if d != target:
@@ -415,6 +417,11 @@ class _Solver:
 
     def float_factor(self, e, target):
         """Note the unit a product's one floating-point factor takes (for the report)."""
+        if e.is_Float:
+            self.note_float(e, target)
+            return
+        if not e.is_Mul:
+            return
         floats = [a for a in e.args if a.is_Float]
         if len(floats) != 1:
             return
@@ -790,7 +797,7 @@ class _Check:
             rep.operators.append(tuple([str(sym)] + ["?" if d is None else format_dim(d) for d in (vin, out)]))
         for rel in self.skipped:  # numbers-only elements: the unit their numbers take
             dl, dr = s.side(rel.lhs), s.side(rel.rhs)
-            if dl not in (None, WILD) and dr is WILD and rel.rhs.is_Mul:
+            if dl not in (None, WILD) and dr is WILD:
                 s.who = rel.who
                 s.float_factor(rel.rhs, div(dl, tuple(x * rel.shift for x in SECOND)) if rel.shift else dl)
         rep.constants = [(who, f"{value:g}", format_dim(dim)) for (who, value), dim in sorted(s.floats.items())]

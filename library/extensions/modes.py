@@ -140,7 +140,7 @@ class ParallelMode(Candidate):
         om, ze, g = math.exp(fit.z[0]), math.exp(fit.z[1]), float(fit.direct[0])
         model = view.rewrite()
         o = model.parameter("hm.omega", om, "rad/s", "natural frequency of the added mode")
-        z = model.parameter("hm.zeta", ze, "", "damping ratio of the added mode")
+        z = model.parameter("hm.zeta", ze, "1", "damping ratio of the added mode")
         gg = model.parameter("hm.g", g, "", "input gain of the added mode (unit modal mass)")
         model.add(
             Se("hm.force", gg * view.drive_expr),
@@ -198,8 +198,8 @@ class OutputMode(Candidate):
         x = sp.Dummy("p")
         M = 1 / sp.diff(law(model, el)(x), x)
         om = model.parameter("om.omega", omega, "rad/s", "natural frequency of the two-mass mode")
-        ze = model.parameter("om.zeta", zeta, "", "damping ratio of the two-mass mode")
-        share = model.parameter("om.mu", mu, "", "share of the inertia's mass on the actuator's side of the spring")
+        ze = model.parameter("om.zeta", zeta, "1", "damping ratio of the two-mass mode")
+        share = model.parameter("om.mu", mu, "1", "share of the inertia's mass on the actuator's side of the spring")
         reduced = share * (1 - share) * M
         modify_law(model, el, lambda p, old: old / share)
         model.add(
