@@ -196,6 +196,9 @@ class _Parser:
     def factor(self):
         kind, value = self.take()
         if kind == "num":
+            before = self.tokens[self.i - 2] if self.i >= 2 else None
+            if value != "1" and before is not None and before[0] == "name":
+                raise ValueError(f"write {before[1]}^{value} for a power")
             if value != "1":
                 raise ValueError(f"a number ({value}) is not a unit; only '1' is (a pure number)")
             dim, scale = ONE, Fraction(1)
