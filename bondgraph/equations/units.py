@@ -67,7 +67,7 @@ ANCHOR, STRUCTURE, ELEMENT, USER, FREE, POWER = range(6)
 MAX_SUSPECTS = 24
 
 
-@dataclass
+@dataclass(slots=True)
 class Relation:
     """``dim(lhs) = dim(rhs)·s^shift`` written by ``who`` (an element, output, state or operator)."""
 
@@ -283,12 +283,12 @@ class _Solver:
             return self.dims.get(e)
         if e.is_Number:
             return WILD if (e.is_Float or e.is_zero) else ONE
-        got = self.memo.get(e)
+        got = self.memo.get(id(e))  # by identity: hashing a fresh sympy expression costs more
         if got is not None:
             return got
         d = self._eval(e)
         if d is not None:
-            self.memo[e] = d
+            self.memo[id(e)] = d
         return d
 
     def _eval(self, e):
@@ -484,11 +484,11 @@ def _holds_symbols(expr, memo: dict, seen: set) -> bool:
     the symbols go to ``seen``."""
     if expr is None:
         return False
-    got = memo.get(expr)
+    got = memo.get(id(expr))
     if got is None:
         syms = [x for x in expr.free_symbols if not isinstance(x, sp.Dummy)]
         seen.update(syms)
-        got = memo[expr] = bool(syms)
+        got = memo[id(expr)] = bool(syms)
     return got
 
 
@@ -556,9 +556,10 @@ class _Check:
 
     def _declare(self):
         d, m = self.data, self.m
-        for name, decl in m.all_parameters().items():
-            if decl.symbolic and decl.kind == "real":
-                self.anchor(decl.symbol, decl.unit)
+        self.parameters = m.all_parameters()
+        self.symbols = {n: d.symbol for n, d in self.parameters.items() if d.symbolic and d.kind == "real"}
+        for name, sym in self.symbols.items():
+            self.anchor(sym, self.parameters[name].unit)
         for name, inp in m.inputs.items():
             self.anchor(inp.symbol, inp.unit)
             rate = input_rate_symbol(inp.symbol)
@@ -569,7 +570,7 @@ class _Check:
         numeric: dict = {}  # element name -> it holds only numbers (its relations are skipped)
         owners: dict = {}
 
-        holds: dict = {}  # expression -> it holds a symbol (laws are shared between copies of a component)
+        holds: dict = {}  # id of an expression -> it holds a symbol (copies of a component share laws)
         seen: set = set()  # the symbol objects the laws hold
 
         def only_numbers(el) -> bool:
@@ -785,9 +786,8 @@ class _Check:
                 return UnitEntry(name, declared, dim, "declared")
             return UnitEntry(name, declared, dim, "inferred" if dim is not None else "undetermined")
 
-        for name, decl in m.all_parameters().items():
-            sym = decl.symbol if decl.symbolic and decl.kind == "real" else None
-            rep.parameters.append(entry(name, sym, decl.unit))
+        for name, decl in self.parameters.items():
+            rep.parameters.append(entry(name, self.symbols.get(name), decl.unit))
         rep.inputs = [entry(n, i.symbol, i.unit) for n, i in m.inputs.items()]
         rep.outputs = [entry(n, sp.Symbol(f"output {n}", real=True), o.unit) for n, o in m.outputs.items()]
         rep.states = [entry(n, st.symbol, st.unit) for n, st in m.internal_states.items()]

@@ -97,6 +97,9 @@ def div(a: tuple, b: tuple) -> tuple:
 
 def power(a: tuple, p: Fraction) -> tuple | None:
     """The dimension of ``a`` to the rational power ``p``; None if it has no exact exponents here."""
+    if p.denominator == 1:
+        n = int(p)
+        return tuple(x * n for x in a)
     out = []
     for x in a:
         y = x * p
