@@ -256,19 +256,23 @@ class _Solver:
             dr = mul(dr, shift)
         if dl is not None and dr is not None:
             if dl != dr:
-                raise _Mismatch(rel.lhs, dl, rel.rhs, dr)
+                raise _Mismatch(lhs, dl, rhs, dr)
             self.done.add(i)
             return
         if dl is not None:
-            self.infer(rel.rhs, div(dl, shift) if shift else dl)
+            self.infer(rhs, div(dl, shift) if shift else dl)
         elif dr is not None:
-            self.infer(rel.lhs, dr)
-        dl, dr = self.side(rel.lhs), self.side(rel.rhs)
-        if dl is None or dr is None:
+            self.infer(lhs, dr)
+        dl, dr = self.side(lhs), self.side(rhs)
+        if dl is None or dr is None:  # wait for one of its unknown symbols
             for s in rel.symbols:
                 if s not in self.dims:
                     self.waiting[self.classes.get(s, s)].append(i)
             return
+        if shift:
+            dr = mul(dr, shift)
+        if dl != dr:
+            raise _Mismatch(lhs, dl, rhs, dr)
         self.done.add(i)
 
     def note_float(self, e, dim):
@@ -655,8 +659,7 @@ class _Check:
         miss = self.solver.solve()
         if miss is not None:
             raise ModelError(self.explain(miss))
-        report = self.report()
-        return report
+        return self.report()
 
     def power_relations(self) -> list[Relation]:
         watt = parse_unit("W").dim
@@ -681,6 +684,7 @@ class _Check:
         ok = s.drain() is None
         del self.relations[n:]
         s.queue = [q for q in s.queue if q[1] < n]
+        s.waiting = defaultdict(list, {r: [i for i in w if i < n] for r, w in s.waiting.items()})
         if not ok:
             s.dims = snapshot
             s.memo = {}
@@ -719,17 +723,17 @@ class _Check:
     def explain(self, miss: _Mismatch) -> str:
         s = self.solver
         who = self.culprit(miss)
-        if who is not None:
-            s.reset(frozenset({who}))
-            s.drain()
-            mine = [i for i, r in enumerate(self.relations) if r.who == who]
-            for i in mine:  # in their own order of trust, before anything else
-                heapq.heappush(s.queue, (self.relations[i].priority - POWER - 1, i))
+        again = None
+        if who is not None:  # the others' units first, then its relations: where it breaks
+            s.solve(frozenset({who}))
+            for i, r in enumerate(self.relations):
+                if r.who == who:  # in their own order of trust, before anything else
+                    heapq.heappush(s.queue, (r.priority - POWER - 1, i))
             again = s.drain()
-            if again is not None and self.relations[again.relation].who == who:
-                miss = again
-            else:
-                s.solve()
+        if again is not None and self.relations[again.relation].who == who:
+            miss = again
+        else:
+            s.solve()  # back to where the contradiction first showed
         rel = self.relations[miss.relation]
         name = self.name(rel.who)
         return (
