@@ -203,6 +203,17 @@ def test_undeclared_units_are_inferred_and_numbers_take_the_unit_their_place_nee
     assert not rep.notes  # power bonds
 
 
+def test_an_element_given_only_numbers_takes_the_units_of_its_place():
+    """I("mass", 1) writes f = p: the number is gone from its relation, which says nothing."""
+    g = bg.Model("m")
+    g.add(bg.Se("force", g.input("F", "N")), bg.J1("v"), bg.I("mass", 1), bg.R("damper", 1), bg.C("spring", 1))
+    g.bond("force", "v")
+    for e in ("mass", "spring", "damper"):
+        g.bond("v", e)
+    g.output("x", g.displacement("spring"), "m")
+    assert bg.derive(g).units.lines()[0] == "units: consistent"
+
+
 def test_the_check_can_be_turned_off(tmp_path):
     bad = load_model(oscillator_file(tmp_path, spring="p.k"))
     with config.override({"units.check": False}):
