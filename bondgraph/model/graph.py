@@ -26,11 +26,11 @@ from .parameters import Parameter
 from .units import unit_problem
 
 
-def _check_unit(owner: str, what: str, unit: str) -> str:
+def _check_unit(owner: str, what: str, unit: str) -> None:
+    """ModelError if ``unit`` is not a unit string (see :mod:`bondgraph.model.units`)."""
     problem = unit_problem(unit)
     if problem:
         raise ModelError(f"{owner}: {what}: {problem}")
-    return unit
 
 
 def input_rate_symbol(u: sp.Symbol) -> sp.Symbol:

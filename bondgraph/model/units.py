@@ -280,7 +280,18 @@ def parse_unit(text: str) -> Unit | None:
 
 
 def unit_problem(text) -> str | None:
-    """Why ``text`` is not a unit string (one phrase), or None if it reads."""
+    """Why ``text`` is not a unit string, for the error of what declares it.
+
+    Parameters
+    ----------
+    text : str
+        A unit string as declared.
+
+    Returns
+    -------
+    str or None
+        One phrase naming the problem and the way to write units; None if ``text`` reads.
+    """
     try:
         parse_unit(text)
     except ValueError as exc:
@@ -327,9 +338,19 @@ def _exp_text(e: Fraction) -> str:
 
 
 def format_dim(dim: tuple) -> str:
-    """A dimension written as a unit string :func:`parse_unit` reads back: ``"1"`` for a pure
-    number, a product of one or two familiar units where one fits (``"N/m"``, ``"m/N"``,
-    ``"C*m"``), SI base units otherwise."""
+    """A dimension written as a unit string that :func:`parse_unit` reads back.
+
+    Parameters
+    ----------
+    dim : tuple
+        Exponents of :data:`BASE`, times :data:`DENOM`.
+
+    Returns
+    -------
+    str
+        ``"1"`` for a pure number, a product of one or two familiar units where one fits
+        (``"N/m"``, ``"m/N"``, ``"C*m"``), SI base units otherwise.
+    """
     if dim == ONE:
         return "1"
     parts = _spellings().get(dim)
