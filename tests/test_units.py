@@ -362,6 +362,16 @@ def test_check_prints_causality_and_units_and_marks_inferred_ones(tmp_path, caps
     assert re.search(r"^ +q +C +\(inferred\)$", "\n".join(out), re.M)
 
 
+def test_check_summarises_an_algebraic_loop_by_its_first_elements(capsys):
+    assert main(["check", str(MODELS / "stack.py"), "--set", "layers=8"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    (loop,) = [line for line in out if "algebraic loop" in line]
+    assert re.fullmatch(
+        r"  algebraic loop through (L\d\.\w+, ){5}L\d\.\w+ and 13 more \(36 variables, torn at \S+\) solved symbolically",
+        loop,
+    ), loop
+
+
 def test_check_exits_2_with_one_line_when_units_do_not_match(tmp_path, capsys):
     assert main(["check", str(oscillator_file(tmp_path, spring="p.k"))]) == 2
     captured = capsys.readouterr()

@@ -33,5 +33,15 @@ def summary(eqs) -> list[str]:
         f"{len(caus.arbitrary)} free choice(s)",
     ]
     lines += [f"  derivative causality: {e if p == 'p' else e + '.' + p}" for e, p in caus.derivative]
-    lines += [f"  {text}" for text in eqs.eliminated + eqs.loops]
+    lines += [f"  {_short(text)}" for text in eqs.eliminated + eqs.loops]
     return lines
+
+
+def _short(text: str, keep: int = 6) -> str:
+    """A loop or elimination note with its list of element names cut to the first few."""
+    head, sep, rest = text.partition(" through ")
+    names, paren, tail = rest.partition(" (")
+    parts = names.split(", ")
+    if not sep or not paren or len(parts) <= keep:
+        return text
+    return f"{head}{sep}{', '.join(parts[:keep])} and {len(parts) - keep} more{paren}{tail}"
