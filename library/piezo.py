@@ -56,7 +56,7 @@ def linear_polarization(comp: Component, name: str, kx) -> C:
 def bouc_wen_polarization(comp: Component, name: str, kx, kw, q, r, n) -> C:
     """Bouc–Wen polarization law (Rodriguez-Fortun et al. 2010, eq. 9): E = kx·p + kw·z with the internal state
     ż = q·(ṗ − r·|ṗ|·|z|^(n−1)·z + (r − 1)·ṗ·|z|^n).  Adds the C element and the state z."""
-    z = comp.state(f"{name}.z", 0, unit="", doc="Bouc–Wen hysteretic variable")
+    z = comp.state(f"{name}.z", 0, unit="1", doc="Bouc–Wen hysteretic variable")
     cap = comp.add(C(name, law=lambda p: kx * p + kw * z))
     pdot = comp.flow(name)
     comp.set_rate(

@@ -77,7 +77,7 @@ PARAMETERS = [
     Parameter("K", 10.77e6, "N/m", "actuator stiffness, 10.77 N/um (Table 1)", bounds=(0.0, 1e12)),
     Parameter("c", 3000.0, "N*s/m", "viscous rate-dependence term R_NL = c*dx/dt (Table 1)", bounds=(0.0, 1e8)),
     Parameter("M", 0.160, "kg", "moving mass (Table 1)", bounds=(1e-9, 1e3)),
-    Parameter("T", 1.0, "", "mechanical amplification (Table 1 values already include it)"),
+    Parameter("T", 1.0, "1", "mechanical amplification (Table 1 values already include it)"),
     Parameter("kx", 5e12, "V/(C*m^2)", "linear polarization stiffness 1/C_NL (Table 2)", bounds=(0.0, 1e20)),
     Parameter(
         "hysteresis",
@@ -96,8 +96,8 @@ PARAMETERS = [
     ),
     Parameter("kw", 1.98e5, "V/m", "Bouc-Wen hysteretic field weight (Table 2)"),
     Parameter("q_bw", 1.58e7, "1/(C*m)", "Bouc-Wen rate constant q (Table 2)"),
-    Parameter("r_bw", 0.56, "", "Bouc-Wen shape parameter r (Table 2)"),
-    Parameter("n_bw", 1.08, "", "Bouc-Wen exponent n (Table 2)"),
+    Parameter("r_bw", 0.56, "1", "Bouc-Wen shape parameter r (Table 2)"),
+    Parameter("n_bw", 1.08, "1", "Bouc-Wen exponent n (Table 2)"),
 ]
 
 EXPERIMENT = Experiment(t_end=0.4, dt=1e-4, inputs={"V": Sine(amplitude=60.0, frequency=5.0, phase=-90.0, offset=60.0)})

@@ -21,6 +21,7 @@ from ..support.errors import BondGraphError, UsageError
 from . import (  # noqa: F401 - importing a command's module registers it
     batch,
     causality,
+    check,
     compensate,
     diagnose,
     equations,

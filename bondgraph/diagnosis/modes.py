@@ -160,7 +160,7 @@ class ParallelMode(Candidate):
         om, ze, g = math.exp(fit.z[0]), math.exp(fit.z[1]), float(fit.direct[0])
         model = view.rewrite()
         o = model.parameter(f"{p}.omega", om, "rad/s", "natural frequency of the added mode")
-        z = model.parameter(f"{p}.zeta", ze, "", "damping ratio of the added mode")
+        z = model.parameter(f"{p}.zeta", ze, "1", "damping ratio of the added mode")
         gg = model.parameter(f"{p}.g", g, "", "input gain of the added mode (unit modal mass)")
         model.add(
             Se(f"{p}.force", gg * view.drive_expr),
@@ -236,8 +236,8 @@ class OutputMode(Candidate):
         x = sp.Dummy("p")
         M = 1 / sp.diff(law(model, el)(x), x)
         om = model.parameter(f"{p}.omega", omega, "rad/s", "natural frequency of the two-mass mode")
-        ze = model.parameter(f"{p}.zeta", zeta, "", "damping ratio of the two-mass mode")
-        share = model.parameter(f"{p}.mu", mu, "", f"share of {el}'s mass on the driven side of the spring")
+        ze = model.parameter(f"{p}.zeta", zeta, "1", "damping ratio of the two-mass mode")
+        share = model.parameter(f"{p}.mu", mu, "1", f"share of {el}'s mass on the driven side of the spring")
         reduced = share * (1 - share) * M
         modify_law(model, el, lambda q, old: old / share)
         model.add(

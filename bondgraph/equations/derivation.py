@@ -23,9 +23,11 @@ import sympy as sp
 
 from ..model.elements import Port, sympify
 from ..model.graph import Model, OperatorBlock, Quantity, input_rate_symbol
+from ..support import config
 from ..support.errors import CausalityError, ModelError
 from .causality import Causality, assign_causality
 from .system import Equations, State, Statement
+from .units import UnitInput, UnitReport, check_units
 
 
 def _is_cheap(expr: sp.Expr) -> bool:
@@ -37,9 +39,10 @@ def _is_cheap(expr: sp.Expr) -> bool:
 
 
 class Deriver:
-    def __init__(self, model: Model, causality: Causality):
+    def __init__(self, model: Model, causality: Causality, units: bool | None = None):
         self.m = model
         self.c = causality
+        self.check = config.get("units.check") if units is None else units
         self.assign_map: dict[sp.Symbol, sp.Expr] = {}
         self.origin: dict[sp.Symbol, str] = {}
         self.ops: dict[sp.Symbol, OperatorBlock] = {}
@@ -93,6 +96,7 @@ class Deriver:
             self.assign(ob.symbol, ob_in, f"operator {name}")
             self.ops[ob.symbol] = ob
         outputs = {n: self._q(o.expr) for n, o in m.outputs.items()}
+        units = self._check_units(outputs) if self.check else None
         self._solve_loops()
         if self.dependent:
             self._eliminate_dependent()
@@ -114,6 +118,24 @@ class Deriver:
             self.eliminated,
             self.loops,
             {b.index: (self.e[b.index], self.f[b.index]) for b in m.bonds},
+            units,
+        )
+
+    def _check_units(self, outputs: dict) -> UnitReport:
+        """Dimensional analysis of the element relations as written (before loops and derivative
+        causality are solved, so that a contradiction names the element that wrote it)."""
+        return check_units(
+            UnitInput(
+                self.m,
+                self.assign_map,
+                self.origin,
+                self.ops,
+                self.states,
+                self.rates,
+                self.dependent,
+                outputs,
+                {b.index: (self.e[b.index], self.f[b.index]) for b in self.m.bonds},
+            )
         )
 
     # ---- constitutive relations (the element protocol) ---------------------------------------
@@ -382,8 +404,9 @@ def _expr(value, origin: str, what) -> sp.Expr:
     return value if isinstance(value, sp.Expr) else sympify(value, f"{origin}: {what}")
 
 
-def derive(model: Model, causality: Causality | None = None) -> Equations:
-    """Derive the state equations of ``model``, assigning causality first if needed.
+def derive(model: Model, causality: Causality | None = None, units: bool | None = None) -> Equations:
+    """Derive the state equations of ``model``, assigning causality first if needed, and check
+    their units (:mod:`bondgraph.equations.units`).
 
     Parameters
     ----------
@@ -391,6 +414,9 @@ def derive(model: Model, causality: Causality | None = None) -> Equations:
         The acausal bond graph.
     causality : Causality, optional
         A causality already assigned to ``model`` (default: :func:`assign_causality`).
+    units : bool, optional
+        Check the units of every equation (default: the setting ``units.check``); the result
+        is ``Equations.units``.
 
     Returns
     -------
@@ -400,6 +426,7 @@ def derive(model: Model, causality: Causality | None = None) -> Equations:
     Raises
     ------
     CausalityError, ModelError
-        When no causal assignment exists or an algebraic loop cannot be solved.
+        When no causal assignment exists, an algebraic loop cannot be solved, or the units of
+        an equation do not match (the message names the element, the equation and both units).
     """
-    return Deriver(model, causality or assign_causality(model)).run()
+    return Deriver(model, causality or assign_causality(model), units).run()

@@ -16,6 +16,7 @@ import sympy as sp
 
 from ..model.graph import Model, OperatorBlock
 from .causality import Causality
+from .units import UnitReport
 
 
 @dataclass
@@ -59,6 +60,8 @@ class Equations:
     eliminated: list[str] = field(default_factory=list)
     loops: list[str] = field(default_factory=list)
     bond_vars: dict[int, tuple[sp.Symbol, sp.Symbol]] = field(default_factory=dict)
+    #: the unit check's result (:class:`~bondgraph.equations.units.UnitReport`), None when not checked
+    units: UnitReport | None = None
 
     @property
     def state_symbols(self) -> list[sp.Symbol]:

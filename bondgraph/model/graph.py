@@ -23,6 +23,14 @@ from ..support.errors import ModelError, did_you_mean
 from .elements import Element, Junction, sympify
 from .memory import MemoryOperator
 from .parameters import Parameter
+from .units import unit_problem
+
+
+def _check_unit(owner: str, what: str, unit: str) -> None:
+    """ModelError if ``unit`` is not a unit string (see :mod:`bondgraph.model.units`)."""
+    problem = unit_problem(unit)
+    if problem:
+        raise ModelError(f"{owner}: {what}: {problem}")
 
 
 def input_rate_symbol(u: sp.Symbol) -> sp.Symbol:
@@ -220,6 +228,7 @@ class Component:
         """An internal state z with dz/dt = rate (DE-based memory such as Bouc–Wen)."""
         if name in self.internal_states:
             raise ModelError(f"{self.name}: internal state '{name}' declared twice")
+        _check_unit(self.name, f"internal state '{name}'", unit)
         sym = sp.Symbol(name, real=True)
         self.internal_states[name] = InternalState(
             sym, sympify(rate, f"state '{name}' rate"), sympify(x0, f"state '{name}' x0"), unit, doc
@@ -400,6 +409,7 @@ class Model(Component):
         """Declare an input signal (e.g. the drive voltage ``V``); returns its symbol."""
         if name in self.inputs:
             return self.inputs[name].symbol
+        _check_unit(self.name, f"input '{name}'", unit)
         sym = sp.Symbol(name, real=True)
         self.inputs[name] = Input(name, sym, unit, doc)
         return sym
@@ -415,6 +425,7 @@ class Model(Component):
         A string ``"elem.e"``, ``"elem.f"``, ``"elem.q"``, ``"elem.p"`` names a port quantity."""
         if name in self.outputs:
             raise ModelError(f"{self.name}: output '{name}' declared twice")
+        _check_unit(self.name, f"output '{name}'", unit)
         if isinstance(expr, str):
             endpoint, _, what = expr.rpartition(".")
             if what not in ("e", "f", "q", "p") or not endpoint:

@@ -86,6 +86,18 @@ class MemoryOperator(ABC):
     #: names (without the element prefix) and default values of the operator parameters
     parameter_names: tuple[str, ...] = ()
 
+    #: units of the input v and the output y when the operator fixes them (unit strings, see
+    #: :mod:`bondgraph.model.units`); "" (the default): they follow from where the model uses it
+    input_unit: str = ""
+    output_unit: str = ""
+
+    def parameter_dimensions(self) -> dict[str, tuple]:
+        """How the units of the parameters follow from the input's and the output's, for
+        dimensional analysis: parameter name -> (a, b) with [parameter] = [v]^a·[y]^b (a
+        threshold in units of v is (1, 0), a weight in y per v (-1, 1), a pure number (0, 0)).
+        Parameters left out get their units where the model uses them, or none.  Default: none."""
+        return {}
+
     @abstractmethod
     def parameter_values(self) -> np.ndarray:
         """Default values of the parameters, in ``parameter_names`` order."""

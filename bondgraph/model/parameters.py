@@ -19,6 +19,7 @@ from typing import Any, Iterable, Mapping
 import sympy as sp
 
 from ..support.errors import ParameterError, did_you_mean
+from .units import unit_problem
 
 _TRUE = {"true", "yes", "on", "1"}
 _FALSE = {"false", "no", "off", "0"}
@@ -29,8 +30,10 @@ class Parameter:
     """A declared model parameter.
 
     ``default`` fixes the kind: float (symbolic unless ``symbolic=False``), int, bool, or
-    str (then ``choices`` lists the allowed values).  ``unit`` is an SI unit string.
-    ``bounds`` (lower, upper) are used by fitting and checked by ``--set``.
+    str (then ``choices`` lists the allowed values).  ``unit`` is a unit string
+    (:mod:`bondgraph.model.units`: ``"N/m"``, ``"N*s/m"``, ``"1"`` for a pure number, ``""``
+    when not declared: dimensional analysis then infers it); a string that cannot be read is a
+    ParameterError here.  ``bounds`` (lower, upper) are used by fitting and checked by ``--set``.
     """
 
     name: str
@@ -44,6 +47,9 @@ class Parameter:
     def __post_init__(self):
         if not self.name.replace("_", "a").replace(".", "a").isalnum() or self.name[0].isdigit():
             raise ParameterError(f"parameter name '{self.name}' must be an identifier (letters, digits, _ and .)")
+        problem = unit_problem(self.unit)
+        if problem:
+            raise ParameterError(f"parameter '{self.name}': {problem}")
         if isinstance(self.default, str) and not self.choices:
             raise ParameterError(f"parameter '{self.name}': a text parameter needs choices=(...)")
         if self.choices and self.default not in self.choices:

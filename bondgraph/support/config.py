@@ -52,6 +52,11 @@ DEFAULTS: dict[str, Default] = {
         "causality assignment gives up after this many revised choices "
         "in one part of the graph (reported as an error naming its elements)",
     ),
+    "units.check": Default(
+        True,
+        "check the units of every equation when equations are derived (an inconsistency is an "
+        "error naming the element); bondgraph check prints the result",
+    ),
     "codegen.tape_threshold": Default(
         300, "programs with more statements run on the tape interpreter instead of being compiled by numba per model"
     ),

@@ -84,7 +84,7 @@ def even_term(base) -> tuple[np.ndarray, float, float]:
 
 def even_expr(model, prefix: str, q: float, centre: float, half: float, drive):
     """The model's expression of :func:`even_term` with weight ``q`` (parameters prefix.q, .c, .h)."""
-    qs = model.parameter(f"{prefix}.q", q, "", "weight of the memoryless even term (asymmetry)")
+    qs = model.parameter(f"{prefix}.q", q, "1", "weight of the memoryless even term (asymmetry)")
     cs = model.parameter(f"{prefix}.c", centre, "", "centre of the drive's range (the even term's origin)")
     hs = model.parameter(f"{prefix}.h", half, "", "half the drive's range (the even term's scale)")
     return qs * hs * ((drive - cs) / hs) ** 2
@@ -242,11 +242,11 @@ class InputBoucWen(_DriveCandidate):
         beta, gamma = self.shape(fit.z)
         z_start = float(fit.z[2]) / (beta + gamma)
         model = view.rewrite()
-        kappa = model.parameter("bw.kappa", float(fit.coef[0]), "", "weight of the Bouc-Wen state in the drive")
-        b = model.parameter("bw.beta", beta, "", "Bouc-Wen beta")
-        g = model.parameter("bw.gamma", gamma, "", "Bouc-Wen gamma")
+        kappa = model.parameter("bw.kappa", float(fit.coef[0]), "1", "weight of the Bouc-Wen state in the drive")
+        b = model.parameter("bw.beta", beta, "1", "Bouc-Wen beta")
+        g = model.parameter("bw.gamma", gamma, "1", "Bouc-Wen gamma")
         vr = model.parameter("bw.Vr", Vr, "", "reference drive (largest |drive| of the data)")
-        z = model.state("bw.z", z_start, unit="", doc="Bouc-Wen hysteretic variable (units of V/V_r)")
+        z = model.state("bw.z", z_start, unit="1", doc="Bouc-Wen hysteretic variable (units of V/V_r)")
         vdot = model.input_rate(view.input) / vr
         model.set_rate("bw.z", vdot - b * sp.Abs(vdot) * z - g * vdot * sp.Abs(z))
         expr = view.additive_expr(kappa * vr * z)
@@ -362,7 +362,7 @@ class InputCreep(_DriveCandidate):
         model.bond("creep.src", "creep.node")
         new, qs = {}, []
         for k, i in enumerate(keep, 1):
-            c = model.parameter(f"creep.c{k}", float(fit.coef[i]), "", f"creep ratio of cell {k}", bounds=(0, 1e3))
+            c = model.parameter(f"creep.c{k}", float(fit.coef[i]), "1", f"creep ratio of cell {k}", bounds=(0, 1e3))
             tau = model.parameter(
                 f"creep.tau{k}", float(taus[i]), "s", f"creep time constant of cell {k}", bounds=(0, 1e6)
             )
@@ -487,7 +487,7 @@ class _InputPolynomial(_DriveCandidate):
             self.sign
             * vr
             * sum(
-                model.parameter(name, float(w), "", what, bounds=(0, 1e6)) * shape(D / vr)
+                model.parameter(name, float(w), "1", what, bounds=(0, 1e6)) * shape(D / vr)
                 for name, w, (_, what, shape) in zip(names, fit.coef, self.shapes)
             )
         )

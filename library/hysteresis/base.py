@@ -35,6 +35,13 @@ class VectorOperator(MemoryOperator):
     order of ``vectors`` (attribute names); memory holds one value per entry of the first."""
 
     vectors: tuple[str, ...] = ()
+    #: units of each vector's entries from the input's (v) and the output's (y): name -> (a, b)
+    #: for [entry] = [v]^a·[y]^b (see MemoryOperator.parameter_dimensions)
+    vector_units: dict[str, tuple[int, int]] = {}
+
+    def parameter_dimensions(self) -> dict[str, tuple]:
+        exps = [self.vector_units.get(name) for name in self.vectors for _ in range(getattr(self, name).size)]
+        return {n: e for n, e in zip(self.parameter_names, exps) if e is not None}
 
     def __repr__(self) -> str:
         args = ", ".join(str(getattr(self, name).tolist()) for name in self.vectors)

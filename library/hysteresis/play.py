@@ -57,6 +57,7 @@ class _PlayBank(VectorOperator):
     """Shared part of the play-based operators: n plays, prm = [r_1..r_n, w_1..w_n, ...]."""
 
     vectors = ("thresholds", "weights")
+    vector_units = {"thresholds": (1, 0), "weights": (-1, 1), "prior": (1, 0)}
 
     def __init__(self, thresholds, weights):
         self.thresholds = _vector("thresholds", thresholds, nonneg=True)
@@ -163,6 +164,7 @@ class _DeadZonePI(_PlayBank):
     d_1..d_m, ws_1..ws_m]; S_d(x) = max(0, x - d) for d > 0, min(0, x - d) for d < 0, x for d = 0."""
 
     vectors = ("thresholds", "weights", "deadzones", "dz_weights")
+    vector_units = {**_PlayBank.vector_units, "deadzones": (0, 1), "dz_weights": (0, 0)}
 
     def __init__(self, thresholds, weights, deadzones, dz_weights):
         super().__init__(thresholds, weights)
@@ -227,6 +229,7 @@ class InverseModifiedPI(_DeadZonePI):
     as returned by :meth:`ModifiedPI.inverse`). Memory: the n play outputs (units of x)."""
 
     kind = "modified_pi_inverse"
+    vector_units = {**_DeadZonePI.vector_units, "deadzones": (1, 0)}  # the dead zones act on the input
 
     def c_source(self):
         """The kernels in C, for exported models."""
@@ -340,6 +343,7 @@ class InverseRelativeModifiedPI(_RelativeDeadZones):
     :meth:`RelativeModifiedPI.inverse`); memory = [h_1..h_n, v_r, x_r, s, v_last]."""
 
     kind = "modified_pi_relative_inverse"
+    vector_units = {**_DeadZonePI.vector_units, "deadzones": (1, 0)}  # the dead zones act on the input
 
     def c_source(self):
         """The kernels in C, for exported models."""

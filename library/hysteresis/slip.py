@@ -23,6 +23,7 @@ class MaxwellSlip(VectorOperator):
 
     kind = "maxwell_slip"
     vectors = ("stiffnesses", "breakaway_forces")
+    vector_units = {"stiffnesses": (-1, 1), "breakaway_forces": (0, 1)}
 
     def c_source(self):
         """The kernels in C, for exported models."""
