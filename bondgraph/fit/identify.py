@@ -389,11 +389,19 @@ def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     number of rows; a column that vanishes here up to rounding among them) get 0: any split
     between them would fit, and elsewhere, where they differ, a huge one would be anything
     but a fit."""
+    return bounded_lstsq_free(A, b, lower, upper)[0]
+
+
+def bounded_lstsq_free(A: np.ndarray, b: np.ndarray, lower, upper) -> tuple[np.ndarray, np.ndarray]:
+    """(x, free): :func:`bounded_lstsq`'s solution and a boolean mask of its free columns,
+    those solved from the data: neither on a bound nor set to 0 for want of being told apart
+    (what a derivative of the solution with respect to the columns moves)."""
     norms = np.linalg.norm(A, axis=0)
     out = np.zeros(A.shape[1])
+    free = np.zeros(A.shape[1], bool)
     live = np.nonzero(norms > 1e-60 * max(float(norms.max(initial=0.0)), 1e-300))[0]
     if live.size == 0:
-        return out
+        return out, free
     Q, R, piv = scipy.linalg.qr(A[:, live] / norms[live], mode="economic", pivoting=True)
     d = np.abs(np.diag(R))
     r = int(np.argmin(d > 1e-10 * d[0])) if np.any(d <= 1e-10 * d[0]) else d.size  # the told-apart columns lead
@@ -403,10 +411,13 @@ def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     upper = np.asarray(upper, float)[cols] * norms[cols]
     if np.all(np.isinf(lower)) and np.all(np.isinf(upper)):
         x = scipy.linalg.solve_triangular(R, qb)
+        free[cols] = True
     else:
-        x = lsq_linear(R, qb, bounds=(lower, upper), method="bvls").x
+        sol = lsq_linear(R, qb, bounds=(lower, upper), method="bvls")
+        x = sol.x
+        free[cols] = sol.active_mask == 0
     out[cols] = x / norms[cols]
-    return out
+    return out, free
 
 
 def check_varies(u: np.ndarray, name: str, path: str | None = None) -> None:

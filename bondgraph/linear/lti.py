@@ -25,6 +25,7 @@ The input's rate at the samples is their central difference (one-sided at the en
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 import sympy as sp
@@ -32,14 +33,27 @@ from numba import njit
 from scipy.linalg import expm, matrix_balance, schur, solve_sylvester
 
 from ..equations.system import Equations
-from ..support.errors import UsageError, did_you_mean
+from ..support.errors import ParameterError, UsageError, did_you_mean
+
+#: a state whose magnitude is below this share of its column's largest so far is set to zero
+#: (see :func:`recursion`), checked every :data:`GUARD_EVERY` samples
+FLOOR = 1e-150
+GUARD_EVERY = 64
 
 
 @njit(cache=True, nogil=True)
 def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
     """x_j[k+1] = Ad x_j[k] + Bd u_j[k], y_j[k] = Cd x_j[k] + Dd u_j[k] for every column j of U
     (one input each, states X0[:, j] at k = 0), all columns in one pass over the samples; the
-    outputs are kept at the sample indices ``rows`` (ascending) only: Y[r, j] = y_j[rows[r]]."""
+    outputs are kept at the sample indices ``rows`` (ascending) only: Y[r, j] = y_j[rows[r]].
+
+    The subnormal guard: every :data:`GUARD_EVERY` samples, a state whose magnitude is below
+    :data:`FLOOR` times the largest state magnitude its column has had at these checks is set
+    to zero.  A response that decays for long (a drive resting at zero) would otherwise reach
+    subnormal numbers, on which every multiplication is many times slower.  What the guard
+    drops is below 1e-150 of the states' own scale: the output changes by less than that
+    share of its scale times the filter's gain; a mode would have to decay by 1e-158 within
+    the samples between two checks to reach the subnormals first."""
     n = Ad.shape[0]
     N, m = U.shape
     if m == 1:
@@ -47,9 +61,13 @@ def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
         return
     x = X0.copy()
     xn = np.empty((n, m))
+    peak = np.zeros(m)
     r = 0
     R = rows.shape[0]
     for k in range(N):
+        if k % GUARD_EVERY == 0:
+            for j in range(m):
+                peak[j] = _guard(x[:, j], peak[j])
         keep = r < R and rows[r] == k
         for j in range(m):
             u = U[k, j]
@@ -71,14 +89,30 @@ def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
 
 
 @njit(cache=True, nogil=True)
+def _guard(x, peak):
+    """The subnormal guard of :func:`recursion` on one column's states ``x`` (in place);
+    returns the column's new peak."""
+    for i in range(x.shape[0]):
+        peak = max(peak, abs(x[i]))
+    floor = FLOOR * peak
+    for i in range(x.shape[0]):
+        if abs(x[i]) < floor:
+            x[i] = 0.0
+    return peak
+
+
+@njit(cache=True, nogil=True)
 def _one_column(Ad, b, c, d, x, u, rows, y):
     """:func:`recursion` for a single input column (vectors b, c, x, u, y; scalar d): the same
     arithmetic in the same order, in a loop about twice as fast; ``x`` is overwritten."""
     n = Ad.shape[0]
     xn = np.empty(n)
+    peak = 0.0
     r = 0
     R = rows.shape[0]
     for k in range(u.shape[0]):
+        if k % GUARD_EVERY == 0:
+            peak = _guard(x, peak)
         if r < R and rows[r] == k:
             acc = d * u[k]
             for i in range(n):
@@ -176,6 +210,8 @@ class LTI:
         #: names of the parameters the linear dynamics depend on, in the order of ``eqs.params``
         self.parameters = [p.name for p in eqs.params if p in used]
         self._fn = sp.lambdify([eqs.params], mats, modules="numpy", cse=True)
+        self._mats = mats
+        self._dfn = None
         self.n = len(xs)
 
     def matrices(self, th: np.ndarray):
@@ -184,6 +220,32 @@ class LTI:
             for M, shape in zip(self._fn(np.asarray(th, float)), [(self.n, self.n), (self.n, 1), (1, self.n), (1, 1)])
         )
         return A, B, C, D
+
+    def derivatives(self, th: np.ndarray, names: Sequence[str]):
+        """(∂A, ∂B, ∂C, ∂D) at θ with respect to the parameters ``names``, stacked along a first
+        axis in that order: the symbolic derivatives of the matrices, compiled to numeric
+        functions of θ on first use (zero for a parameter the dynamics do not depend on).
+
+        Raises
+        ------
+        ParameterError
+            A name that is no parameter of the model."""
+        known = [p.name for p in self.eqs.params]
+        for n in names:
+            if n not in known:
+                raise ParameterError(did_you_mean(n, known, "parameter"))
+        if self._dfn is None:
+            syms = [p for p in self.eqs.params if p.name in self.parameters]
+            self._dfn = sp.lambdify([self.eqs.params], [M.diff(p) for p in syms for M in self._mats], "numpy", cse=True)
+        flat = self._dfn(np.asarray(th, float))
+        shapes = [(self.n, self.n), (self.n, 1), (1, self.n), (1, 1)]
+        out = [np.zeros((len(names), *shape)) for shape in shapes]
+        for i, n in enumerate(names):
+            if n in self.parameters:
+                at = 4 * self.parameters.index(n)
+                for M, shape, dM in zip(out, shapes, flat[at : at + 4]):
+                    M[i] = np.array(dM, dtype=float).reshape(shape)
+        return tuple(out)
 
     def state_space(self, th: np.ndarray, cut: float | None = None) -> StateSpace:
         """The numeric model at θ; modes faster than ``cut`` (rad/s) residualised."""
