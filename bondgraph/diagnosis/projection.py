@@ -192,14 +192,7 @@ def projected_fit(
             J = projection_jacobian(at["A"], at["c"], at["free"], at["r"] * scale, dA) / scale
             if np.all(np.isfinite(J)):
                 return J
-        J = np.empty((idx.size, z.size))
-        for i in range(z.size):  # least_squares' forward differences (diff_step 1e-4)
-            h = 1e-4 * (1.0 if z[i] >= 0 else -1.0) * max(1.0, abs(z[i]))
-            h = -h if not lb[i] <= z[i] + h <= ub[i] else h
-            zi = np.array(z, float)
-            zi[i] += h
-            J[:, i] = (resid(zi) - at["r"]) / (zi[i] - z[i])
-        return J
+        return forward_differences(resid, z, at["r"], lb, ub)
 
     def final(z):
         A = columns(z, None)
@@ -241,6 +234,27 @@ def projected_fit(
     width = np.where(np.isfinite(ub - lb), ub - lb, 1.0)
     at = [i for i in range(x.size) if x[i] - lb[i] < 1e-3 * width[i] or ub[i] - x[i] < 1e-3 * width[i]]
     return Projected(x, c, A, cost, nfev, success, message, at)
+
+
+def forward_step(z: np.ndarray, i: int, lb: np.ndarray, ub: np.ndarray) -> np.ndarray:
+    """z moved along its coordinate i by ``least_squares``' forward-difference step (relative
+    step 1e-4, at least 1e-4), away from the bound it would cross."""
+    h = 1e-4 * (1.0 if z[i] >= 0 else -1.0) * max(1.0, abs(z[i]))
+    out = np.array(z, float)
+    out[i] += -h if not lb[i] <= z[i] + h <= ub[i] else h
+    return out
+
+
+def forward_differences(fun: Callable, z: np.ndarray, f0: np.ndarray, lb, ub) -> np.ndarray:
+    """The forward-difference Jacobian of ``fun`` at ``z`` (where it is ``f0``) that
+    ``least_squares(diff_step=1e-4)`` takes (steps of :func:`forward_step`): the fallback of
+    an analytic Jacobian that is not available at some point."""
+    lb, ub = np.asarray(lb, float), np.asarray(ub, float)
+    J = np.empty((np.size(f0), z.size))
+    for i in range(z.size):
+        zi = forward_step(z, i, lb, ub)
+        J[:, i] = (fun(zi) - f0) / (zi[i] - z[i])
+    return J
 
 
 def projection_jacobian(A: np.ndarray, c: np.ndarray, free: np.ndarray, r: np.ndarray, dA: np.ndarray) -> np.ndarray:

@@ -33,6 +33,7 @@ from scipy.optimize import least_squares, lsq_linear
 
 from ..data import Dataset, uniform_step
 from ..linear.lti import LTI, first_input, first_output
+from ..linear.sensitivity import sensitivity
 from ..model.graph import Model
 from ..model.signals import PiecewiseLinear
 from ..numerics.simulate import SimulationError, Simulator
@@ -234,6 +235,29 @@ class Identification:
             deadline=deadline,
         )
         return res.outputs[self.output]
+
+    def sensitivities(
+        self,
+        values: Mapping[str, float] | None,
+        names: Sequence[str],
+        inputs: np.ndarray | None = None,
+        rows: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """The exact linear route's output for each column of ``inputs`` (input samples, one
+        per data time; default the record's input) and its derivatives with respect to the
+        parameters ``names``, at the sample indices ``rows`` (every sample for None): (Y (rows,
+        columns), dY (names, rows, columns)), from the output sensitivities of
+        :mod:`bondgraph.linear.sensitivity`, or None off the exact linear route, from a state
+        other than rest, or for a model without a well-conditioned modal form."""
+        if self.lti is None:
+            return None
+        th = self.sim.theta(values)
+        if np.any(self.sim.initial_state(th)):
+            return None
+        modal = sensitivity(self.lti, th, names, self.cut)
+        if modal is None:
+            return None
+        return modal.time(self.dt, self.u if inputs is None else inputs, rows)
 
     def offset(self, pred: np.ndarray) -> float:
         return float(np.mean(self.y[self.fit_idx] - pred[self.fit_idx]))
