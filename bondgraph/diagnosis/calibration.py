@@ -373,21 +373,35 @@ def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, 
     if w.size < 2 * len(z0) + 2:
         return None
 
+    names = [s.name for s in specs]
+    last: dict = {"z": None}
+
+    def modal_at(z):  # (values, H, dH) of the linear route at z (the last one kept), or None
+        if last["z"] is None or not np.array_equal(last["z"], z):
+            vals = dict(values)
+            vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
+            modal = sensitivity(ctx.lti, ctx.ident.sim.theta(vals), names, ctx.cut)
+            last.update(z=np.array(z, float), at=None if modal is None else (vals, *modal.frequency(w)))
+        return last["at"]
+
     def frf_of(z):
-        vals = dict(values)
-        vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
-        Hm = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w) * ctx.reading_factor(w)
+        at = modal_at(z)
+        if at is None:  # no modal form: the state space's own frequency response
+            vals = dict(values)
+            vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
+            Hl = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w)
+        else:
+            Hl = at[1]
+        Hm = Hl * ctx.reading_factor(w)
         return Hm * np.exp(-1j * w * z[-1] * ctx.dt) if delay else Hm
 
     def derivatives(z):  # ∂ log H/∂z: the output sensitivities' (log parameters), -iω·dt for the delay
-        vals = dict(values)
-        vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
-        modal = sensitivity(ctx.lti, ctx.ident.sim.theta(vals), [s.name for s in specs], ctx.cut)
-        if modal is None:
+        at = modal_at(z)
+        if at is None:
             return None
-        Hl, dH = modal.frequency(w)
+        vals, Hl, dH = at
         with np.errstate(divide="ignore", invalid="ignore"):
-            g = dH / Hl * np.array([vals[s.name] for s in specs])[:, None]
+            g = dH / Hl * np.array([vals[n] for n in names])[:, None]
         return np.vstack([g, -1j * w * ctx.dt]) if delay else g
 
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)

@@ -178,8 +178,13 @@ def polynomial_term(term: Callable, partner: bool):
     """``term(c, r2, x, a)`` (``a`` None without a partner) as a polynomial in x and a plus at
     most one smooth saturation h·tanh(g·x) of the element's own variable, the coefficients
     functions of (c, r2): a function (c, r2) → (P, (h, g)) with
-    term = Σ P[i, j]·x^i·a^j + h·tanh(g·x), made once per process and formula.  Any other
+    term = Σ P[i, j]·x^i·a^j + h·tanh(g·x), made once per process and formula (and looked up
+    by the function itself after its first call).  Any other
     term raises :class:`NotConverged` (the caller then integrates)."""
+    try:
+        return _TERMS[(term, partner)]  # the same function again: no sympy
+    except (KeyError, TypeError):
+        pass
     c, r2, x, a = sp.symbols("c r2 x a", real=True)
     expr = sp.expand(sp.sympify(term(c, r2, x, a if partner else None)))
     key = sp.srepr(expr)
@@ -213,6 +218,10 @@ def polynomial_term(term: Callable, partner: bool):
             return np.array(P, float), (hg if hg[0] != 0.0 and np.all(np.isfinite(hg)) else np.zeros(2))
 
         _TERMS[key] = coefficients
+    try:
+        _TERMS[(term, partner)] = _TERMS[key]
+    except TypeError:  # an unhashable callable: its formula's key only
+        pass
     return _TERMS[key]
 
 

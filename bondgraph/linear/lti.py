@@ -211,7 +211,7 @@ class LTI:
         self.parameters = [p.name for p in eqs.params if p in used]
         self._fn = sp.lambdify([eqs.params], mats, modules="numpy", cse=True)
         self._mats = mats
-        self._dfn = None
+        self._dfn = self._analytic = None
         self.n = len(xs)
 
     def matrices(self, th: np.ndarray):
@@ -223,8 +223,11 @@ class LTI:
 
     def derivatives(self, th: np.ndarray, names: Sequence[str]):
         """(∂A, ∂B, ∂C, ∂D) at θ with respect to the parameters ``names``, stacked along a first
-        axis in that order: the symbolic derivatives of the matrices, compiled to numeric
-        functions of θ on first use (zero for a parameter the dynamics do not depend on).
+        axis in that order (zero for a parameter the dynamics do not depend on).  By the
+        complex step, ∂M/∂θ_j = Im M(θ + ih·e_j)/h with h = 1e-20·|θ_j| (exact to rounding, no
+        difference taken), when the matrices are analytic in θ (arithmetic, powers and the
+        functions of :data:`ANALYTIC`); else from their symbolic derivatives, compiled on first
+        use.
 
         Raises
         ------
@@ -234,17 +237,32 @@ class LTI:
         for n in names:
             if n not in known:
                 raise ParameterError(did_you_mean(n, known, "parameter"))
-        if self._dfn is None:
-            syms = [p for p in self.eqs.params if p.name in self.parameters]
-            self._dfn = sp.lambdify([self.eqs.params], [M.diff(p) for p in syms for M in self._mats], "numpy", cse=True)
-        flat = self._dfn(np.asarray(th, float))
         shapes = [(self.n, self.n), (self.n, 1), (1, self.n), (1, 1)]
         out = [np.zeros((len(names), *shape)) for shape in shapes]
+        th = np.asarray(th, float)
+        if self._analytic is None:
+            self._analytic = all(
+                type(f) in ANALYTIC for M in self._mats for e in M for f in e.atoms(sp.core.function.Application)
+            )
+        analytic = self._analytic
         for i, n in enumerate(names):
-            if n in self.parameters:
+            if n not in self.parameters:
+                continue
+            if analytic:
+                j = known.index(n)
+                h = 1e-20 * max(abs(th[j]), 1e-280)
+                tc = th.astype(complex)
+                tc[j] += 1j * h
+                parts = [np.array(M, dtype=complex).imag / h for M in self._fn(tc)]
+            else:
+                if self._dfn is None:
+                    syms = [p for p in self.eqs.params if p.name in self.parameters]
+                    diffs = [M.diff(p) for p in syms for M in self._mats]
+                    self._dfn = sp.lambdify([self.eqs.params], diffs, "numpy", cse=True)
                 at = 4 * self.parameters.index(n)
-                for M, shape, dM in zip(out, shapes, flat[at : at + 4]):
-                    M[i] = np.array(dM, dtype=float).reshape(shape)
+                parts = [np.array(dM, dtype=float) for dM in self._dfn(th)[at : at + 4]]
+            for M, shape, dM in zip(out, shapes, parts):
+                M[i] = dM.reshape(shape)
         return tuple(out)
 
     def state_space(self, th: np.ndarray, cut: float | None = None) -> StateSpace:
@@ -271,6 +289,11 @@ def first_output(eqs: Equations) -> str:
         raise UsageError(f"{eqs.model.name} declares no output")
     return next(iter(eqs.outputs))
 
+
+#: functions of the parameters through which :meth:`LTI.derivatives` takes the complex step
+ANALYTIC = frozenset(
+    {sp.exp, sp.log, sp.sin, sp.cos, sp.tan, sp.sinh, sp.cosh, sp.tanh, sp.asin, sp.acos, sp.atan, sp.asinh, sp.atanh}
+)
 
 #: eigenvector matrices worse conditioned than this are not used for the modal sum
 MODAL_COND = 1e6
