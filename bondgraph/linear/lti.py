@@ -190,29 +190,13 @@ class LTI:
             raise UsageError(did_you_mean(output, list(eqs.outputs), "output"))
         self.eqs = eqs
         self.input, self.output = input, output
-        u = eqs.inputs[names.index(input)]
-        xs = eqs.state_symbols
-        rates = [eqs.rates[s] for s in xs]
-        y = [eqs.outputs[output]]
-        mats = [eqs.jacobian(rates, xs), eqs.jacobian(rates, [u]), eqs.jacobian(y, xs), eqs.jacobian(y, [u])]
-        moving = set(xs) | set(eqs.inputs) | set(eqs.input_rates) | {ob.symbol for ob in eqs.operators}
-        others = [s for s in eqs.inputs if s != u]
-        # affine in states and every input (so the Jacobians say everything): the slopes in x
-        # and u move with nothing; the slopes in the other inputs move with no state or input
-        self.exact = (
-            not eqs.operators
-            and all(not (e.free_symbols & moving) for M in mats for e in M)
-            and all(not (e.free_symbols & (set(xs) | set(eqs.inputs))) for e in eqs.jacobian(rates + y, others))
-        )
-        zero = {s: 0 for s in list(moving - set(xs) - {u}) + others}
-        mats = [M.xreplace(zero) for M in mats]
-        used = set().union(*(e.free_symbols for M in mats for e in M))
+        mats, self.exact, used = linear_matrices(eqs, [input], [output])
         #: names of the parameters the linear dynamics depend on, in the order of ``eqs.params``
         self.parameters = [p.name for p in eqs.params if p in used]
         self._fn = sp.lambdify([eqs.params], mats, modules="numpy", cse=True)
         self._mats = mats
         self._dfn = self._analytic = None
-        self.n = len(xs)
+        self.n = len(eqs.state_symbols)
 
     def matrices(self, th: np.ndarray):
         A, B, C, D = (
@@ -273,6 +257,30 @@ class LTI:
     def response(self, th: np.ndarray, dt: float, U: np.ndarray, x0: np.ndarray | None = None) -> np.ndarray:
         """Output of the full model for each column of ``U`` (see :meth:`StateSpace.response`)."""
         return self.state_space(th).response(dt, U, x0)
+
+
+def linear_matrices(eqs: Equations, inputs: Sequence[str], outputs: Sequence[str]):
+    """The symbolic (A, B, C, D) of the inputs ``inputs`` (names) → the outputs ``outputs``,
+    whether they say everything (the model is affine in its states and every input: the slopes
+    in the states and these inputs move with nothing, those in the other inputs with no state
+    or input; the route is then exact) and the parameters they depend on.  The other inputs,
+    the input rates and operator outputs are set to zero.  Returns (matrices, exact, symbols)."""
+    names = [str(u) for u in eqs.inputs]
+    us = [eqs.inputs[names.index(i)] for i in inputs]
+    xs = eqs.state_symbols
+    rates = [eqs.rates[s] for s in xs]
+    ys = [eqs.outputs[o] for o in outputs]
+    mats = [eqs.jacobian(rates, xs), eqs.jacobian(rates, us), eqs.jacobian(ys, xs), eqs.jacobian(ys, us)]
+    moving = set(xs) | set(eqs.inputs) | set(eqs.input_rates) | {ob.symbol for ob in eqs.operators}
+    others = [s for s in eqs.inputs if s not in us]
+    exact = (
+        not eqs.operators
+        and all(not (e.free_symbols & moving) for M in mats for e in M)
+        and all(not (e.free_symbols & (set(xs) | set(eqs.inputs))) for e in eqs.jacobian(rates + ys, others))
+    )
+    zero = {s: 0 for s in list(moving - set(xs) - set(us)) + others}
+    mats = [M.xreplace(zero) for M in mats]
+    return mats, exact, set().union(*(e.free_symbols for M in mats for e in M))
 
 
 def first_input(eqs: Equations) -> str:
