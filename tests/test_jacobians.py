@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import sympy as sp
 from test_diagnosis_friction import resonator
 
 import bondgraph as bg
@@ -114,6 +115,32 @@ def test_the_apa_models_sensitivities_through_its_symbolic_derivatives():
         np.testing.assert_allclose(dY[k], fd, rtol=0, atol=1e-5 * np.abs(fd).max() + 1e-30)
     with pytest.raises(bg.ParameterError, match="no_such"):
         lti.derivatives(th, ["no_such"])
+
+
+def spring_mass(compliance):
+    """A mass on a spring (compliance ``compliance(kk)``) and a damper, force in, x out."""
+    g = bg.Model("spring_mass")
+    F = g.input("F", "N")
+    kk, cc = g.parameter("kk", 1e-4, "m/N"), g.parameter("cc", 2.0, "N*s/m")
+    g.add(bg.Se("src", F), bg.J1("v"), bg.I("m", 1.0), bg.C("k", compliance(kk)), bg.R("c", cc))
+    g.chain("src", "v", "m")
+    g.bond("v", "k")
+    g.bond("v", "c")
+    g.output("x", "k.q", "m")
+    return g
+
+
+def test_the_complex_step_and_the_symbolic_derivatives_agree():
+    """Matrices analytic in θ take the complex step; an |·| (not analytic) the symbolic route."""
+    out = []
+    for compliance, analytic in ((lambda k: k, True), (lambda k: sp.Abs(k), False)):
+        eqs = bg.derive(spring_mass(compliance))
+        lti = LTI(eqs)
+        out.append(lti.derivatives(bg.Simulator(eqs).theta(), ["kk", "cc"]))
+        assert lti._analytic is analytic
+    for a, b in zip(*out):
+        np.testing.assert_allclose(a, b, rtol=1e-14)
+    np.testing.assert_allclose(out[0][0][0], [[0.0, 1e8], [0.0, 0.0]], rtol=1e-14)  # ∂(1/kk)/∂kk = −1/kk²
 
 
 def test_a_near_defective_model_has_no_modal_sensitivities():
