@@ -50,7 +50,8 @@ def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
     The subnormal guard: every :data:`GUARD_EVERY` samples, a state whose magnitude is below
     :data:`FLOOR` times the largest state magnitude its column has had at these checks is set
     to zero.  A response that decays for long (a drive resting at zero) would otherwise reach
-    subnormal numbers, on which every multiplication is many times slower.  What the guard
+    subnormal numbers, on which arithmetic is slower (1.5x for this loop on the machine of
+    benchmarks/README.md, far more on some processors) and which never reach zero.  What the guard
     drops is below 1e-150 of the states' own scale: the output changes by less than that
     share of its scale times the filter's gain; a mode would have to decay by 1e-158 within
     the samples between two checks to reach the subnormals first."""
