@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 import sympy as sp
 from test_diagnosis_friction import resonator
+from test_parallel_fits import decaying_sine
 
 import bondgraph as bg
 from bondgraph.data import Dataset
@@ -199,15 +200,7 @@ def test_the_projection_jacobian_is_the_derivative_of_the_projected_residual():
 
 
 def test_a_fit_with_the_analytic_jacobian_is_the_finite_difference_fit():
-    t = np.linspace(0.0, 2.0, 4000)
-    y = 0.7 * np.exp(-1.3 * t) * np.sin(2 * math.pi * 3.1 * t) + 0.05
-    y = y + 1e-3 * np.random.default_rng(3).standard_normal(t.size)
-    idx = np.arange(0, t.size, 2)
-
-    def columns(z, rows):
-        a, f = math.exp(z[0]), math.exp(z[1])
-        tt = t if rows is None else t[rows]
-        return np.column_stack([np.exp(-a * tt) * np.sin(2 * math.pi * f * tt), np.ones(tt.size)])
+    t, y, idx, columns = decaying_sine()
 
     def derivatives(z, rows):
         a, f = math.exp(z[0]), math.exp(z[1])
