@@ -106,8 +106,8 @@ def jacobian_map(threads: int) -> Iterator[Callable | None]:
     """A map for ``least_squares(workers=...)``: the finite-difference Jacobian's columns in
     ``threads`` threads (each call in a copy of the caller's context, so its time budget holds
     there too), or None (serial) for one.  It gains where the evaluations spend their time in
-    compiled kernels that release the GIL (the exact linear route's recursion); the columns,
-    and so the fit, are the serial ones."""
+    compiled kernels that release the GIL (the exact linear recursion, the Lur'e stepping);
+    the columns, and so the fit, are the serial ones."""
     if threads < 2:
         yield None
         return
