@@ -2,10 +2,11 @@
 
 ``fork_map`` shares independent calls between this process and forked children (the
 calibration's frequency-response starts); ``projected_fit(threads=2)`` evaluates the
-finite-difference Jacobian's columns in threads (the exact linear route's recursion releases
-the GIL).  Truths: an exponentially decaying sine (amplitude and offset solved, decay rate and
-frequency fitted), and the tone record of test_diagnosis_strained (a lightly damped resonator
-whose calibration ends on a bound and is retried from random starts: every parallel path).
+finite-difference Jacobian's columns in threads (fits without analytic derivatives: the
+compiled kernels release the GIL).  Truths: an exponentially decaying sine (amplitude and
+offset solved, decay rate and frequency fitted), and the tone record of
+test_diagnosis_strained (a lightly damped resonator whose calibration ends on a bound and is
+retried from random starts: the frequency-response starts in forked children).
 """
 
 import math
@@ -39,17 +40,23 @@ def test_fork_map_raises_a_childs_exception_here():
         fork_map(_square_or_fail, [1, 5, 2, 3], 2)  # item 5 is the child's
 
 
-def test_threaded_jacobians_give_the_serial_fit():
+def decaying_sine():
+    """(t, y, fit rows, columns(z, rows)): 0.7·e^(−1.3t)·sin(2π·3.1t) + 0.05 with noise of 1e-3;
+    the columns of z = (log decay rate, log frequency): the sine and a constant."""
     t = np.linspace(0.0, 2.0, 4000)
     y = 0.7 * np.exp(-1.3 * t) * np.sin(2 * math.pi * 3.1 * t) + 0.05
     y = y + 1e-3 * np.random.default_rng(3).standard_normal(t.size)
-    idx = np.arange(0, t.size, 2)
 
     def columns(z, rows):
         a, f = math.exp(z[0]), math.exp(z[1])
         tt = t if rows is None else t[rows]
         return np.column_stack([np.exp(-a * tt) * np.sin(2 * math.pi * f * tt), np.ones(tt.size)])
 
+    return t, y, np.arange(0, t.size, 2), columns
+
+
+def test_threaded_jacobians_give_the_serial_fit():
+    t, y, idx, columns = decaying_sine()
     fits = [
         projected_fit(columns, y, idx, [0.0, math.log(2.5)], [-3, 0], [3, 2], [-np.inf] * 2, [np.inf] * 2, threads=n)
         for n in (1, 2)

@@ -41,11 +41,12 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..linear.sensitivity import sensitivity
 from ..support import config
 from ..support.errors import UsageError
 from .context import SENSOR_GAIN, Context, State, welch, welch_length
 from .pool import fork_map
-from .projection import Param, projected_fit
+from .projection import Param, forward_differences, projected_fit
 
 
 @dataclass
@@ -296,22 +297,39 @@ def fit_frf(
     random: int = 12,
     max_nfev: int = 60,
     workers: int = 1,
+    derivatives=None,
 ):
     """Multi-start fit of ``frf_of(z)`` (complex, at ``w``) to the measured ``H``: log-magnitude
     (its coherence-weighted mean removed: the sensor gain is solved later) and wrapped phase,
     weighted by √coherence.  Starts: ``z0``, ``starts``, and ``random`` perturbations of z0
-    (σ = 0.5 in z), fitted in ``workers`` processes (the same result as one).  Returns the
-    best (z, cost) or None."""
+    (σ = 0.5 in z), fitted in ``workers`` processes (the same result as one).  ``derivatives(z)``,
+    when given, returns ∂ log frf_of(z)/∂z (complex, one row per z) or None: the Jacobian then
+    comes from it (from forward differences where it returns None).  Returns the best (z, cost)
+    or None."""
     wt = np.sqrt(coh)
     share = coh / np.sum(coh)  # the weights of the mean log-magnitude
     log_mag, phase = np.log(np.abs(H) + 1e-300), np.angle(H)
+    last: dict = {"z": None}
 
     def fres(z):  # log|·| and angle: the complex log's parts, 3x cheaper
         Hm = frf_of(z)
         re = np.log(np.abs(Hm) + 1e-300) - log_mag
         im = (np.angle(Hm) - phase + np.pi) % (2 * np.pi) - np.pi  # wrapped to [-π, π)
         r = np.concatenate([wt * (re - share @ re), wt * im])
-        return r if np.all(np.isfinite(r)) else np.full(r.size, 1e3)
+        ok = bool(np.all(np.isfinite(r)))
+        last.update(z=np.array(z, float), r=r, ok=ok)
+        return r if ok else np.full(r.size, 1e3)
+
+    def jac(z):  # log|H| and the phase are the real and imaginary parts of log H
+        if last["z"] is None or not np.array_equal(last["z"], z):
+            fres(z)
+        if not last["ok"]:
+            return np.zeros((2 * w.size, z.size))
+        g = derivatives(z)
+        if g is None or not np.all(np.isfinite(g)):
+            return forward_differences(fres, z, last["r"], lb, ub)
+        re = g.real.T
+        return np.concatenate([wt[:, None] * (re - share @ re), wt[:, None] * g.imag.T])
 
     rng = np.random.default_rng(1)
     points = [np.asarray(z0, float)] + [np.asarray(s, float) for s in starts]
@@ -319,7 +337,13 @@ def fit_frf(
 
     def solve(p):
         try:
-            sol = least_squares(fres, np.clip(p, lb, ub), bounds=(lb, ub), max_nfev=max_nfev)
+            sol = least_squares(
+                fres,
+                np.clip(p, lb, ub),
+                jac="2-point" if derivatives is None else jac,
+                bounds=(lb, ub),
+                max_nfev=max_nfev,
+            )
         except (ValueError, np.linalg.LinAlgError):
             return None
         return sol.x, float(sol.cost)
@@ -349,16 +373,44 @@ def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, 
     if w.size < 2 * len(z0) + 2:
         return None
 
+    names = [s.name for s in specs]
+    last: dict = {"z": None}
+
+    def modal_at(z):  # (values, H, dH) of the linear route at z (the last one kept), or None
+        if last["z"] is None or not np.array_equal(last["z"], z):
+            vals = dict(values)
+            vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
+            modal = sensitivity(ctx.lti, ctx.ident.sim.theta(vals), names, ctx.cut)
+            last.update(z=np.array(z, float), at=None if modal is None else (vals, *modal.frequency(w)))
+        return last["at"]
+
     def frf_of(z):
-        vals = dict(values)
-        vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
-        Hm = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w) * ctx.reading_factor(w)
+        at = modal_at(z)
+        if at is None:  # no modal form: the state space's own frequency response
+            vals = dict(values)
+            vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
+            Hl = ctx.lti.state_space(ctx.ident.sim.theta(vals), ctx.cut).frequency_response(w)
+        else:
+            Hl = at[1]
+        Hm = Hl * ctx.reading_factor(w)
         return Hm * np.exp(-1j * w * z[-1] * ctx.dt) if delay else Hm
+
+    def derivatives(z):  # ∂ log H/∂z: the output sensitivities' (log parameters), -iω·dt for the delay
+        at = modal_at(z)
+        if at is None:
+            return None
+        vals, Hl, dH = at
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = dH / Hl * np.array([vals[n] for n in names])[:, None]
+        return np.vstack([g, -1j * w * ctx.dt]) if delay else g
 
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
     fits = [
         f
-        for f in (fit_frf(frf_of, z0, lb, ub, w, sign * H, coh, workers=workers) for sign in (1.0, -1.0))
+        for f in (
+            fit_frf(frf_of, z0, lb, ub, w, sign * H, coh, workers=workers, derivatives=derivatives)
+            for sign in (1.0, -1.0)
+        )
         if f is not None
     ]
     return min(fits, key=lambda f: f[1])[0] if fits else None
@@ -387,7 +439,8 @@ def _fit(
     output's delay behind the drive (samples, last in z) too; with ``resample``, when the
     frequency response's start ends on a search bound, the best of a random sample of starts
     too; ``workers``: processes for the frequency response's starts, threads for the time
-    series' Jacobians.  (values, delay, raw prediction, solution, route)."""
+    series' finite-difference Jacobians (off the exact linear route; on it the Jacobians come
+    from the output sensitivities).  (values, delay, raw prediction, solution, route)."""
     idx = ctx.ident.fit_idx
     route = "time series"
     z0 = np.append(z0, 0.0) if delay else np.asarray(z0, float)
@@ -405,6 +458,29 @@ def _fit(
         raw = raw if rows is None else raw[rows]
         return np.column_stack([raw, np.ones(raw.size)] + ([trend if rows is None else trend[rows]] if drift else []))
 
+    def derivatives(z, rows):  # ∂columns/∂z: the output sensitivities, the delay's by the drive's
+        vals = dict(nominal)
+        vals.update({s.name: s.from_z(zi) for s, zi in zip(specs, z)})
+        U = None
+        if delay:  # the response to the drive's derivative with respect to the delay (samples)
+            step = 1e-3
+            U = np.column_stack(
+                [
+                    ctx.drive_with_delay(z[-1]),
+                    (ctx.drive_with_delay(z[-1] + step) - ctx.drive_with_delay(z[-1] - step)) / (2 * step),
+                ]
+            )
+        out = ctx.ident.sensitivities(vals, [s.name for s in specs], U, rows)
+        if out is None:
+            return None
+        Y, dY = out
+        dA = np.zeros((z.size, rows.size, lin))
+        dA[: len(specs), :, 0] = dY[:, :, 0] * np.array([vals[s.name] for s in specs])[:, None]  # log parameters
+        if delay:
+            dA[-1, :, 0] = Y[:, 1]
+        return dA
+
+    exact = derivatives if ctx.lti is not None else None
     trend = ctx.trend if drift else None
     lin = 3 if drift else 2
     lb, ub = _z_bounds(specs, max_delay(ctx) if delay else None)
@@ -423,6 +499,7 @@ def _fit(
         max_nfev=40,
         starts=([] if z_frf is None else [z0]) + list(starts),
         threads=workers,
+        derivatives=exact,
     )
     if resample and z_frf is not None and [i for i in sol.at_bounds if i < len(specs)]:
         # the frequency response's start led to a search bound: that may be a local minimum
@@ -441,6 +518,7 @@ def _fit(
             max_nfev=40,
             starts=sampled[1:],
             threads=workers,
+            derivatives=exact,
         )
         sol = other if other.cost < sol.cost else sol
     if not sol.success:  # the baseline must be the best linear explanation: go on from the best point
@@ -455,6 +533,7 @@ def _fit(
             [np.inf] * lin,
             max_nfev=int(40 * config.get("diagnosis.polish_effort")),
             threads=workers,
+            derivatives=exact,
         )
         sol = more if more.cost <= sol.cost else sol
     values = dict(nominal)

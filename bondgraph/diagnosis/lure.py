@@ -25,7 +25,7 @@ import sympy as sp
 from numba import njit
 
 from ..equations.derivation import derive
-from ..linear.lti import LTI, foh
+from ..linear.lti import foh, linear_matrices
 from ..model.elements import C, I, R
 from ..model.graph import Model, Quantity
 from ..support.errors import BondGraphError
@@ -87,9 +87,12 @@ class Lure:
             [output] + [f"diag.x:{el}" for el in elements] + [f"diag.a:{el}" for el in elements if partners.get(el)]
         )
         self.inputs = [input] + ws
-        self.lti = {(i, o): LTI(eqs, i, o) for i in self.inputs for o in self.outputs}
-        if not all(lti.exact for lti in self.lti.values()):
+        mats, exact, _ = linear_matrices(eqs, self.inputs, self.outputs)
+        if not exact:
             raise BondGraphError("the model is not linear in its states")
+        n, m, p = len(eqs.state_symbols), len(self.inputs), len(self.outputs)
+        self._fn = sp.lambdify([eqs.params], mats, modules="numpy", cse=True)
+        self._shapes = [(n, n), (n, m), (p, n), (p, m)]
         self.partners = [bool(partners.get(el)) for el in elements]
         self.eqs, self.dt = eqs, dt
 
@@ -189,12 +192,7 @@ class Lure:
 
     def _matrices(self, th: np.ndarray):
         """A, B (inputs: drive, w_0..), C (rows: self.outputs), D of the augmented model."""
-        first = self.lti[(self.inputs[0], self.outputs[0])].matrices(th)
-        A = first[0]
-        B = np.hstack([self.lti[(i, self.outputs[0])].matrices(th)[1] for i in self.inputs])
-        C = np.vstack([self.lti[(self.inputs[0], o)].matrices(th)[2] for o in self.outputs])
-        D = np.array([[self.lti[(i, o)].matrices(th)[3][0, 0] for i in self.inputs] for o in self.outputs])
-        return A, B, C, D
+        return tuple(np.array(M, dtype=float).reshape(shape) for M, shape in zip(self._fn(th), self._shapes))
 
     def _run(self, values, u, term, coefs, active, active_new=True):
         th = self.theta(values)
@@ -240,8 +238,13 @@ def polynomial_term(term: Callable, partner: bool):
     """``term(c, r2, x, a)`` (``a`` None without a partner) as a polynomial in x and a plus at
     most one smooth saturation h·tanh(g·x) of the element's own variable, the coefficients
     functions of (c, r2): a function (c, r2) → (P, (h, g)) with
-    term = Σ P[i, j]·x^i·a^j + h·tanh(g·x), made once per process and formula.  Any other
+    term = Σ P[i, j]·x^i·a^j + h·tanh(g·x), made once per process and formula (and looked up
+    by the function itself after its first call).  Any other
     term raises :class:`NotConverged` (the caller then integrates)."""
+    try:
+        return _TERMS[(term, partner)]  # the same function again: no sympy
+    except (KeyError, TypeError):
+        pass
     c, r2, x, a = sp.symbols("c r2 x a", real=True)
     expr = sp.expand(sp.sympify(term(c, r2, x, a if partner else None)))
     key = sp.srepr(expr)
@@ -275,6 +278,10 @@ def polynomial_term(term: Callable, partner: bool):
             return np.array(P, float), (hg if hg[0] != 0.0 and np.all(np.isfinite(hg)) else np.zeros(2))
 
         _TERMS[key] = coefficients
+    try:
+        _TERMS[(term, partner)] = _TERMS[key]
+    except TypeError:  # an unhashable callable: its formula's key only
+        pass
     return _TERMS[key]
 
 

@@ -16,9 +16,10 @@ from dataclasses import dataclass
 from typing import Callable, Iterator, Sequence
 
 import numpy as np
+from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
-from ..fit.identify import bounded_lstsq
+from ..fit.identify import bounded_lstsq, bounded_lstsq_free
 from ..numerics.simulate import SimulationTimeout
 
 #: the time (time.monotonic) after which fits in this context stop at their best point so far
@@ -105,8 +106,8 @@ def jacobian_map(threads: int) -> Iterator[Callable | None]:
     """A map for ``least_squares(workers=...)``: the finite-difference Jacobian's columns in
     ``threads`` threads (each call in a copy of the caller's context, so its time budget holds
     there too), or None (serial) for one.  It gains where the evaluations spend their time in
-    compiled kernels that release the GIL (the exact linear route's recursion); the columns,
-    and so the fit, are the serial ones."""
+    compiled kernels that release the GIL (the exact linear recursion, the Lur'e stepping);
+    the columns, and so the fit, are the serial ones."""
     if threads < 2:
         yield None
         return
@@ -127,42 +128,71 @@ def projected_fit(
     max_nfev: int = 40,
     starts: Sequence[Sequence[float]] = (),
     threads: int = 1,
+    derivatives: Callable[[np.ndarray, np.ndarray], np.ndarray | None] | None = None,
 ) -> Projected:
     """min over z in [lb, ub] of min over lower ≤ c ≤ upper of ||y[idx] − A(z)[idx]·c||.
 
     ``columns(z, rows)`` returns the rows ``rows`` of A(z) (every sample for None: the optimiser
     asks for the rows ``idx`` only, the result holds A on every sample); ``starts`` are extra
     start points (the best solution wins); ``threads``: see :func:`jacobian_map` (``columns``
-    must then be safe to call from several threads)."""
+    must then be safe to call from several threads).
+
+    ``derivatives(z, rows)``, when given, returns ∂A/∂z on the rows ``rows`` (an array of shape
+    (len(z), len(rows), columns)), or None where it has none: the optimiser then gets the
+    exact Jacobian of the projected residual from them (:func:`projection_jacobian`) instead
+    of finite differences of ``columns`` (forward differences of the residual, as
+    ``least_squares`` takes them, where ``derivatives`` returns None)."""
     scale = max(float(np.std(y[idx])), 1e-300)
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
 
     yi = y[idx]
     deadline = _DEADLINE.get()
     seen = {"cost": math.inf, "z": None}
+    #: the last evaluation: z, the columns there (None when not finite), the solution, its free
+    #: columns and the residual
+    last: dict = {"z": None}
 
-    def resid(z):
+    def evaluate(fn, z):
+        """fn(z, idx) within the fit's time limits (see :func:`simulation_deadline`)."""
         if deadline is not None and seen["z"] is not None and time.monotonic() > deadline:
             raise _OutOfTime
         token = _STOP_AT.set(deadline if seen["z"] is not None else None)
         try:
-            Ai = columns(z, idx)
+            return fn(z, idx)
         except SimulationTimeout:
             if seen["z"] is None:  # the limit, on the first evaluation: nothing to fall back on
                 raise
             raise _OutOfTime from None
         finally:
             _STOP_AT.reset(token)
+
+    def resid(z):
+        Ai = evaluate(columns, z)
+        last.update(z=np.array(z, float), A=None)
         if not np.all(np.isfinite(Ai)):  # never hand LAPACK a NaN (it prints to stdout)
             return np.full(idx.size, 1e3)
-        c = bounded_lstsq(Ai, yi, lower, upper)
+        c, free = bounded_lstsq_free(Ai, yi, lower, upper)
         r = (Ai @ c - yi) / scale
         if not np.all(np.isfinite(r)):
             return np.full(idx.size, 1e3)
+        last.update(A=Ai, c=c, free=free, r=r)
         cost = 0.5 * float(r @ r)
         if cost < seen["cost"]:
             seen["cost"], seen["z"] = cost, np.array(z, float)
         return r
+
+    def jac(z):
+        if last["z"] is None or not np.array_equal(last["z"], z):
+            resid(z)
+        if last["A"] is None:  # the placeholder residual of a non-finite prediction: flat
+            return np.zeros((idx.size, z.size))
+        at = dict(last)
+        dA = evaluate(derivatives, z)
+        if dA is not None and np.all(np.isfinite(dA)):
+            J = projection_jacobian(at["A"], at["c"], at["free"], at["r"] * scale, dA) / scale
+            if np.all(np.isfinite(J)):
+                return J
+        return forward_differences(resid, z, at["r"], lb, ub)
 
     def final(z):
         A = columns(z, None)
@@ -177,17 +207,18 @@ def projected_fit(
         return Projected(z0, c, A, 0.5 * float(r @ r), 1, True, "linear least squares", [])
     best = None
     nfev, out_of_time = 0, False
-    with jacobian_map(threads) as jmap:
+    with jacobian_map(threads if derivatives is None else 1) as jmap:
         for start in [z0, *[np.asarray(s, float) for s in starts]]:
             try:
                 sol = least_squares(
                     resid,
                     np.clip(start, lb, ub),
+                    jac="2-point" if derivatives is None else jac,
                     bounds=(lb, ub),
                     max_nfev=max_nfev,
                     diff_step=1e-4,
                     x_scale=1.0,
-                    workers=jmap,
+                    workers=jmap if derivatives is None else None,
                 )
             except _OutOfTime:
                 out_of_time = True
@@ -203,3 +234,48 @@ def projected_fit(
     width = np.where(np.isfinite(ub - lb), ub - lb, 1.0)
     at = [i for i in range(x.size) if x[i] - lb[i] < 1e-3 * width[i] or ub[i] - x[i] < 1e-3 * width[i]]
     return Projected(x, c, A, cost, nfev, success, message, at)
+
+
+def forward_step(z: np.ndarray, i: int, lb: np.ndarray, ub: np.ndarray) -> np.ndarray:
+    """z moved along its coordinate i by ``least_squares``' forward-difference step (relative
+    step 1e-4, at least 1e-4), away from the bound it would cross."""
+    h = 1e-4 * (1.0 if z[i] >= 0 else -1.0) * max(1.0, abs(z[i]))
+    out = np.array(z, float)
+    out[i] += -h if not lb[i] <= z[i] + h <= ub[i] else h
+    return out
+
+
+def forward_differences(fun: Callable, z: np.ndarray, f0: np.ndarray, lb, ub) -> np.ndarray:
+    """The forward-difference Jacobian of ``fun`` at ``z`` (where it is ``f0``) that
+    ``least_squares(diff_step=1e-4)`` takes (steps of :func:`forward_step`): the fallback of
+    an analytic Jacobian that is not available at some point."""
+    lb, ub = np.asarray(lb, float), np.asarray(ub, float)
+    J = np.empty((np.size(f0), z.size))
+    for i in range(z.size):
+        zi = forward_step(z, i, lb, ub)
+        J[:, i] = (fun(zi) - f0) / (zi[i] - z[i])
+    return J
+
+
+def projection_jacobian(A: np.ndarray, c: np.ndarray, free: np.ndarray, r: np.ndarray, dA: np.ndarray) -> np.ndarray:
+    """The Jacobian of the variable projection's residual r(z) = A(z)·c(z) − y, c(z) solving the
+    bounded linear least squares at every z (the columns on a bound held there), from the
+    derivatives dA[i] = ∂A/∂z_i at a point with solution ``c``, free columns ``free`` (mask)
+    and residual ``r``:
+
+        ∂r/∂z_i = P⊥·dA_i·c − A_F·(A_Fᵀ A_F)⁻¹·dA_{i,F}ᵀ·r,
+
+    P⊥ projecting out the free columns A_F: the full Jacobian of Golub and Pereyra (G. H. Golub, V. Pereyra, 1973, "The differentiation
+    of pseudo-inverses and nonlinear least squares problems whose variables separate", SIAM
+    Journal on Numerical Analysis 10(2), 413-432), from one QR of the free columns (scaled to
+    unit norm).  Returns an array (rows, len(z))."""
+    dAc = dA @ c  # (nz, rows)
+    F = np.nonzero(free)[0]
+    if F.size == 0:
+        return dAc.T
+    norms = np.linalg.norm(A[:, F], axis=0)
+    Q, R = np.linalg.qr(A[:, F] / norms)
+    proj = dAc - (dAc @ Q) @ Q.T
+    w = np.einsum("irf,r->fi", dA[:, :, F], r) / norms[:, None]
+    back = Q @ solve_triangular(R, w, trans="T")
+    return (proj - back.T).T

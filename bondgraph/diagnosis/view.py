@@ -12,6 +12,7 @@ import numpy as np
 import sympy as sp
 
 from ..fit.identify import Identification, Spec
+from ..linear.sensitivity import sensitivity
 from ..model.graph import Model
 from ..support import config
 from ..support.errors import BondGraphError
@@ -19,7 +20,7 @@ from .additive import AdditiveDrive, Term
 from .calibration import RESOLVED_COHERENCE, coherence_spectrum, cross_spectra, empirical_frf, param_bounds, score
 from .context import SENSOR_GAIN, Context, State, drive_held_share
 from .lure import Lure
-from .projection import Param, projected_fit, simulation_deadline
+from .projection import Param, forward_step, projected_fit, simulation_deadline
 
 
 def _frozen(a: np.ndarray | None) -> np.ndarray | None:
@@ -197,6 +198,21 @@ class View:
         U = columns if isinstance(columns, np.ndarray) and columns.ndim == 2 else np.column_stack(columns)
         return ctx.lti.state_space(th, ctx.cut).response(ctx.dt, U, rows=rows)
 
+    def respond_sensitivities(
+        self,
+        columns: np.ndarray,
+        names: Sequence[str],
+        values: Mapping[str, float] | None = None,
+        rows: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """:meth:`respond` to the columns of the 2-D array ``columns`` and its derivatives with
+        respect to the linear core's parameters ``names``: (Y (rows, columns), dY (names, rows,
+        columns)) from the output sensitivities (:mod:`bondgraph.linear.sensitivity`), or None
+        when the core has no well-conditioned modal form."""
+        ctx = self._ctx
+        modal = sensitivity(ctx.lti, self.theta_values(values), names, ctx.cut)
+        return None if modal is None else modal.time(ctx.dt, columns, rows)
+
     def frequency_response(self, omega: np.ndarray, values: Mapping[str, float] | None = None) -> np.ndarray:
         """The linear core's frequency response at ``omega`` (rad/s), sensor gain 1, with the
         drive's reading and the measurement chain's delay of the output behind the drive (as
@@ -361,6 +377,42 @@ class View:
                 cols.insert(-1, ex[:, None])
             return np.column_stack(cols)
 
+        def derivatives(z, rows):
+            """∂columns/∂z: the output sensitivities for the linear parameters; for the basis'
+            own parameters, forward differences of the basis (drive side) and of the direct
+            columns, the basis' passed through the core in the same call as the columns."""
+            vals, b, dc = parts(z)
+            U = fixed_U if fixed_U is not None else np.column_stack(lead + b)
+            m = U.shape[1]
+            moved = []  # (parameter, basis difference quotients, direct ones)
+            for i in range(nz) if call_b or call_d else ():
+                zi = forward_step(z, i, np.asarray(zl), np.asarray(zu))
+                _, bi, dci = parts(zi)
+                h = zi[i] - z[i]
+                moved.append(
+                    (
+                        [(np.asarray(p) - np.asarray(q)) / h for p, q in zip(bi, b)] if call_b else [],
+                        [(np.asarray(p) - np.asarray(q)) / h for p, q in zip(dci, dc)] if call_d else [],
+                    )
+                )
+            more = [np.asarray(col, float) * np.ones(U.shape[0]) for db, _ in moved for col in db]
+            out = self.respond_sensitivities(
+                np.column_stack([U] + more) if more else U, [p.name for p in lin], vals, rows
+            )
+            if out is None:
+                return None
+            Y, dY = out
+            dA = np.zeros((z.size, rows.size, m + n_free))
+            dA[nz:, :, :m] = dY[:, :, :m] * np.array([vals[p.name] for p in lin])[:, None, None]  # log parameters
+            at = m
+            for i, (db, ddc) in enumerate(moved):
+                if db:
+                    dA[i, :, n_lead:m] = Y[:, at : at + len(db)]
+                    at += len(db)
+                if ddc:
+                    dA[i, :, m : m + n_dir] = np.column_stack(ddc)[rows]
+            return dA
+
         # the bounds are on the drive's weights; the solved coefficients are these times the
         # sensor gain, whose sign is the sensor's orientation, not physics
         lo, hi = lead_lo + list(lower), lead_hi + list(upper)
@@ -387,6 +439,7 @@ class View:
             hi,
             max_nfev=self._budget(max_nfev) if (nz or lin) else 1,
             starts=more_starts,
+            derivatives=derivatives,
         )
         vals, b, dc = parts(sol.z)
         c = sol.coef
@@ -462,14 +515,25 @@ class View:
         of :meth:`core`: the drive it sees, ``self.drive``; the output part outside the core,
         ``extra``, is added), else by the compiled integrator within the context's time
         limits (:func:`~bondgraph.diagnosis.projection.simulation_deadline`)."""
+        return self._routes(model, drive)[:2]
+
+    def _routes(self, model: Model, drive: np.ndarray | None = None):
+        """:meth:`predictor`'s (predict, known), and on the exact linear route a function
+        (values, names, rows) -> (raw, ∂raw/∂names) at the rows ``rows`` or None
+        (:meth:`~bondgraph.fit.identify.Identification.sensitivities`); None off it."""
         ident = self.identification(model)
         known = {p.name for p in ident.sim.eqs.params}
         if ident.lti is None:  # the integrator: one slow run must not outlast the fit's budget
-            return (lambda values: ident.predict(values, deadline=simulation_deadline())), known
+            return (lambda values: ident.predict(values, deadline=simulation_deadline())), known, None
+
+        def sens(values, names, rows):
+            out = ident.sensitivities(values, names, drive, rows)
+            return None if out is None else (out[0][:, 0], out[1][:, :, 0])
+
         if drive is None:
-            return ident.predict, known
+            return ident.predict, known, sens
         extra = 0.0 if self.extra is None else self.extra
-        return (lambda values: ident.predict(values, drive=drive) + extra), known
+        return (lambda values: ident.predict(values, drive=drive) + extra), known, sens
 
     def fit_model(
         self,
@@ -488,8 +552,9 @@ class View:
         with lower = upper is held.  Returns (values, raw prediction, success, message, names at
         a bound).  ``drive``: for an extension of :meth:`core`, the drive it sees (``self.drive``);
         the output part outside the core (``extra``) is added."""
+        sens = None
         if predict is None:
-            predict, known = self.predictor(model, drive)
+            predict, known, sens = self._routes(model, drive)
         else:
             known = set(model.all_parameters())
         base = {k: v for k, v in {**self.values, **(start or {})}.items() if k in known}
@@ -512,6 +577,19 @@ class View:
             raw = raw if rows is None else raw[rows]
             return np.column_stack([raw, np.ones(raw.size)])
 
+        names = [s.name for s in specs] + [p.name for p in lin]
+
+        def derivatives(z, rows):  # the output sensitivities, per unit z
+            vals = values_of(z)
+            out = sens(vals, names, rows)
+            if out is None:
+                return None
+            dv = [vals[s.name] if s.log else s.scale for s in specs] + [vals[p.name] for p in lin]
+            dv = [0.0 if n in names[i + 1 :] else d for i, (n, d) in enumerate(zip(names, dv))]  # overridden
+            dA = np.zeros((z.size, rows.size, 2))
+            dA[:, :, 0] = out[1] * np.array(dv)[:, None]
+            return dA
+
         z0 = [s.to_z(s.start) for s in specs] + [p.to_z(p.start) for p in lin]
         lb = [s.z_bounds()[0] for s in specs] + [p.z_bounds()[0] for p in lin]
         ub = [s.z_bounds()[1] for s in specs] + [p.z_bounds()[1] for p in lin]
@@ -525,8 +603,8 @@ class View:
             [-np.inf] * 2,
             [np.inf] * 2,
             max_nfev=self._budget(max_nfev),
+            derivatives=derivatives if sens is not None else None,
         )
-        names = [s.name for s in specs] + [p.name for p in lin]
         return (values_of(sol.z), sol.columns[:, 0], sol.success, sol.message, [names[i] for i in sol.at_bounds])
 
     def lure(self, model: Model, elements: Sequence[str], partners: Mapping[str, str | None]):

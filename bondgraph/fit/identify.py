@@ -33,6 +33,7 @@ from scipy.optimize import least_squares, lsq_linear
 
 from ..data import Dataset, uniform_step
 from ..linear.lti import LTI, first_input, first_output
+from ..linear.sensitivity import sensitivity
 from ..model.graph import Model
 from ..model.signals import PiecewiseLinear
 from ..numerics.simulate import SimulationError, Simulator
@@ -235,6 +236,29 @@ class Identification:
         )
         return res.outputs[self.output]
 
+    def sensitivities(
+        self,
+        values: Mapping[str, float] | None,
+        names: Sequence[str],
+        inputs: np.ndarray | None = None,
+        rows: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """The exact linear route's output for each column of ``inputs`` (input samples, one
+        per data time; default the record's input) and its derivatives with respect to the
+        parameters ``names``, at the sample indices ``rows`` (every sample for None): (Y (rows,
+        columns), dY (names, rows, columns)), from the output sensitivities of
+        :mod:`bondgraph.linear.sensitivity`, or None off the exact linear route, from a state
+        other than rest, or for a model without a well-conditioned modal form."""
+        if self.lti is None:
+            return None
+        th = self.sim.theta(values)
+        if np.any(self.sim.initial_state(th)):
+            return None
+        modal = sensitivity(self.lti, th, names, self.cut)
+        if modal is None:
+            return None
+        return modal.time(self.dt, self.u if inputs is None else inputs, rows)
+
     def offset(self, pred: np.ndarray) -> float:
         return float(np.mean(self.y[self.fit_idx] - pred[self.fit_idx]))
 
@@ -389,11 +413,19 @@ def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     number of rows; a column that vanishes here up to rounding among them) get 0: any split
     between them would fit, and elsewhere, where they differ, a huge one would be anything
     but a fit."""
+    return bounded_lstsq_free(A, b, lower, upper)[0]
+
+
+def bounded_lstsq_free(A: np.ndarray, b: np.ndarray, lower, upper) -> tuple[np.ndarray, np.ndarray]:
+    """(x, free): :func:`bounded_lstsq`'s solution and a boolean mask of its free columns,
+    those solved from the data: neither on a bound nor set to 0 for want of being told apart
+    (what a derivative of the solution with respect to the columns moves)."""
     norms = np.linalg.norm(A, axis=0)
     out = np.zeros(A.shape[1])
+    free = np.zeros(A.shape[1], bool)
     live = np.nonzero(norms > 1e-60 * max(float(norms.max(initial=0.0)), 1e-300))[0]
     if live.size == 0:
-        return out
+        return out, free
     Q, R, piv = scipy.linalg.qr(A[:, live] / norms[live], mode="economic", pivoting=True)
     d = np.abs(np.diag(R))
     r = int(np.argmin(d > 1e-10 * d[0])) if np.any(d <= 1e-10 * d[0]) else d.size  # the told-apart columns lead
@@ -403,10 +435,13 @@ def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     upper = np.asarray(upper, float)[cols] * norms[cols]
     if np.all(np.isinf(lower)) and np.all(np.isinf(upper)):
         x = scipy.linalg.solve_triangular(R, qb)
+        free[cols] = True
     else:
-        x = lsq_linear(R, qb, bounds=(lower, upper), method="bvls").x
+        sol = lsq_linear(R, qb, bounds=(lower, upper), method="bvls")
+        x = sol.x
+        free[cols] = sol.active_mask == 0
     out[cols] = x / norms[cols]
-    return out
+    return out, free
 
 
 def check_varies(u: np.ndarray, name: str, path: str | None = None) -> None:

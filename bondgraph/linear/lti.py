@@ -25,6 +25,7 @@ The input's rate at the samples is their central difference (one-sided at the en
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 import sympy as sp
@@ -32,14 +33,28 @@ from numba import njit
 from scipy.linalg import expm, matrix_balance, schur, solve_sylvester
 
 from ..equations.system import Equations
-from ..support.errors import UsageError, did_you_mean
+from ..support.errors import ParameterError, UsageError, did_you_mean
+
+#: a state whose magnitude is below this share of its column's largest so far is set to zero
+#: (see :func:`recursion`), checked every :data:`GUARD_EVERY` samples
+FLOOR = 1e-150
+GUARD_EVERY = 64
 
 
 @njit(cache=True, nogil=True)
 def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
     """x_j[k+1] = Ad x_j[k] + Bd u_j[k], y_j[k] = Cd x_j[k] + Dd u_j[k] for every column j of U
     (one input each, states X0[:, j] at k = 0), all columns in one pass over the samples; the
-    outputs are kept at the sample indices ``rows`` (ascending) only: Y[r, j] = y_j[rows[r]]."""
+    outputs are kept at the sample indices ``rows`` (ascending) only: Y[r, j] = y_j[rows[r]].
+
+    The subnormal guard: every :data:`GUARD_EVERY` samples, a state whose magnitude is below
+    :data:`FLOOR` times the largest state magnitude its column has had at these checks is set
+    to zero.  A response that decays for long (a drive resting at zero) would otherwise reach
+    subnormal numbers, on which arithmetic is slower (1.5x for this loop on the machine of
+    benchmarks/README.md, far more on some processors) and which never reach zero.  What the guard
+    drops is below 1e-150 of the states' own scale: the output changes by less than that
+    share of its scale times the filter's gain; a mode would have to decay by 1e-158 within
+    the samples between two checks to reach the subnormals first."""
     n = Ad.shape[0]
     N, m = U.shape
     if m == 1:
@@ -47,9 +62,13 @@ def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
         return
     x = X0.copy()
     xn = np.empty((n, m))
+    peak = np.zeros(m)
     r = 0
     R = rows.shape[0]
     for k in range(N):
+        if k % GUARD_EVERY == 0:
+            for j in range(m):
+                peak[j] = _guard(x[:, j], peak[j])
         keep = r < R and rows[r] == k
         for j in range(m):
             u = U[k, j]
@@ -71,14 +90,30 @@ def recursion(Ad, Bd, Cd, Dd, X0, U, rows, Y):
 
 
 @njit(cache=True, nogil=True)
+def _guard(x, peak):
+    """The subnormal guard of :func:`recursion` on one column's states ``x`` (in place);
+    returns the column's new peak."""
+    for i in range(x.shape[0]):
+        peak = max(peak, abs(x[i]))
+    floor = FLOOR * peak
+    for i in range(x.shape[0]):
+        if abs(x[i]) < floor:
+            x[i] = 0.0
+    return peak
+
+
+@njit(cache=True, nogil=True)
 def _one_column(Ad, b, c, d, x, u, rows, y):
     """:func:`recursion` for a single input column (vectors b, c, x, u, y; scalar d): the same
     arithmetic in the same order, in a loop about twice as fast; ``x`` is overwritten."""
     n = Ad.shape[0]
     xn = np.empty(n)
+    peak = 0.0
     r = 0
     R = rows.shape[0]
     for k in range(u.shape[0]):
+        if k % GUARD_EVERY == 0:
+            peak = _guard(x, peak)
         if r < R and rows[r] == k:
             acc = d * u[k]
             for i in range(n):
@@ -156,27 +191,13 @@ class LTI:
             raise UsageError(did_you_mean(output, list(eqs.outputs), "output"))
         self.eqs = eqs
         self.input, self.output = input, output
-        u = eqs.inputs[names.index(input)]
-        xs = eqs.state_symbols
-        rates = [eqs.rates[s] for s in xs]
-        y = [eqs.outputs[output]]
-        mats = [eqs.jacobian(rates, xs), eqs.jacobian(rates, [u]), eqs.jacobian(y, xs), eqs.jacobian(y, [u])]
-        moving = set(xs) | set(eqs.inputs) | set(eqs.input_rates) | {ob.symbol for ob in eqs.operators}
-        others = [s for s in eqs.inputs if s != u]
-        # affine in states and every input (so the Jacobians say everything): the slopes in x
-        # and u move with nothing; the slopes in the other inputs move with no state or input
-        self.exact = (
-            not eqs.operators
-            and all(not (e.free_symbols & moving) for M in mats for e in M)
-            and all(not (e.free_symbols & (set(xs) | set(eqs.inputs))) for e in eqs.jacobian(rates + y, others))
-        )
-        zero = {s: 0 for s in list(moving - set(xs) - {u}) + others}
-        mats = [M.xreplace(zero) for M in mats]
-        used = set().union(*(e.free_symbols for M in mats for e in M))
+        mats, self.exact, used = linear_matrices(eqs, [input], [output])
         #: names of the parameters the linear dynamics depend on, in the order of ``eqs.params``
         self.parameters = [p.name for p in eqs.params if p in used]
         self._fn = sp.lambdify([eqs.params], mats, modules="numpy", cse=True)
-        self.n = len(xs)
+        self._mats = mats
+        self._dfn = self._analytic = None
+        self.n = len(eqs.state_symbols)
 
     def matrices(self, th: np.ndarray):
         A, B, C, D = (
@@ -184,6 +205,50 @@ class LTI:
             for M, shape in zip(self._fn(np.asarray(th, float)), [(self.n, self.n), (self.n, 1), (1, self.n), (1, 1)])
         )
         return A, B, C, D
+
+    def derivatives(self, th: np.ndarray, names: Sequence[str]):
+        """(∂A, ∂B, ∂C, ∂D) at θ with respect to the parameters ``names``, stacked along a first
+        axis in that order (zero for a parameter the dynamics do not depend on).  By the
+        complex step, ∂M/∂θ_j = Im M(θ + ih·e_j)/h with h = 1e-20·|θ_j| (exact to rounding, no
+        difference taken), when the matrices are analytic in θ (arithmetic, powers and the
+        functions of :data:`ANALYTIC`); else from their symbolic derivatives, compiled on first
+        use.
+
+        Raises
+        ------
+        ParameterError
+            A name that is no parameter of the model."""
+        known = [p.name for p in self.eqs.params]
+        for n in names:
+            if n not in known:
+                raise ParameterError(did_you_mean(n, known, "parameter"))
+        shapes = [(self.n, self.n), (self.n, 1), (1, self.n), (1, 1)]
+        out = [np.zeros((len(names), *shape)) for shape in shapes]
+        th = np.asarray(th, float)
+        if self._analytic is None:
+            self._analytic = all(
+                type(f) in ANALYTIC for M in self._mats for e in M for f in e.atoms(sp.core.function.Application)
+            )
+        analytic = self._analytic
+        for i, n in enumerate(names):
+            if n not in self.parameters:
+                continue
+            if analytic:
+                j = known.index(n)
+                h = 1e-20 * max(abs(th[j]), 1e-280)
+                tc = th.astype(complex)
+                tc[j] += 1j * h
+                parts = [np.array(M, dtype=complex).imag / h for M in self._fn(tc)]
+            else:
+                if self._dfn is None:
+                    syms = [p for p in self.eqs.params if p.name in self.parameters]
+                    diffs = [M.diff(p) for p in syms for M in self._mats]
+                    self._dfn = sp.lambdify([self.eqs.params], diffs, "numpy", cse=True)
+                at = 4 * self.parameters.index(n)
+                parts = [np.array(dM, dtype=float) for dM in self._dfn(th)[at : at + 4]]
+            for M, shape, dM in zip(out, shapes, parts):
+                M[i] = dM.reshape(shape)
+        return tuple(out)
 
     def state_space(self, th: np.ndarray, cut: float | None = None) -> StateSpace:
         """The numeric model at θ; modes faster than ``cut`` (rad/s) residualised."""
@@ -193,6 +258,30 @@ class LTI:
     def response(self, th: np.ndarray, dt: float, U: np.ndarray, x0: np.ndarray | None = None) -> np.ndarray:
         """Output of the full model for each column of ``U`` (see :meth:`StateSpace.response`)."""
         return self.state_space(th).response(dt, U, x0)
+
+
+def linear_matrices(eqs: Equations, inputs: Sequence[str], outputs: Sequence[str]):
+    """The symbolic (A, B, C, D) of the inputs ``inputs`` (names) → the outputs ``outputs``,
+    whether they say everything (the model is affine in its states and every input: the slopes
+    in the states and these inputs move with nothing, those in the other inputs with no state
+    or input; the route is then exact) and the parameters they depend on.  The other inputs,
+    the input rates and operator outputs are set to zero.  Returns (matrices, exact, symbols)."""
+    names = [str(u) for u in eqs.inputs]
+    us = [eqs.inputs[names.index(i)] for i in inputs]
+    xs = eqs.state_symbols
+    rates = [eqs.rates[s] for s in xs]
+    ys = [eqs.outputs[o] for o in outputs]
+    mats = [eqs.jacobian(rates, xs), eqs.jacobian(rates, us), eqs.jacobian(ys, xs), eqs.jacobian(ys, us)]
+    moving = set(xs) | set(eqs.inputs) | set(eqs.input_rates) | {ob.symbol for ob in eqs.operators}
+    others = [s for s in eqs.inputs if s not in us]
+    exact = (
+        not eqs.operators
+        and all(not (e.free_symbols & moving) for M in mats for e in M)
+        and all(not (e.free_symbols & (set(xs) | set(eqs.inputs))) for e in eqs.jacobian(rates + ys, others))
+    )
+    zero = {s: 0 for s in list(moving - set(xs) - set(us)) + others}
+    mats = [M.xreplace(zero) for M in mats]
+    return mats, exact, set().union(*(e.free_symbols for M in mats for e in M))
 
 
 def first_input(eqs: Equations) -> str:
@@ -209,6 +298,11 @@ def first_output(eqs: Equations) -> str:
         raise UsageError(f"{eqs.model.name} declares no output")
     return next(iter(eqs.outputs))
 
+
+#: functions of the parameters through which :meth:`LTI.derivatives` takes the complex step
+ANALYTIC = frozenset(
+    {sp.exp, sp.log, sp.sin, sp.cos, sp.tan, sp.sinh, sp.cosh, sp.tanh, sp.asin, sp.acos, sp.atan, sp.asinh, sp.atanh}
+)
 
 #: eigenvector matrices worse conditioned than this are not used for the modal sum
 MODAL_COND = 1e6
