@@ -102,6 +102,20 @@ def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du=True):
                 du[i] = -slope
 
 
+_f1 = types.float64[::1]
+_f2 = types.float64[:, ::1]
+_i1 = types.int64[::1]
+#: type of :func:`input_values` as a first-class function value
+INPUTS_TYPE = types.FunctionType(types.void(types.float64, _i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1, types.boolean))
+
+
+@njit(INPUTS_TYPE.signature, cache=True)
+def input_values(t, kind, par, off, ln, tt, tv, cur, u, du, with_du):
+    """:func:`eval_inputs` as a compiled function value, for kernels in other files (numba's
+    disk cache would not see a change to this file in a kernel that inlined it)."""
+    eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du)
+
+
 @njit(cache=True)
 def sample_inputs(t, kind, par, off, ln, tt, tv, cur, out):
     """Values of all inputs at the times ``t`` into ``out`` (len(t) × n_inputs)."""
@@ -119,10 +133,6 @@ _E = np.ascontiguousarray(RK45.E, float)
 _P = np.ascontiguousarray(RK45.P, float)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _N_CHECK = 4  # interior points where operator inputs are checked for a reversal
-
-_f1 = types.float64[::1]
-_f2 = types.float64[:, ::1]
-_i1 = types.int64[::1]
 
 STATUS = {0: "ok", 1: "step size underflow", 2: "too many steps", 3: "non-finite state"}
 
