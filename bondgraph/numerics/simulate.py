@@ -188,9 +188,12 @@ class Simulator:
         ``params`` maps parameter names to values; ``progress(fraction)`` is called between
         chunks of long runs.  ``rtol``, ``atol`` and ``max_steps`` default to the settings
         ``simulate.rtol``, ``simulate.atol_floor`` and ``simulate.max_steps``.  ``deadline``
-        (a ``time.monotonic()`` value): past it the stiff solvers (radau, bdf, lsoda) stop with
-        :class:`SimulationTimeout` at their next step; the compiled dopri5 checks it between
-        chunks only (one chunk unless ``progress`` is given)."""
+        (a ``time.monotonic()`` value): past it scipy's solvers (radau, bdf, lsoda) stop with
+        :class:`SimulationTimeout` at their next step, radau5 at the start and between the
+        twenty chunks it then runs in; the compiled dopri5 checks it between chunks only (one
+        chunk unless ``progress`` is given).  With ``method="auto"`` (see :meth:`choose`) a
+        radau5 run that fails is repeated on dopri5.  ``stats`` of the result: the method
+        that ran and the reason, step and call counts."""
         rtol = config.get("simulate.rtol") if rtol is None else rtol
         atol = config.get("simulate.atol_floor") if atol is None else atol
         max_steps = config.get("simulate.max_steps") if max_steps is None else max_steps
@@ -205,13 +208,27 @@ class Simulator:
         x = self.initial_state(th) if x0 is None else np.asarray(x0, float).copy()
         bank = self.signal_bank(inputs)
         mem = self.initial_memory(t[0], x, th, bank)
-        aux = self.compiled.aux.copy()  # the tape's registers are written
-        n = x.size
-        atol_v = np.broadcast_to(np.asarray(atol, float), (n,)).copy()
-        reason = "asked for"
-        if method == "auto":
-            method, reason = self.choose(t, x, th, mem, bank)
+        atol_v = np.broadcast_to(np.asarray(atol, float), (x.size,)).copy()
         max_step = min(max_step, config.get("simulate.table_steps") * bank.table_spacing())
+        args = (t, x, th, bank, rtol, atol_v, max_step, max_steps, progress, deadline)
+        if method != "auto":
+            return self._integrate(method, "asked for", mem, *args)
+        method, reason = self.choose(t, x, th, mem, bank)
+        if method == "radau5":
+            try:
+                return self._integrate(method, reason, mem.copy(), *args)
+            except SimulationTimeout:
+                raise
+            except SimulationError as exc:  # auto never leaves a model without an answer
+                method, reason = "dopri5", f"{reason}; radau5 failed ({exc}), so dopri5 ran"
+        return self._integrate(method, reason, mem, *args)
+
+    def _integrate(
+        self, method, reason, mem, t, x, th, bank, rtol, atol_v, max_step, max_steps, progress, deadline
+    ) -> SimResult:
+        """The integration of :meth:`run` with ``method`` (not auto), from memory ``mem``."""
+        n = x.size
+        aux = self.compiled.aux.copy()  # the tape's registers are written
         X = np.empty((t.size, n))
         Y = np.empty((t.size, len(self.output_names)))
         stats: Counter = Counter()
@@ -380,15 +397,15 @@ class Simulator:
             try:
                 radius = spectral_radius(self.jacobian_at(t[0], x, th, mem, bank, sparse=True))
             except SimulationError as exc:
-                return "dopri5", f"{exc}: explicit"
+                return "dopri5", f"stiffness unknown: {exc}"
         verdict = stiffness(radius, t)
         if not verdict.stiff:
-            return "dopri5", f"not stiff: {verdict.reason()}"
+            return "dopri5", verdict.reason()
         try:
             self.sparse_jacobian()
         except SimulationError as exc:
-            return "dopri5", f"stiff ({verdict.reason()}), but {exc}"
-        return "radau5", f"stiff: {verdict.reason()}"
+            return "dopri5", f"{verdict.reason()}, but {exc}"
+        return "radau5", verdict.reason()
 
     def choose_method(self, t, x, th, mem, bank) -> str:
         """The method ``auto`` runs (see :meth:`choose`)."""

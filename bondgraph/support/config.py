@@ -68,7 +68,10 @@ DEFAULTS: dict[str, Default] = {
         "in one part of the graph (reported as an error naming its elements)",
     ),
     "codegen.tape_threshold": Default(
-        300, "programs with more statements run on the tape interpreter instead of being compiled by numba per model"
+        300,
+        "programs with more statements run on the tape interpreter instead of being compiled by numba per model "
+        "(numba takes about 7.6 ms per statement, 2.3 s here, once per model structure; the tape is 7-8 times "
+        "slower per call, which matters to long explicit runs, not to the implicit route's few thousand calls)",
     ),
     "data.uniform_rtol": Default(
         1e-2,
