@@ -39,15 +39,17 @@ def stack(layers: int):
     return load_model(MODELS / "stack.py", {"layers": layers})
 
 
-@pytest.mark.parametrize("hub_support", [16, 1])
+@pytest.mark.parametrize("hub_support,tape", [(16, False), (1, False), (16, True)])
 @pytest.mark.parametrize("build", [nonlinear_oscillator, lambda: stack(4).model])
-def test_sparse_jacobian_equals_the_symbolic_one(build, hub_support):
+def test_sparse_jacobian_equals_the_symbolic_one(build, hub_support, tape):
     """Through hubs (hub_support = 1 makes nearly every program variable one) or substituted,
-    the Schur complement of the augmented matrix is the dense symbolic Jacobian."""
-    with config.override({"jacobian.hub_support": hub_support}):
+    compiled by numba or on the tape, the Schur complement of the augmented matrix is the
+    dense symbolic Jacobian."""
+    with config.override({"jacobian.hub_support": hub_support, "codegen.tape_threshold": 0 if tape else 300}):
         sim = bg.Simulator(build())
         sj = sim.sparse_jacobian()
     eqs = sim.eqs
+    assert sj.route == ("tape" if tape else "numba")
     if hub_support == 1:
         assert sj.program.hubs
     rng = np.random.default_rng(4)

@@ -236,6 +236,35 @@ def run_plan(W, plan, first_accumulator):
 
 
 @njit(cache=True)
+def _jacobian_values(jac, t, x, u, du, th, mem, jaux, W, plan, first_accumulator, slots, J):
+    """J = the CSC values of J_aug at (t, x): the partials, then the chain rule."""
+    jac(t, x, u, du, th, mem, jaux, W[2:first_accumulator])
+    run_plan(W, plan, first_accumulator)
+    for k in range(slots.shape[0]):
+        J[k] = W[slots[k]]
+
+
+@njit(cache=True)
+def _predict(have_sol, x_old, Q_old, t_old, h_old, t, h, x, Z, work):
+    """Z[s] = the last step's collocation polynomial at t + C_s·h, minus x (0 without one)."""
+    for s in range(3):
+        if have_sol:
+            _dense(x_old, Q_old, (t + _C[s] * h - t_old) / h_old, work)
+            for i in range(x.shape[0]):
+                Z[s, i] = work[i] - x[i]
+        else:
+            for i in range(x.shape[0]):
+                Z[s, i] = 0.0
+
+
+@njit(cache=True)
+def _error(fx, Z, h, b):
+    """b = f + Zᵀ·E/h on the state rows, 0 on the hub rows: the right side of the error estimate."""
+    for i in range(b.shape[0]):
+        b[i] = fx[i] + (Z[0, i] * _E[0] + Z[1, i] * _E[1] + Z[2, i] * _E[2]) / h if i < fx.shape[0] else 0.0
+
+
+@njit(cache=True)
 def _newton_matrix(J, diag, n, c, A):
     """A = c·D − J_aug (D: identity on the n state rows)."""
     for k in range(J.shape[0]):
@@ -381,7 +410,7 @@ def radau5(
     rates = flags.input_rates
     out_inputs = flags.outputs_use_inputs
     opin_inputs = flags.opins_use_inputs
-    C, E, T, TI, P = _C, _E, _T, _TI, _P
+    C, T, TI, P = _C, _T, _TI, _P
     u = np.zeros(max(nu, 1))
     du = np.zeros(max(nu, 1))
     x = x0.copy()
@@ -453,7 +482,6 @@ def radau5(
         output(t, x, u, du, th, mem, aux, y)
         Y[k_out, :ny] = y[:ny]
         k_out += 1
-    n_partials = first_accumulator - 2
 
     n_jac = 0
     n_lu = 0
@@ -485,10 +513,7 @@ def radau5(
         h_min = 10.0 * np.spacing(abs(t) + 1.0)
         if jac_stale:  # Jacobian at (t, x)
             inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-            jac(t, x, u, du, th, mem, jaux, Wk[2 : 2 + n_partials])
-            run_plan(Wk, plan, first_accumulator)
-            for k in range(nnz):
-                Jv[k] = Wk[slots[k]]
+            _jacobian_values(jac, t, x, u, du, th, mem, jaux, Wk, plan, first_accumulator, slots, Jv)
             n_jac += 1
             jac_stale = False
             current_jac = True
@@ -547,14 +572,7 @@ def radau5(
                 hit = True
             t_new = t_stop if hit else t + h
             # predictor: the last step's collocation polynomial, extrapolated
-            for s in range(3):
-                if have_sol:
-                    _dense(x_old, Qold, (t + C[s] * h - t_old) / h_old, xd)
-                    for i in range(n):
-                        Z[s, i] = xd[i] - x[i]
-                else:
-                    for i in range(n):
-                        Z[s, i] = 0.0
+            _predict(have_sol, x_old, Qold, t_old, h_old, t, h, x, Z, xd)
             for i in range(n):
                 w[i] = atol[i] + rtol * max(abs(x[i]), peak[i])
             converged = False
@@ -648,21 +666,11 @@ def radau5(
                     break
                 # a Jacobian from an earlier step did not converge: a fresh one at (t, x)
                 inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
-                jac(t, x, u, du, th, mem, jaux, Wk[2 : 2 + n_partials])
-                run_plan(Wk, plan, first_accumulator)
-                for k in range(nnz):
-                    Jv[k] = Wk[slots[k]]
+                _jacobian_values(jac, t, x, u, du, th, mem, jaux, Wk, plan, first_accumulator, slots, Jv)
                 n_jac += 1
                 current_jac = True
                 lu_h = -1.0
-                for s in range(3):
-                    if have_sol:
-                        _dense(x_old, Qold, (t + C[s] * h - t_old) / h_old, xd)
-                        for i in range(n):
-                            Z[s, i] = xd[i] - x[i]
-                    else:
-                        for i in range(n):
-                            Z[s, i] = 0.0
+                _predict(have_sol, x_old, Qold, t_old, h_old, t, h, x, Z, xd)
             if not converged or singular:
                 h_abs *= 0.5
                 lu_h = -1.0
@@ -676,9 +684,7 @@ def radau5(
                 if not math.isfinite(xn[i]):
                     finite = False
                 w[i] = atol[i] + rtol * max(abs(x[i]), abs(xn[i]), peak[i])
-                br[i] = f[i] + (Z[0, i] * E[0] + Z[1, i] * E[1] + Z[2, i] * E[2]) / h
-            for i in range(n, N):
-                br[i] = 0.0
+            _error(f, Z, h, br)
             lu_solve(q, rs_r, Lp_r, Li_r, Lx_r, Up_r, Ui_r, Ux_r, pinv_r, br, xr)
             err_norm = _rms(br, w, n)
             safety = 0.9 * (2 * _NEWTON_MAXITER + 1) / (2 * _NEWTON_MAXITER + n_iter)
@@ -688,10 +694,7 @@ def radau5(
                 inputs(t, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
                 rhs(t, xs, u, du, th, mem, aux, tmp)
                 n_rhs += 1
-                for i in range(n):
-                    br[i] = tmp[i] + (Z[0, i] * E[0] + Z[1, i] * E[1] + Z[2, i] * E[2]) / h
-                for i in range(n, N):
-                    br[i] = 0.0
+                _error(tmp, Z, h, br)
                 lu_solve(q, rs_r, Lp_r, Li_r, Lx_r, Up_r, Ui_r, Ux_r, pinv_r, br, xr)
                 err_norm = _rms(br, w, n)
             if not finite or not math.isfinite(err_norm):

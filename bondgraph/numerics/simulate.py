@@ -451,7 +451,8 @@ class Simulator:
             return self.jacobian_at(tt, np.ascontiguousarray(xx), th, mem, bank, sparse=x.size > DENSE_EIGEN)
 
         solver_cls = {"radau": si.Radau, "bdf": si.BDF, "lsoda": si.LSODA}[method]
-        atol_v = np.maximum(atol_v, self._scale_atol(solver_cls, f, t, x, rtol, breaks, deadline))
+        kw = {"jac": jac} if method != "lsoda" else {}
+        atol_v = np.maximum(atol_v, self._scale_atol(solver_cls, f, t, x, rtol, breaks, deadline, kw))
         edges = [t[0], *breaks, t[-1]]
         k = 0
 
@@ -463,7 +464,6 @@ class Simulator:
         X[0], Y[0] = x, emit(t[0], x)
         k = 1
         for a, b in zip(edges[:-1], edges[1:]):
-            kw = {"jac": jac} if method != "lsoda" else {}
             s = solver_cls(f, a, x, b, rtol=rtol, atol=atol_v, max_step=max_step, **kw)
             while s.status == "running":
                 _check_deadline(deadline, s.t)
@@ -487,15 +487,16 @@ class Simulator:
             stats["rhs_calls"] += s.nfev
         return stats
 
-    def _scale_atol(self, solver_cls, f, t, x, rtol, breaks, deadline=None):
+    def _scale_atol(self, solver_cls, f, t, x, rtol, breaks, deadline=None, kw=None):
         """atol_i = rtol·max|x_i| from a loose first pass (scipy's solvers weigh errors by
-        atol + rtol·|x|, which chases rounding noise when a state crosses zero)."""
+        atol + rtol·|x|, which chases rounding noise when a state crosses zero); ``kw``: the
+        solver's Jacobian."""
         peak = np.abs(x).copy()
         floor = config.get("simulate.atol_floor")
         edges = [t[0], *breaks, t[-1]]
         xx = x.copy()
         for a, b in zip(edges[:-1], edges[1:]):
-            s = solver_cls(f, a, xx, b, rtol=1e-3, atol=floor)
+            s = solver_cls(f, a, xx, b, rtol=1e-3, atol=floor, **(kw or {}))
             while s.status == "running":
                 _check_deadline(deadline, s.t)
                 s.step()
