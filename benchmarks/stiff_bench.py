@@ -222,39 +222,13 @@ def spawn(mode: str, spec: dict, cap: float, cache: str) -> dict:
 
 def exact_stack(layers: int):
     """The exact sampled response x(t) of the linear stack to its step (see the docstring)."""
-    import scipy.linalg as sl
-
     from bondgraph.numerics.simulate import Simulator
 
+    sys.path.insert(0, str(ROOT / "tests"))
+    from truth import exact_step_response
+
     lm, t = _case({"case": "stack", "layers": layers})
-    sim = Simulator(lm.model)
-    th = sim.theta()
-    x = sim.initial_state(th)
-    bank = sim.signal_bank(lm.experiment.inputs)
-    A = sim.jacobian_at(0.0, x, th, np.zeros(1), bank)
-    aux = sim.compiled.aux.copy()
-
-    def rates(V):
-        out = np.zeros(x.size)
-        sim.compiled.rhs(0.0, np.zeros(x.size), np.array([V, 0.0]), np.zeros(2), th, np.zeros(1), aux, out)
-        return out
-
-    B = rates(1.0) - rates(0.0)
-    dt = t[1] - t[0]
-    M = np.zeros((x.size + 1, x.size + 1))
-    M[:-1, :-1], M[:-1, -1] = A * dt, B * dt
-    E = sl.expm(M)
-    V = bank.sample(t)[:, 0]
-    X = np.zeros((t.size, x.size))
-    for k in range(t.size - 1):
-        x = E[:-1, :-1] @ x + E[:-1, -1] * V[k]
-        X[k + 1] = x
-    y = np.zeros(t.size)
-    out = np.zeros(1)
-    for k in range(t.size):
-        sim.compiled.output(0.0, X[k], np.zeros(2), np.zeros(2), th, np.zeros(1), aux, out)
-        y[k] = out[0]
-    return y
+    return exact_step_response(Simulator(lm.model), t, lm.experiment.inputs)
 
 
 def slope(ns, ts) -> float | None:

@@ -6,33 +6,16 @@ import re
 
 import numpy as np
 import pytest
-import scipy.linalg as sl
 import scipy.sparse as sps
-import sympy as sp
 from conftest import MODELS, ROOT
+from test_tape import nonlinear_oscillator
+from truth import exact_step_response
 
 import bondgraph as bg
 from bondgraph import config
 from bondgraph.cli import main
 from bondgraph.model.modelfile import load_model
 from bondgraph.numerics.implicit import lu_factor, lu_solve
-
-
-def nonlinear_oscillator():
-    g = bg.Model("nl")
-    V = g.input("V")
-    g.add(
-        bg.Se("s", V),
-        bg.J1("j"),
-        bg.I("m", 1.0),
-        bg.C("k", law=lambda q: q + q**3 + sp.sin(q)),
-        bg.R("r", law=lambda f: 0.5 * f + 0.1 * sp.Abs(f) * f),
-    )
-    g.bond("s", "j")
-    for e in ("m", "k", "r"):
-        g.bond("j", e)
-    g.output("x", g.displacement("k"))
-    return g
 
 
 def stack(layers: int):
@@ -86,35 +69,6 @@ def test_sparse_lu_is_backward_stable_on_badly_scaled_rows(dtype):
     lu_solve(q, rs, Lp, Li, Lx, Up, Ui, Ux, pinv, y, x)
     backward = np.abs(A @ y - b) / (abs(A) @ np.abs(y) + np.abs(b))  # componentwise (Oettli-Prager)
     assert backward.max() < 1e-12
-
-
-def exact_step_response(sim, t, inputs):
-    """The stack is linear and its drive a step on the sample grid: x_{k+1} = Φ·x_k + Γ·V_k
-    with Φ, Γ from one matrix exponential is exact (no integrator)."""
-    th = sim.theta()
-    x = sim.initial_state(th)
-    bank = sim.signal_bank(inputs)
-    A = sim.jacobian_at(0.0, x, th, np.zeros(1), bank)
-    aux = sim.compiled.aux.copy()
-
-    def rates(V):
-        out = np.zeros(x.size)
-        sim.compiled.rhs(0.0, np.zeros(x.size), np.array([V, 0.0]), np.zeros(2), th, np.zeros(1), aux, out)
-        return out
-
-    B = rates(1.0) - rates(0.0)
-    dt = t[1] - t[0]
-    M = np.zeros((x.size + 1, x.size + 1))
-    M[:-1, :-1], M[:-1, -1] = A * dt, B * dt
-    E = sl.expm(M)
-    V = bank.sample(t)[:, 0]
-    y = np.zeros(t.size)
-    for k in range(t.size - 1):
-        x = E[:-1, :-1] @ x + E[:-1, -1] * V[k]
-        out = np.zeros(1)
-        sim.compiled.output(0.0, x, np.zeros(2), np.zeros(2), th, np.zeros(1), aux, out)
-        y[k + 1] = out[0]
-    return y
 
 
 def test_radau5_equals_the_exact_step_response_of_a_stiff_stack():

@@ -20,8 +20,11 @@ committed only after that, once per accepted step.  Rejected steps (error test, 
 failure, reversal) never touch it.
 
 The sparse LU lives in this file with the integrator that calls it (numba's on-disk cache is
-keyed by the source file); the input signals are evaluated through the compiled function
-value :func:`~bondgraph.numerics.integrators.input_values`.
+keyed by the source file); the input signals and the memory contract's reversal test come
+from :mod:`~bondgraph.numerics.integrators` as compiled function values
+(:func:`~bondgraph.numerics.integrators.input_values`,
+:func:`~bondgraph.numerics.integrators.reversal_at`), so a change there reaches this file's
+cached machine code.
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ import numpy as np
 from numba import njit, types
 from scipy.integrate._ivp import radau as _radau
 
-from .integrators import _FLAGS, INPUTS_TYPE
+from .integrators import _FLAGS, INPUTS_TYPE, REVERSAL_TYPE
 from .model_functions import FUNCTION_TYPE
 
 _C = np.ascontiguousarray(_radau.C, float)
@@ -315,6 +318,7 @@ _STATS = types.NamedUniTuple(types.int64, len(ImplicitStats._fields), ImplicitSt
     _STATS(
         *((FUNCTION_TYPE,) * 5),
         INPUTS_TYPE,
+        REVERSAL_TYPE,
         _f1,
         _f1,
         _f1,
@@ -357,6 +361,7 @@ def radau5(
     commit,
     jac,
     inputs,
+    reversal_at,
     x0,
     th,
     mem,
@@ -394,8 +399,9 @@ def radau5(
 
     ``rhs``, ``output``, ``opin``, ``commit`` are the model's functions, ``jac`` writes the
     local partials of its Jacobian program (``jaux`` its aux data; with memory operators, the
-    direction of each one's slope, kept here), ``inputs`` is
-    :func:`~bondgraph.numerics.integrators.input_values`; the signal arrays come from
+    direction of each one's slope, kept here), ``inputs`` and ``reversal_at`` are
+    :func:`~bondgraph.numerics.integrators.input_values` and
+    :func:`~bondgraph.numerics.integrators.reversal_at`; the signal arrays come from
     :meth:`~bondgraph.numerics.signal_bank.SignalBank.args`.  ``Ap``, ``Ai`` (CSC pattern of
     J_aug), ``slots``, ``diag``, ``plan``, ``n_work``, ``first_accumulator`` and
     ``constant_jacobian`` describe the Jacobian program, ``q`` the column order of the LU.
@@ -732,13 +738,7 @@ def radau5(
                     if opin_inputs:
                         inputs(t + theta * h, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
                     opin(t + theta * h, xd, u, du, th, mem, aux, vt)
-                    for j in range(nv):
-                        tol = 1e-9 * (abs(v0[j]) + abs(v1[j])) + 1e-300
-                        d_in = vt[j] - v0[j]
-                        d_out = v1[j] - vt[j]
-                        if (d_in > tol and d_out < -tol) or (d_in < -tol and d_out > tol):
-                            if reversal < 0.0 or theta < reversal:
-                                reversal = theta
+                    reversal = reversal_at(v0, v1, vt, theta, reversal)
                 if reversal > 0.0 and h > 64 * h_min:
                     h_abs = h * reversal
                     n_rev += 1

@@ -116,6 +116,25 @@ def input_values(t, kind, par, off, ln, tt, tv, cur, u, du, with_du):
     eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du)
 
 
+#: type of :func:`reversal_at` as a first-class function value
+REVERSAL_TYPE = types.FunctionType(types.float64(_f1, _f1, _f1, types.float64, types.float64))
+
+
+@njit(REVERSAL_TYPE.signature, cache=True)
+def reversal_at(v0, v1, vt, theta, reversal):
+    """The memory contract's test: ``theta`` if an operator input reverses between the step's
+    start (``v0``), its interior point θ (``vt``) and its end (``v1``), and θ is earlier than
+    ``reversal`` (negative: none yet); ``reversal`` otherwise."""
+    for j in range(v0.shape[0]):
+        tol = 1e-9 * (abs(v0[j]) + abs(v1[j])) + 1e-300
+        d_in = vt[j] - v0[j]
+        d_out = v1[j] - vt[j]
+        if (d_in > tol and d_out < -tol) or (d_in < -tol and d_out > tol):
+            if reversal < 0.0 or theta < reversal:
+                reversal = theta
+    return reversal
+
+
 @njit(cache=True)
 def sample_inputs(t, kind, par, off, ln, tt, tv, cur, out):
     """Values of all inputs at the times ``t`` into ``out`` (len(t) × n_inputs)."""
@@ -411,13 +430,7 @@ def dopri5(
                 if opin_inputs:
                     eval_inputs(t + theta * h, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
                 opin(t + theta * h, xd, u, du, th, mem, aux, vt)
-                for j in range(nv):
-                    tol = 1e-9 * (abs(v0[j]) + abs(v1[j])) + 1e-300
-                    d_in = vt[j] - v0[j]
-                    d_out = v1[j] - vt[j]
-                    if (d_in > tol and d_out < -tol) or (d_in < -tol and d_out > tol):
-                        if reversal < 0.0 or theta < reversal:
-                            reversal = theta
+                reversal = reversal_at(v0, v1, vt, theta, reversal)
             if reversal > 0.0 and h > 64 * h_min:
                 h = h * reversal
                 n_rev += 1

@@ -36,7 +36,7 @@ from ..support import config
 from ..support.errors import BondGraphError, ParameterError, SignalError, did_you_mean
 from . import implicit
 from .codegen import compile_equations, parameter_vector
-from .integrators import STATUS, Flags, dopri5, eval_inputs, input_values
+from .integrators import STATUS, Flags, dopri5, eval_inputs, input_values, reversal_at
 from .model_functions import ModelFunctions
 from .signal_bank import SignalBank
 from .stiffness import DENSE_EIGEN, SparseJacobian, spectral_radius, stiffness
@@ -317,6 +317,7 @@ class Simulator:
             *self.compiled.integrator_functions,
             sparse.compiled.jac,
             input_values,
+            reversal_at,
             x,
             th,
             mem,
