@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit, types
 from scipy.integrate._ivp import radau as _radau
 
-from .integrators import _FLAGS, INPUTS_TYPE, REVERSAL_TYPE
+from .integrators import _FLAGS, INPUTS_TYPE, REVERSAL_TYPE, SIGNAL_TYPES
 from .model_functions import FUNCTION_TYPE
 
 _C = np.ascontiguousarray(_radau.C, float)
@@ -225,6 +225,21 @@ def _factor(Ap, Ai, Ax, q, rs, Lp, Li, Lx, Up, Ui, Ux, pinv, x, xi, stack, pstac
         Ux = np.empty(2 * Ux.shape[0], Ux.dtype)
 
 
+@njit(cache=True)
+def _lu_storage(n, cap, like):
+    """Empty L, U (room for ``cap`` entries each, values of ``like``'s dtype), pinv and row scales."""
+    return (
+        np.zeros(n + 1, np.int64),
+        np.empty(cap, np.int64),
+        np.empty(cap, like.dtype),
+        np.zeros(n + 1, np.int64),
+        np.empty(cap, np.int64),
+        np.empty(cap, like.dtype),
+        np.empty(n, np.int64),
+        np.empty(n),
+    )
+
+
 # ---- the Jacobian program's numeric part ---------------------------------------------------
 
 
@@ -325,15 +340,7 @@ _STATS = types.NamedUniTuple(types.int64, len(ImplicitStats._fields), ImplicitSt
         _f1,
         _f1,
         types.int64,
-        _i1,
-        _f2,
-        _i1,
-        _i1,
-        _f1,
-        _f1,
-        _i1,
-        _f1,
-        _f1,
+        *SIGNAL_TYPES,
         types.float64,
         _f1,
         _f1,
@@ -446,22 +453,8 @@ def radau5(
     Ar = np.empty(nnz)
     Ac = np.empty(nnz, np.complex128)
     cap = 4 * nnz + 8 * N
-    Lp_r = np.zeros(N + 1, np.int64)
-    Up_r = np.zeros(N + 1, np.int64)
-    Li_r = np.empty(cap, np.int64)
-    Ui_r = np.empty(cap, np.int64)
-    Lx_r = np.empty(cap)
-    Ux_r = np.empty(cap)
-    pinv_r = np.empty(N, np.int64)
-    rs_r = np.empty(N)
-    Lp_c = np.zeros(N + 1, np.int64)
-    Up_c = np.zeros(N + 1, np.int64)
-    Li_c = np.empty(cap, np.int64)
-    Ui_c = np.empty(cap, np.int64)
-    Lx_c = np.empty(cap, np.complex128)
-    Ux_c = np.empty(cap, np.complex128)
-    pinv_c = np.empty(N, np.int64)
-    rs_c = np.empty(N)
+    Lp_r, Li_r, Lx_r, Up_r, Ui_r, Ux_r, pinv_r, rs_r = _lu_storage(N, cap, Ar)
+    Lp_c, Li_c, Lx_c, Up_c, Ui_c, Ux_c, pinv_c, rs_c = _lu_storage(N, cap, Ac)
     br = np.zeros(N)
     bc = np.zeros(N, np.complex128)
     xr = np.zeros(N)

@@ -212,6 +212,8 @@ class Stats(NamedTuple):
 _FLAGS = types.NamedUniTuple(types.boolean, len(Flags._fields), Flags)
 _STATS = types.NamedUniTuple(types.int64, len(Stats._fields), Stats)
 _FN4 = (FUNCTION_TYPE,) * 4
+#: the types of SignalBank.args() (kind, par, off, len, tt, tv, cur), then t_out, t_break
+SIGNAL_TYPES = (_i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1)
 
 
 @njit(
@@ -222,15 +224,7 @@ _FN4 = (FUNCTION_TYPE,) * 4
         _f1,
         _f1,
         types.int64,
-        _i1,
-        _f2,
-        _i1,
-        _i1,
-        _f1,
-        _f1,
-        _i1,
-        _f1,
-        _f1,
+        *SIGNAL_TYPES,
         types.float64,
         _f1,
         types.float64,
