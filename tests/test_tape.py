@@ -25,7 +25,7 @@ def test_tape_equals_compiled(settings):
     assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a))
 
 
-def test_tape_evaluates_nonlinear_functions():
+def nonlinear_oscillator():
     g = bg.Model("nl")
     V = g.input("V")
     g.add(
@@ -39,6 +39,11 @@ def test_tape_evaluates_nonlinear_functions():
     for e in ("m", "k", "r"):
         g.bond("j", e)
     g.output("x", g.displacement("k"))
+    return g
+
+
+def test_tape_evaluates_nonlinear_functions():
+    g = nonlinear_oscillator()
     t = np.linspace(0, 3, 301)
     with config.override({"codegen.tape_threshold": 10**9}):
         a = bg.simulate(g, t, {"V": bg.Sine(1.0, 0.5)}, rtol=1e-10)["x"]

@@ -12,6 +12,7 @@ sampled with white sensor noise.
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg as sl
 import sympy as sp
 from conftest import MODELS
 
@@ -200,3 +201,35 @@ def t226_data(effect: str, duration: float = 2.0, rate: float = 20000.0, noise: 
     base = load_model(MODELS / "bimorph_t226.py").model
     w = {str(k): v for k, v in base.parameter_table().items()}["omega_1"] * T226_CHANGES["omega_1"]
     return measure(t226_truth(effect), t, bimorph_drive(t, w), noise, seed)
+
+
+# ---- exact references ---------------------------------------------------------------------------
+def exact_step_response(sim, t, inputs):
+    """The first output of a linear model with one driven input (the first) whose drive is
+    constant between samples (a step on the sample grid): x_{k+1} = Φ·x_k + Γ·V_k with Φ, Γ
+    from one matrix exponential is exact, no integrator involved."""
+    th = sim.theta()
+    nu = len(sim.input_names)
+    x = sim.initial_state(th)
+    bank = sim.signal_bank(inputs)
+    A = sim.jacobian_at(0.0, x, th, np.zeros(1), bank)
+    aux = sim.compiled.aux.copy()
+
+    def rates(V):
+        out = np.zeros(x.size)
+        sim.compiled.rhs(0.0, np.zeros(x.size), np.r_[V, np.zeros(nu - 1)], np.zeros(nu), th, np.zeros(1), aux, out)
+        return out
+
+    B = rates(1.0) - rates(0.0)
+    dt = t[1] - t[0]
+    M = np.zeros((x.size + 1, x.size + 1))
+    M[:-1, :-1], M[:-1, -1] = A * dt, B * dt
+    E = sl.expm(M)
+    V = bank.sample(t)[:, 0]
+    y = np.zeros(t.size)
+    for k in range(t.size - 1):
+        x = E[:-1, :-1] @ x + E[:-1, -1] * V[k]
+        out = np.zeros(len(sim.output_names))
+        sim.compiled.output(0.0, x, np.zeros(nu), np.zeros(nu), th, np.zeros(1), aux, out)
+        y[k + 1] = out[0]
+    return y

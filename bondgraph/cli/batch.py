@@ -7,7 +7,7 @@ import json
 import sys
 
 from ..support.errors import UsageError
-from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, arg, command, outputs, write_text
+from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, arg, command, module_constant, outputs, write_text
 
 ACTIONS = ("diagnose", "fit", "simulate", "sweep")
 _ONLY = {
@@ -84,7 +84,11 @@ _ONLY = {
         ),
         arg("--t-end", type=float, help="(simulate, sweep) end time (s); default from the model's EXPERIMENT"),
         arg("--dt", type=float, help="(simulate, sweep) output sample interval (s)"),
-        arg("--method", choices=("auto", "dopri5", "radau", "bdf", "lsoda"), help="(simulate, sweep) integrator"),
+        arg(
+            "--method",
+            choices=module_constant("bondgraph.numerics.simulate", "METHODS"),
+            help="(simulate, sweep) integrator",
+        ),
         arg("--rtol", type=float, help="(simulate, sweep) relative tolerance"),
         arg(
             "--vary",

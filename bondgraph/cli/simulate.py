@@ -123,7 +123,10 @@ def run(args):
         wrote = [p for p in (args.out, args.plot) if p]
         print(
             f"simulated {res.t[-1] - res.t[0]:g} s of {lm.model.name} in {time.time() - started:.2f} s "
-            f"({res.stats['method']}, {res.stats['steps']} steps)"
+            f"({res.stats['method']}{' on the tape interpreter' if sim.compiled.route == 'tape' else ''}, "
+            f"{res.stats['steps']} steps"
+            + ("" if res.stats["reason"] == "asked for" else f"; auto: {res.stats['reason']}")
+            + ")"
             + (f"; wrote {', '.join(wrote)}" if wrote else "")
             + "".join(f"; {n}" for n in notes),
             file=sys.stderr,

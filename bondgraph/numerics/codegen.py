@@ -1,7 +1,8 @@
 """Compile a straight-line program to numba-compiled numeric functions.
 
 The generated functions follow the calling convention of :mod:`bondgraph.numerics.model_functions`
-(``rhs``, ``output``, ``opin``, ``commit`` and, on demand, ``jac``).  Memory operators are
+(``rhs``, ``output``, ``opin``, ``commit`` and, on demand, ``jac``: the local partials of the
+sparse Jacobian program of :mod:`bondgraph.numerics.jacobian`).  Memory operators are
 called through their compiled kernels (:meth:`MemoryOperator.kernels`), which the generated
 module receives as globals before it is compiled; a fingerprint of the kernels' code is part
 of the source, so changed kernels make a new module.
@@ -20,6 +21,7 @@ import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable, NamedTuple
 
 import numpy as np
 import sympy as sp
@@ -27,6 +29,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from ..equations.system import Equations
 from ..support import config
+from .jacobian import JacobianProgram, slope_symbol
 from .model_functions import ARGUMENTS, SIGNATURE, ModelFunctions
 
 _NO_AUX = np.zeros(1)
@@ -67,6 +70,10 @@ class _Printer(PythonCodePrinter):
     def _print_Rational(self, expr):
         return repr(float(expr))
 
+    def _print_RightSign(self, expr):
+        a = self._print(expr.args[0])
+        return f"(1.0 if {a} >= 0.0 else -1.0)"
+
     def _print_Heaviside(self, expr):
         a = self._print(expr.args[0])
         return f"(1.0 if {a} > 0.0 else (0.0 if {a} < 0.0 else 0.5))"
@@ -106,11 +113,16 @@ def layout(eqs: Equations) -> Layout:
     return Layout(names, mem_slices, prm_slices, pos)
 
 
-def generate_source(eqs: Equations, with_jacobian: bool = False) -> str:
-    """Python source of the compiled functions (see the module docstring)."""
+def generate_source(eqs: Equations, jacobian: JacobianProgram | None = None) -> str:
+    """Python source of the compiled functions (see the module docstring); with ``jacobian``,
+    of ``jac`` alone: the values of its local partials (:mod:`bondgraph.numerics.jacobian`)."""
     lay = layout(eqs)
-    pr = _Printer(lay.names)
+    names = dict(lay.names)
+    if jacobian is not None:
+        names.update({slope_symbol(k): f"_slope{k}" for k in jacobian.slopes})
+    pr = _Printer(names)
     op_index = {ob.symbol: k for k, ob in enumerate(eqs.operators)}
+    op_input = {op_index[st.var]: st.expr for st in eqs.program if st.op is not None}
     lines = ["import math", "import numpy as np", "from numba import njit", "", f"SIG = {SIGNATURE!r}", ""]
     for k, ob in enumerate(eqs.operators):
         kind = type(ob.operator)
@@ -120,20 +132,33 @@ def generate_source(eqs: Equations, with_jacobian: bool = False) -> str:
         )
     signature = ", ".join(ARGUMENTS)
 
-    def function(name: str, targets: list[sp.Expr], extra: list[str] | None = None) -> list[str]:
+    def function(name: str, targets: list[sp.Expr], extra: list[str] | None = None, slopes=()) -> list[str]:
         src = ["", "@njit(SIG, cache=True)", f"def {name}({signature}):"]
-        for st in eqs.needed(targets)[0]:
+        inputs = [op_input[k] for k in slopes]
+        for st in eqs.needed([*targets, *inputs])[0]:
             if st.op is not None:
                 j = op_index[st.var]
                 (a, b), (c, d) = lay.mem_slices[j], lay.prm_slices[j]
-                src.append(f"    {lay.names[st.var]} = op{j}_output({pr.doprint(st.expr)}, mem[{a}:{b}], th[{c}:{d}])")
+                src.append(f"    {names[st.var]} = op{j}_output({pr.doprint(st.expr)}, mem[{a}:{b}], th[{c}:{d}])")
             else:
-                src.append(f"    {lay.names[st.var]} = {pr.doprint(st.expr)}")
+                src.append(f"    {names[st.var]} = {pr.doprint(st.expr)}")
+        for k in slopes:  # the right difference quotient of the operator's output at frozen memory
+            (a, b), (c, d) = lay.mem_slices[k], lay.prm_slices[k]
+            scale = f"max(abs(_v), np.max(np.abs(mem[{a}:{b}])))" if b > a else "abs(_v)"
+            src += [
+                f"    _v = {pr.doprint(op_input[k])}",
+                f"    _d = {2.0**-26!r} * {scale}",
+                f"    _d = (_d if _d > 0.0 else 1e-12) * aux[{k}]",
+                f"    _slope{k} = (op{k}_output(_v + _d, mem[{a}:{b}], th[{c}:{d}]) - "
+                f"op{k}_output(_v, mem[{a}:{b}], th[{c}:{d}])) / _d",
+            ]
         src += [f"    out[{i}] = {pr.doprint(e)}" for i, e in enumerate(targets)]
         src += extra or []
         src.append("    return")
         return src
 
+    if jacobian is not None:
+        return "\n".join(lines + function("jac", jacobian.partials, slopes=jacobian.slopes)) + "\n"
     rates = [eqs.rates[s] for s in eqs.state_symbols]
     opins = [st.expr for st in eqs.program if st.op is not None]
     lines += function("rhs", rates)
@@ -144,16 +169,13 @@ def generate_source(eqs: Equations, with_jacobian: bool = False) -> str:
         (a, b), (c, d) = lay.mem_slices[j], lay.prm_slices[j]
         commits.append(f"    op{j}_commit(out[{j}], mem[{a}:{b}], th[{c}:{d}])")
     lines += function("commit", opins, commits)
-    if with_jacobian:
-        xs = eqs.state_symbols
-        lines += function("jac", list(eqs.jacobian([eqs.rates[s] for s in xs], xs, inline=False)))
     return "\n".join(lines) + "\n"
 
 
-def compile_equations(eqs: Equations, with_jacobian: bool = False) -> ModelFunctions:
+def compile_equations(eqs: Equations) -> ModelFunctions:
     """The numeric functions of ``eqs``: generated, cached and compiled by numba, or for long
     programs (more statements than ``codegen.tape_threshold``) the tape interpreter."""
-    if len(eqs.program) > config.get("codegen.tape_threshold") and not with_jacobian:
+    if len(eqs.program) > config.get("codegen.tape_threshold"):
         from . import tape
 
         try:
@@ -162,7 +184,41 @@ def compile_equations(eqs: Equations, with_jacobian: bool = False) -> ModelFunct
             pass
         else:
             return ModelFunctions(tape.rhs, tape.output, tape.nothing, tape.nothing, layout(eqs), program, route="tape")
-    src = generate_source(eqs, with_jacobian)
+    src = generate_source(eqs)
+    module = _load(eqs, src)
+    return ModelFunctions(
+        module.rhs, module.output, module.opin, module.commit, layout(eqs), _NO_AUX, module.__file__, "numba"
+    )
+
+
+class CompiledJacobian(NamedTuple):
+    """``jac(t, x, u, du, th, mem, aux, out)`` writing the local partials of a
+    :class:`~bondgraph.numerics.jacobian.JacobianProgram`, its ``aux`` and its route.
+
+    On the numba route ``aux[k]`` is the direction (+1 or −1) in which memory operator ``k``'s
+    slope is taken: the direction its input last moved (the integrator keeps it up to date)."""
+
+    jac: Callable
+    aux: np.ndarray
+    route: str
+
+
+def compile_jacobian(eqs: Equations, jacobian: JacobianProgram) -> CompiledJacobian:
+    """The partials of ``jacobian`` compiled like :func:`compile_equations` compiles a model
+    (the tape when the statements they need and the partials outnumber ``codegen.tape_threshold``)."""
+    if len(eqs.needed(jacobian.partials)[0]) + len(jacobian.partials) > config.get("codegen.tape_threshold"):
+        from . import tape
+
+        try:
+            return CompiledJacobian(tape.rhs, tape.build_tape(eqs, (jacobian.partials, [])), "tape")
+        except tape.TapeUnsupported:
+            pass
+    directions = np.ones(max(len(eqs.operators), 1))
+    return CompiledJacobian(_load(eqs, generate_source(eqs, jacobian)).jac, directions, "numba")
+
+
+def _load(eqs: Equations, src: str):
+    """The generated module of ``src``, from the cache directory (written there first if new)."""
     key = hashlib.sha256(src.encode()).hexdigest()[:20]
     path = cache_dir() / f"bg_{key}.py"
     if not path.exists() or path.read_text() != src:
@@ -184,17 +240,7 @@ def compile_equations(eqs: Equations, with_jacobian: bool = False) -> ModelFunct
         except BaseException:
             del sys.modules[modname]
             raise
-    return ModelFunctions(
-        module.rhs,
-        module.output,
-        module.opin,
-        module.commit,
-        layout(eqs),
-        _NO_AUX,
-        getattr(module, "jac", None),
-        str(path),
-        "numba",
-    )
+    return module
 
 
 def parameter_vector(eqs: Equations) -> np.ndarray:

@@ -102,6 +102,39 @@ def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du=True):
                 du[i] = -slope
 
 
+_f1 = types.float64[::1]
+_f2 = types.float64[:, ::1]
+_i1 = types.int64[::1]
+#: type of :func:`input_values` as a first-class function value
+INPUTS_TYPE = types.FunctionType(types.void(types.float64, _i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1, types.boolean))
+
+
+@njit(INPUTS_TYPE.signature, cache=True)
+def input_values(t, kind, par, off, ln, tt, tv, cur, u, du, with_du):
+    """:func:`eval_inputs` as a compiled function value, for kernels in other files (numba's
+    disk cache would not see a change to this file in a kernel that inlined it)."""
+    eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du)
+
+
+#: type of :func:`reversal_at` as a first-class function value
+REVERSAL_TYPE = types.FunctionType(types.float64(_f1, _f1, _f1, types.float64, types.float64))
+
+
+@njit(REVERSAL_TYPE.signature, cache=True)
+def reversal_at(v0, v1, vt, theta, reversal):
+    """The memory contract's test: ``theta`` if an operator input reverses between the step's
+    start (``v0``), its interior point θ (``vt``) and its end (``v1``), and θ is earlier than
+    ``reversal`` (negative: none yet); ``reversal`` otherwise."""
+    for j in range(v0.shape[0]):
+        tol = 1e-9 * (abs(v0[j]) + abs(v1[j])) + 1e-300
+        d_in = vt[j] - v0[j]
+        d_out = v1[j] - vt[j]
+        if (d_in > tol and d_out < -tol) or (d_in < -tol and d_out > tol):
+            if reversal < 0.0 or theta < reversal:
+                reversal = theta
+    return reversal
+
+
 @njit(cache=True)
 def sample_inputs(t, kind, par, off, ln, tt, tv, cur, out):
     """Values of all inputs at the times ``t`` into ``out`` (len(t) × n_inputs)."""
@@ -119,10 +152,6 @@ _E = np.ascontiguousarray(RK45.E, float)
 _P = np.ascontiguousarray(RK45.P, float)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _N_CHECK = 4  # interior points where operator inputs are checked for a reversal
-
-_f1 = types.float64[::1]
-_f2 = types.float64[:, ::1]
-_i1 = types.int64[::1]
 
 STATUS = {0: "ok", 1: "step size underflow", 2: "too many steps", 3: "non-finite state"}
 
@@ -183,6 +212,8 @@ class Stats(NamedTuple):
 _FLAGS = types.NamedUniTuple(types.boolean, len(Flags._fields), Flags)
 _STATS = types.NamedUniTuple(types.int64, len(Stats._fields), Stats)
 _FN4 = (FUNCTION_TYPE,) * 4
+#: the types of SignalBank.args() (kind, par, off, len, tt, tv, cur), then t_out, t_break
+SIGNAL_TYPES = (_i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1)
 
 
 @njit(
@@ -193,15 +224,7 @@ _FN4 = (FUNCTION_TYPE,) * 4
         _f1,
         _f1,
         types.int64,
-        _i1,
-        _f2,
-        _i1,
-        _i1,
-        _f1,
-        _f1,
-        _i1,
-        _f1,
-        _f1,
+        *SIGNAL_TYPES,
         types.float64,
         _f1,
         types.float64,
@@ -401,13 +424,7 @@ def dopri5(
                 if opin_inputs:
                     eval_inputs(t + theta * h, skind, spar, soff, slen, stt, stv, scur, u, du, rates)
                 opin(t + theta * h, xd, u, du, th, mem, aux, vt)
-                for j in range(nv):
-                    tol = 1e-9 * (abs(v0[j]) + abs(v1[j])) + 1e-300
-                    d_in = vt[j] - v0[j]
-                    d_out = v1[j] - vt[j]
-                    if (d_in > tol and d_out < -tol) or (d_in < -tol and d_out > tol):
-                        if reversal < 0.0 or theta < reversal:
-                            reversal = theta
+                reversal = reversal_at(v0, v1, vt, theta, reversal)
             if reversal > 0.0 and h > 64 * h_min:
                 h = h * reversal
                 n_rev += 1

@@ -11,7 +11,8 @@ every model because these functions are passed to it as first-class function val
 * ``opin``   out = inputs of the memory operators (for step-reversal checks)
 * ``commit`` advance the operators' memory to the current input (accepted steps only);
   out receives the operator inputs
-* ``jac``    out = ∂(dx/dt)/∂x, row-major (implicit solvers only)
+* ``jac``    out = the local partials of the sparse Jacobian program (implicit solvers only;
+  compiled on its own, see :func:`bondgraph.numerics.codegen.compile_jacobian`)
 
 ``mem`` is the operator memory and nothing else; ``aux`` is read-only data and scratch space a
 route needs (the tape interpreter's program and registers; empty for generated code).
@@ -39,7 +40,6 @@ class ModelFunctions(NamedTuple):
     commit: Callable
     layout: object
     aux: np.ndarray
-    jac: Callable | None = None
     source: str | None = None
     route: str = "numba"  # or "tape"
 

@@ -1,9 +1,12 @@
 """Simulation: derive once, compile once, run many times (new parameters, inputs, x0).
 
-Methods: ``dopri5`` (compiled Dormand–Prince 5(4), the default), and scipy's stiff solvers
-``radau``, ``bdf``, ``lsoda`` fed with the compiled right-hand side and Jacobian.  ``auto``
-picks ``radau`` when the Jacobian's eigenvalues at the start make the explicit method
-stability-bound for more than a few million steps.
+Methods: ``dopri5`` (compiled Dormand–Prince 5(4)); ``radau5``, the compiled implicit route
+for stiff models (Radau IIA on the sparse analytic Jacobian, :mod:`.implicit`); and scipy's
+stiff solvers ``radau``, ``bdf``, ``lsoda`` fed with the compiled right-hand side and (radau,
+bdf) the same analytic Jacobian.  ``auto`` picks ``radau5`` when the model is stiff for the
+run asked (:mod:`.stiffness`: the Jacobian's spectral radius at the start against the
+output's band, and the explicit method's step count), ``dopri5`` otherwise; the result's
+``stats["reason"]`` says why.
 
 An integrator sees the inputs only where it evaluates them, and a step the error test allows
 can stride over a feature of a tabulated input that falls between two stages (a pulse reaching
@@ -31,12 +34,14 @@ from ..model.graph import Model
 from ..model.signals import Constant, Signal
 from ..support import config
 from ..support.errors import BondGraphError, ParameterError, SignalError, did_you_mean
+from . import implicit
 from .codegen import compile_equations, parameter_vector
-from .integrators import STATUS, Flags, dopri5, eval_inputs
+from .integrators import STATUS, Flags, dopri5, eval_inputs, input_values, reversal_at
 from .model_functions import ModelFunctions
 from .signal_bank import SignalBank
+from .stiffness import DENSE_EIGEN, SparseJacobian, spectral_radius, stiffness
 
-METHODS = ("auto", "dopri5", "radau", "bdf", "lsoda")
+METHODS = ("auto", "dopri5", "radau5", "radau", "bdf", "lsoda")
 
 
 def _signal(name: str, value) -> Signal:
@@ -102,7 +107,7 @@ class Simulator:
     def __init__(self, model: Model | Equations):
         self.eqs = model if isinstance(model, Equations) else derive(model)
         self.compiled: ModelFunctions = compile_equations(self.eqs)
-        self._jac: ModelFunctions | None = None
+        self._sparse: SparseJacobian | Exception | None = None
         self.state_names = [str(s) for s in self.eqs.state_symbols]
         self.output_names = list(self.eqs.outputs)
         self.input_names = [str(u) for u in self.eqs.inputs]
@@ -183,9 +188,12 @@ class Simulator:
         ``params`` maps parameter names to values; ``progress(fraction)`` is called between
         chunks of long runs.  ``rtol``, ``atol`` and ``max_steps`` default to the settings
         ``simulate.rtol``, ``simulate.atol_floor`` and ``simulate.max_steps``.  ``deadline``
-        (a ``time.monotonic()`` value): past it the stiff solvers (radau, bdf, lsoda) stop with
-        :class:`SimulationTimeout` at their next step; the compiled dopri5 checks it between
-        chunks only (one chunk unless ``progress`` is given)."""
+        (a ``time.monotonic()`` value): past it scipy's solvers (radau, bdf, lsoda) stop with
+        :class:`SimulationTimeout` at their next step, radau5 at the start and between the
+        twenty chunks it then runs in; the compiled dopri5 checks it between chunks only (one
+        chunk unless ``progress`` is given).  With ``method="auto"`` (see :meth:`choose`) a
+        radau5 run that fails is repeated on dopri5.  ``stats`` of the result: the method
+        that ran and the reason, step and call counts."""
         rtol = config.get("simulate.rtol") if rtol is None else rtol
         atol = config.get("simulate.atol_floor") if atol is None else atol
         max_steps = config.get("simulate.max_steps") if max_steps is None else max_steps
@@ -200,16 +208,38 @@ class Simulator:
         x = self.initial_state(th) if x0 is None else np.asarray(x0, float).copy()
         bank = self.signal_bank(inputs)
         mem = self.initial_memory(t[0], x, th, bank)
-        aux = self.compiled.aux.copy()  # the tape's registers are written
-        n = x.size
-        atol_v = np.broadcast_to(np.asarray(atol, float), (n,)).copy()
-        if method == "auto":
-            method = self.choose_method(t, x, th, mem, bank)
+        atol_v = np.broadcast_to(np.asarray(atol, float), (x.size,)).copy()
         max_step = min(max_step, config.get("simulate.table_steps") * bank.table_spacing())
+        args = (t, x, th, bank, rtol, atol_v, max_step, max_steps, progress, deadline)
+        if method != "auto":
+            return self._integrate(method, "asked for", mem, *args)
+        method, reason = self.choose(t, x, th, mem, bank)
+        if method == "radau5":
+            try:
+                return self._integrate(method, reason, mem.copy(), *args)
+            except SimulationTimeout:
+                raise
+            except SimulationError as exc:  # auto never leaves a model without an answer
+                method, reason = "dopri5", f"{reason}; radau5 failed ({exc}), so dopri5 ran"
+        return self._integrate(method, reason, mem, *args)
+
+    def _integrate(
+        self, method, reason, mem, t, x, th, bank, rtol, atol_v, max_step, max_steps, progress, deadline
+    ) -> SimResult:
+        """The integration of :meth:`run` with ``method`` (not auto), from memory ``mem``."""
+        n = x.size
+        aux = self.compiled.aux.copy()  # the tape's registers are written
         X = np.empty((t.size, n))
         Y = np.empty((t.size, len(self.output_names)))
         stats: Counter = Counter()
         n_chunks = 1 if progress is None else int(min(50, max(1, t.size // 20000)))
+        if method == "radau5":
+            sparse = self.sparse_jacobian()
+            jaux = sparse.compiled.aux.copy()
+            h_io = np.zeros(1)
+            if deadline is not None:  # the compiled loop cannot look at the clock: check between chunks
+                _check_deadline(deadline, float(t[0]))
+                n_chunks = max(n_chunks, int(min(20, t.size - 1)))
         bounds = np.linspace(0, t.size - 1, n_chunks + 1).round().astype(int)
         for a, b in zip(bounds[:-1], bounds[1:]):
             tc = t[a : b + 1]
@@ -246,6 +276,12 @@ class Simulator:
                     rhs_calls=st.rhs_calls,
                     reversal_rejections=st.reversal_rejections,
                 )
+            elif method == "radau5":
+                stats.update(
+                    self._run_radau5(
+                        sparse, tc, x, th, mem, aux, jaux, bank, breaks, rtol, atol_v, h_io, max_step, max_steps, Xc, Yc
+                    )
+                )
             else:
                 stats += self._run_scipy(
                     method, tc, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, Xc, Yc, deadline
@@ -259,42 +295,139 @@ class Simulator:
             t,
             {n: Y[:, i] for i, n in enumerate(self.output_names)},
             {n: X[:, i] for i, n in enumerate(self.state_names)},
-            {"method": method, **{k: int(stats[k]) for k in ("steps", "rejected", "rhs_calls", "reversal_rejections")}},
+            {
+                "method": method,
+                "reason": reason,
+                **{k: int(stats[k]) for k in ("steps", "rejected", "rhs_calls", "reversal_rejections")},
+                **(
+                    {k: int(stats[k]) for k in ("jacobians", "factorizations", "newton_failures")}
+                    if method == "radau5"
+                    else {}
+                ),
+            },
             bank,
         )
 
-    def jacobian_at(self, t0, x, th, mem, bank) -> np.ndarray:
-        """∂(dx/dt)/∂x from the compiled symbolic Jacobian."""
-        if self._jac is None:
-            self._jac = compile_equations(self.eqs, with_jacobian=True)
-        n = x.size
-        u, du = np.zeros(max(len(self.input_names), 1)), np.zeros(max(len(self.input_names), 1))
-        eval_inputs(t0, *bank.args(), u, du)
-        J = np.zeros(n * n)
-        self._jac.jac(t0, x, u, du, th, mem, self._jac.aux, J)
-        return J.reshape(n, n)
+    def _run_radau5(
+        self, sparse, t, x, th, mem, aux, jaux, bank, breaks, rtol, atol_v, h_io, max_step, max_steps, X, Y
+    ) -> dict:
+        """One chunk on the compiled implicit integrator; returns its counts."""
+        p = sparse.program
+        st = implicit.radau5(
+            *self.compiled.integrator_functions,
+            sparse.compiled.jac,
+            input_values,
+            reversal_at,
+            x,
+            th,
+            mem,
+            aux,
+            jaux,
+            len(self.eqs.operators),
+            *bank.args(),
+            np.ascontiguousarray(t),
+            breaks,
+            float(rtol),
+            atol_v,
+            h_io,
+            float(max_step),
+            int(max_steps),
+            X,
+            Y,
+            self._flags,
+            p.indptr,
+            p.indices,
+            p.slots,
+            p.diagonal,
+            p.plan,
+            p.n_work,
+            p.first_accumulator,
+            p.constant,
+            sparse.column_order(),
+        )
+        if st.status != 0:
+            raise SimulationError(
+                f"integration failed ({implicit.STATUS[st.status]}) near t = "
+                f"{t[max(st.written - 1, 0)]:.6g} s; check parameters or try --method dopri5"
+            )
+        return {k: getattr(st, k) for k in st._fields if k not in ("status", "written")}
 
-    def choose_method(self, t, x, th, mem, bank) -> str:
-        """dopri5 unless the start-point Jacobian (finite differences) makes it stability-bound."""
-        n = x.size
-        if n == 0:
-            return "dopri5"
+    def sparse_jacobian(self) -> SparseJacobian:
+        """The model's sparse analytic Jacobian (:mod:`.stiffness`), built and compiled once.
+
+        Raises
+        ------
+        SimulationError
+            The Jacobian could not be built or compiled (the message says why)."""
+        if self._sparse is None:
+            try:
+                self._sparse = SparseJacobian(self.eqs)
+            except Exception as exc:  # sympy or numba refused an expression of the model
+                self._sparse = exc
+        if isinstance(self._sparse, Exception):
+            raise SimulationError(
+                f"no analytic Jacobian for this model ({type(self._sparse).__name__}: {self._sparse})"
+            )
+        return self._sparse
+
+    def jacobian_at(self, t0, x, th, mem, bank, sparse: bool = False):
+        """∂(dx/dt)/∂x at time t0 and state x from the sparse analytic Jacobian: a dense array,
+        or with ``sparse`` a scipy CSC matrix.  Where the equations have a kink the entries
+        are the derivatives from the right (:mod:`bondgraph.numerics.jacobian`)."""
+        sj = self.sparse_jacobian()
         nu = max(len(self.input_names), 1)
         u, du = np.zeros(nu), np.zeros(nu)
-        eval_inputs(t[0], *bank.args(), u, du)
+        eval_inputs(t0, *bank.args(), u, du)
+        J = sj.reduced(sj.augmented(t0, np.ascontiguousarray(x, float), u, du, th, mem))
+        return J if sparse else J.toarray()
+
+    def choose(self, t, x, th, mem, bank) -> tuple[str, str]:
+        """The method ``auto`` runs, and why: ``radau5`` when the model is stiff for the output
+        times ``t`` (:func:`bondgraph.numerics.stiffness.stiffness`), ``dopri5`` otherwise.
+
+        The spectral radius comes from a finite-difference Jacobian of the compiled right-hand
+        side for small models (no compilation), from the sparse analytic one above
+        ``DENSE_EIGEN`` states."""
+        n = x.size
+        if n == 0:
+            return "dopri5", "no states"
+        if n <= DENSE_EIGEN:
+            J = self._finite_difference_jacobian(t[0], x, th, mem, bank)
+            radius = float(np.max(np.abs(np.linalg.eigvals(J)))) if np.all(np.isfinite(J)) else 0.0
+        else:
+            try:
+                radius = spectral_radius(self.jacobian_at(t[0], x, th, mem, bank, sparse=True))
+            except SimulationError as exc:
+                return "dopri5", f"stiffness unknown: {exc}"
+        verdict = stiffness(radius, t)
+        if not verdict.stiff:
+            return "dopri5", verdict.reason()
+        try:
+            self.sparse_jacobian()
+        except SimulationError as exc:
+            return "dopri5", f"{verdict.reason()}, but {exc}"
+        return "radau5", verdict.reason()
+
+    def choose_method(self, t, x, th, mem, bank) -> str:
+        """The method ``auto`` runs (see :meth:`choose`)."""
+        return self.choose(t, x, th, mem, bank)[0]
+
+    def _finite_difference_jacobian(self, t0, x, th, mem, bank) -> np.ndarray:
+        n = x.size
+        nu = max(len(self.input_names), 1)
+        u, du = np.zeros(nu), np.zeros(nu)
+        eval_inputs(t0, *bank.args(), u, du)
         f0, f1 = np.zeros(n), np.zeros(n)
         aux = self.compiled.aux.copy()
-        self.compiled.rhs(t[0], x, u, du, th, mem, aux, f0)
+        self.compiled.rhs(t0, x, u, du, th, mem, aux, f0)
         J = np.zeros((n, n))
         for j in range(n):
             xp = x.copy()
             dxj = 1e-7 * max(abs(x[j]), 1e-9)
             xp[j] += dxj
-            self.compiled.rhs(t[0], xp, u, du, th, mem, aux, f1)
+            self.compiled.rhs(t0, xp, u, du, th, mem, aux, f1)
             J[:, j] = (f1 - f0) / dxj
-        lam = np.max(np.abs(np.linalg.eigvals(J))) if np.all(np.isfinite(J)) else 0.0
-        steps = (t[-1] - t[0]) * lam / 3.3
-        return "radau" if steps > config.get("simulate.explicit_step_limit") else "dopri5"
+        return J
 
     def _run_scipy(
         self, method, t, x, th, mem, aux, bank, breaks, rtol, atol_v, max_step, X, Y, deadline: float | None = None
@@ -316,10 +449,11 @@ class Simulator:
             return dx.copy()
 
         def jac(tt, xx):
-            return self.jacobian_at(tt, np.ascontiguousarray(xx), th, mem, bank)
+            return self.jacobian_at(tt, np.ascontiguousarray(xx), th, mem, bank, sparse=x.size > DENSE_EIGEN)
 
         solver_cls = {"radau": si.Radau, "bdf": si.BDF, "lsoda": si.LSODA}[method]
-        atol_v = np.maximum(atol_v, self._scale_atol(solver_cls, f, t, x, rtol, breaks, deadline))
+        kw = {"jac": jac} if method != "lsoda" else {}
+        atol_v = np.maximum(atol_v, self._scale_atol(solver_cls, f, t, x, rtol, breaks, deadline, kw))
         edges = [t[0], *breaks, t[-1]]
         k = 0
 
@@ -331,7 +465,6 @@ class Simulator:
         X[0], Y[0] = x, emit(t[0], x)
         k = 1
         for a, b in zip(edges[:-1], edges[1:]):
-            kw = {"jac": jac} if method != "lsoda" else {}
             s = solver_cls(f, a, x, b, rtol=rtol, atol=atol_v, max_step=max_step, **kw)
             while s.status == "running":
                 _check_deadline(deadline, s.t)
@@ -355,15 +488,16 @@ class Simulator:
             stats["rhs_calls"] += s.nfev
         return stats
 
-    def _scale_atol(self, solver_cls, f, t, x, rtol, breaks, deadline=None):
+    def _scale_atol(self, solver_cls, f, t, x, rtol, breaks, deadline=None, kw=None):
         """atol_i = rtol·max|x_i| from a loose first pass (scipy's solvers weigh errors by
-        atol + rtol·|x|, which chases rounding noise when a state crosses zero)."""
+        atol + rtol·|x|, which chases rounding noise when a state crosses zero); ``kw``: the
+        solver's Jacobian."""
         peak = np.abs(x).copy()
         floor = config.get("simulate.atol_floor")
         edges = [t[0], *breaks, t[-1]]
         xx = x.copy()
         for a, b in zip(edges[:-1], edges[1:]):
-            s = solver_cls(f, a, xx, b, rtol=1e-3, atol=floor)
+            s = solver_cls(f, a, xx, b, rtol=1e-3, atol=floor, **(kw or {}))
             while s.status == "running":
                 _check_deadline(deadline, s.t)
                 s.step()

@@ -20,13 +20,43 @@ import sympy as sp
 from numba import njit
 
 from ..equations.system import Equations
+from .jacobian import RightSign
 from .model_functions import SIGNATURE
 
 HEADER = 8
-(CONST, LDX, LDU, LDDU, LDTH, ADD, MUL, DIV, NEG, POWC, POW, SIN, COS, EXP, LOG, SQRT, ABS, SIGN, TANH, STORE) = range(
-    20
-)
-_FUNCS = {sp.sin: SIN, sp.cos: COS, sp.exp: EXP, sp.log: LOG, sp.Abs: ABS, sp.sign: SIGN, sp.tanh: TANH}
+(
+    CONST,
+    LDX,
+    LDU,
+    LDDU,
+    LDTH,
+    ADD,
+    MUL,
+    DIV,
+    NEG,
+    POWC,
+    POW,
+    SIN,
+    COS,
+    EXP,
+    LOG,
+    SQRT,
+    ABS,
+    SIGN,
+    TANH,
+    RSIGN,
+    STORE,
+) = range(21)
+_FUNCS = {
+    sp.sin: SIN,
+    sp.cos: COS,
+    sp.exp: EXP,
+    sp.log: LOG,
+    sp.Abs: ABS,
+    sp.sign: SIGN,
+    sp.tanh: TANH,
+    RightSign: RSIGN,
+}
 
 
 class TapeUnsupported(Exception):
@@ -95,16 +125,21 @@ class _Builder:
         self.ops.append((STORE, i, self.expr(e), 0, 0.0))
 
 
-def build_tape(eqs: Equations) -> np.ndarray:
-    """The tape of ``eqs`` (see the module docstring); TapeUnsupported if it cannot be built."""
+def build_tape(eqs: Equations, roots: tuple[list, list] | None = None) -> np.ndarray:
+    """The tape of ``eqs`` (see the module docstring); TapeUnsupported if it cannot be built.
+
+    ``roots``: the expressions of the two sections instead of the rates and the outputs (the
+    tape's ``rhs`` then writes the first, ``output`` the second)."""
     if eqs.operators:
         raise TapeUnsupported("memory operators")
+    if roots is None:
+        roots = ([eqs.rates[s] for s in eqs.state_symbols], list(eqs.outputs.values()))
     sections = []
-    for roots in ([eqs.rates[s] for s in eqs.state_symbols], list(eqs.outputs.values())):
+    for section in roots:
         b = _Builder(eqs)
-        for st in eqs.needed(roots)[0]:
+        for st in eqs.needed(section)[0]:
             b.reg[st.var] = b.expr(st.expr)
-        for i, r in enumerate(roots):
+        for i, r in enumerate(section):
             b.store(i, r)
         sections.append((np.array(b.ops, float).reshape(-1, 5), b.n_regs))
     (rhs_ops, rhs_regs), (out_ops, out_regs) = sections
@@ -112,7 +147,7 @@ def build_tape(eqs: Equations) -> np.ndarray:
     out_off = rhs_off + rhs_ops.size
     reg_off = out_off + out_ops.size
     tape = np.zeros(reg_off + max(rhs_regs, out_regs, 1))
-    tape[:HEADER] = [len(rhs_ops), rhs_off, len(out_ops), out_off, len(eqs.states), len(eqs.outputs), reg_off, 0]
+    tape[:HEADER] = [len(rhs_ops), rhs_off, len(out_ops), out_off, len(roots[0]), len(roots[1]), reg_off, 0]
     tape[rhs_off:out_off] = rhs_ops.ravel()
     tape[out_off:reg_off] = out_ops.ravel()
     return tape
@@ -171,6 +206,8 @@ def _run(n_ops, off, x, u, du, th, tape, out):
             tape[dst] = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
         elif code == TANH:
             tape[dst] = math.tanh(tape[reg + a])
+        elif code == RSIGN:
+            tape[dst] = 1.0 if tape[reg + a] >= 0.0 else -1.0
         else:  # STORE: out[index] = register a
             out[int(tape[base + 1])] = tape[reg + a]
 
