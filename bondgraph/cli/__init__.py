@@ -111,6 +111,11 @@ def _check_numbers(args):
         if not math.isfinite(v) or v <= 0 or (name == "rtol" and v >= 1):
             bound = "between 0 and 1" if name == "rtol" else "a positive number"
             raise UsageError(f"--{name.replace('_', '-')} must be {bound}, got {v}")
+    for name in ("dt", "t_end"):
+        v = getattr(args, name, None)
+        if v is not None and not (math.isfinite(v) and v > 0):
+            what = "the output sample interval" if name == "dt" else "the end time"
+            raise UsageError(f"--{name.replace('_', '-')} is {what} in s; it must be a positive number (got {name}={v:g})")
     v = getattr(args, "validation", None)
     if v is not None and not 0 < v < 1:
         raise UsageError(f"--validation is the share of the data held out; it must be between 0 and 1, got {v}")
