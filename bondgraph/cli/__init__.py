@@ -115,7 +115,9 @@ def _check_numbers(args):
         v = getattr(args, name, None)
         if v is not None and not (math.isfinite(v) and v > 0):
             what = "the output sample interval" if name == "dt" else "the end time"
-            raise UsageError(f"--{name.replace('_', '-')} is {what} in s; it must be a positive number (got {name}={v:g})")
+            raise UsageError(
+                f"--{name.replace('_', '-')} is {what} in s; it must be a positive number (got {name}={v:g})"
+            )
     v = getattr(args, "validation", None)
     if v is not None and not 0 < v < 1:
         raise UsageError(f"--validation is the share of the data held out; it must be between 0 and 1, got {v}")
