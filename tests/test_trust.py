@@ -151,3 +151,29 @@ def test_unknown_model_input_names_the_models_inputs(record, capsys):
     assert "--model-input: unknown input of" in err and "F, V" in err and str(record) not in err
     rc, _, err = run(capsys, "diagnose", APA, record, "--model-output", "xx")
     assert rc == 2 and "--model-output: unknown output of" in err and "'x'" in err
+
+
+def test_a_blocking_compilation_reports_progress_and_its_time():
+    import io
+    import time
+
+    from bondgraph.support.progress import quiet_if, waiting
+
+    stream = io.StringIO()
+    with waiting("compiling the integrator", status="first run", mode="lines", stream=stream, delay=0.1) as w:
+        time.sleep(0.5)  # a call that reports nothing itself
+    lines = stream.getvalue().splitlines()
+    assert lines[0].startswith("compiling the integrator: ") and "elapsed, first run" in lines[0]
+    assert lines[-1].startswith("compiling the integrator: done in 0.5 s")
+    assert w.seconds >= 0.5
+    stream = io.StringIO()
+    with quiet_if(True), waiting("compiling", stream=stream, delay=0.0):  # --quiet: nothing
+        time.sleep(0.3)
+    assert stream.getvalue() == ""
+
+
+def test_large_csv_reports_progress_while_writing(tmp_path):
+    seen = []
+    n = 200_000  # four blocks of rows
+    write_csv(tmp_path / "big.csv", np.arange(n) * 1e-3, {"x": np.zeros(n)}, {}, progress=seen.append)
+    assert len(seen) == 4 and seen[-1] == 1.0 and seen == sorted(seen)

@@ -16,7 +16,7 @@ import sys
 import traceback
 import warnings
 
-from ..support import interrupt
+from ..support import interrupt, progress
 from ..support.errors import BondGraphError, UsageError
 from . import (  # noqa: F401 - importing a command's module registers it
     batch,
@@ -67,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
             if not args.command:
                 raise UsageError(f"no command given; choose one of {', '.join(COMMANDS)} (see bondgraph --help)")
             _check_numbers(args)
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), progress.quiet_if(getattr(args, "quiet", False)):
                 warnings.simplefilter("default")
                 warnings.simplefilter("ignore", RuntimeWarning)  # numpy's overflow/invalid notes: results are checked
                 warnings.showwarning = _show_warning

@@ -27,6 +27,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from ..equations.system import Equations
 from ..support import config
+from ..support.progress import waiting
 from .model_functions import ARGUMENTS, SIGNATURE, ModelFunctions
 
 _NO_AUX = np.zeros(1)
@@ -154,7 +155,8 @@ def compile_equations(eqs: Equations, with_jacobian: bool = False) -> ModelFunct
     """The numeric functions of ``eqs``: generated, cached and compiled by numba, or for long
     programs (more statements than ``codegen.tape_threshold``) the tape interpreter."""
     if len(eqs.program) > config.get("codegen.tape_threshold") and not with_jacobian:
-        from . import tape
+        with waiting("compiling the tape interpreter", status="the first run only: numba keeps it for later runs"):
+            from . import tape
 
         try:
             program = tape.build_tape(eqs)
@@ -180,7 +182,11 @@ def compile_equations(eqs: Equations, with_jacobian: bool = False) -> ModelFunct
             setattr(module, f"op{k}_commit", kernels.commit)
         sys.modules[modname] = module  # numba finds the module's globals through sys.modules
         try:
-            spec.loader.exec_module(module)
+            with waiting(
+                f"compiling {eqs.model.name}",
+                status=f"{len(eqs.program)} statements; kept in {cache_dir()} for later runs of this structure",
+            ):
+                spec.loader.exec_module(module)
         except BaseException:
             del sys.modules[modname]
             raise
