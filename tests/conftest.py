@@ -14,6 +14,13 @@ MODELS = ROOT / "models"
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
+def pytest_configure(config):
+    """Compile (or load) the integrator once per test process before any test runs: its
+    "compiling the integrator" progress line would otherwise land in the captured stderr of
+    whichever test imports the simulator first on a fresh checkout."""
+    import bondgraph.numerics.simulate  # noqa: F401
+
+
 def _shares_a_module_fixture(path: Path) -> bool:
     """Whether the test module at ``path`` defines a fixture of module scope."""
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):

@@ -16,7 +16,7 @@ import sys
 import traceback
 import warnings
 
-from ..support import interrupt
+from ..support import interrupt, progress
 from ..support.errors import BondGraphError, UsageError
 from . import (  # noqa: F401 - importing a command's module registers it
     batch,
@@ -69,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
             if not args.command:
                 raise UsageError(f"no command given; choose one of {', '.join(COMMANDS)} (see bondgraph --help)")
             _check_numbers(args)
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), progress.quiet_if(getattr(args, "quiet", False)):
                 warnings.simplefilter("default")
                 warnings.simplefilter("ignore", RuntimeWarning)  # numpy's overflow/invalid notes: results are checked
                 warnings.showwarning = _show_warning
@@ -113,6 +113,13 @@ def _check_numbers(args):
         if not math.isfinite(v) or v <= 0 or (name == "rtol" and v >= 1):
             bound = "between 0 and 1" if name == "rtol" else "a positive number"
             raise UsageError(f"--{name.replace('_', '-')} must be {bound}, got {v}")
+    for name in ("dt", "t_end"):
+        v = getattr(args, name, None)
+        if v is not None and not (math.isfinite(v) and v > 0):
+            what = "the output sample interval" if name == "dt" else "the end time"
+            raise UsageError(
+                f"--{name.replace('_', '-')} is {what} in s; it must be a positive number (got {name}={v:g})"
+            )
     v = getattr(args, "validation", None)
     if v is not None and not 0 < v < 1:
         raise UsageError(f"--validation is the share of the data held out; it must be between 0 and 1, got {v}")

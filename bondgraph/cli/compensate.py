@@ -46,6 +46,12 @@ from .registry import MODEL_ARGS, PLOT_SUFFIXES, arg, command, counter, load, ou
             help="write t, the compensated drive, the reference, the "
             "predicted output, the linear-inverse drive and its predicted output (default: stdout)",
         ),
+        arg(
+            "--drive-range",
+            metavar="LO,HI",
+            help="the drive the device accepts, e.g. 0,120 for a unipolar 120 V amplifier, --drive-range=-30,150 for a negative end (default: the "
+            "range the model file declares for the input, if any); a drive beyond it is clipped, with a note",
+        ),
         arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="plot reference, predicted outputs and drives"),
         arg("--json", action="store_true", help="print the summary as JSON on stdout"),
         arg("--quiet", action="store_true", help="no progress or summary on stderr"),
@@ -60,6 +66,7 @@ def run(args):
         raise UsageError(f"--iterations must be at least 1, got {args.iterations}")
     if not 0.0 < args.tol < 1.0:
         raise UsageError(f"--tol must be between 0 and 1, got {args.tol}")
+    drive_range = _drive_range(args.drive_range)
     with outputs(args, "out", "plot", inputs=[args.reference]) as out:  # checked before the work
         lm = load(args)
         col = args.column or args.model_output
@@ -82,6 +89,7 @@ def run(args):
             iterations=args.iterations,
             tol=args.tol,
             progress=None if args.quiet else counter("compensating"),
+            drive_range=drive_range,
         )
         u, y = args.model_input, args.model_output
         columns = {
@@ -111,6 +119,8 @@ def run(args):
                 _plot(res, tmp, u, y, lm.model.name)
     if args.json:
         print(json.dumps(summary, indent=1))
+    for note in res.notes:  # said even with --quiet: the drive is not what the numbers suggest
+        print(f"bondgraph: note: {note}", file=sys.stderr)
     if not args.quiet:
         print(
             f"{summary['method']}: largest tracking error {summary['max_error']:.4g} "
@@ -121,6 +131,19 @@ def run(args):
             + (f", {args.plot}" if args.plot else ""),
             file=sys.stderr,
         )
+
+
+def _drive_range(text: str | None) -> tuple[float, float] | None:
+    """``--drive-range LO,HI`` as (lo, hi), or None."""
+    if text is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in text.split(","))
+    except ValueError:
+        raise UsageError(f"--drive-range {text!r}: give the lowest and highest drive as LO,HI, e.g. 0,120") from None
+    if not lo < hi:
+        raise UsageError(f"--drive-range {text!r}: the lowest drive must be below the highest")
+    return lo, hi
 
 
 def _plot(res, path: str, u: str, y: str, title: str) -> None:

@@ -29,7 +29,11 @@ FORMATS = ("text", "json", "python-control")
         ),
         arg("--json", action="store_true", help="same as --format json"),
         arg("--out", metavar="FILE", help="write the result to a file instead of stdout"),
-        arg("--bode", metavar="FILE.csv", help="write the frequency response (magnitude, phase)"),
+        arg(
+            "--bode",
+            metavar="FILE.csv",
+            help="write the frequency response: columns omega_rad_s (rad/s), magnitude, phase_deg",
+        ),
         arg("--plot", metavar="FILE" + PLOT_SUFFIXES[0], help="Bode plot (needs matplotlib)"),
     ],
 )
@@ -75,6 +79,7 @@ def run(args):
                 from ..data import write_csv
 
                 with out.path(args.bode) as tmp:
+                    unit = _gain_unit(model, inp, outp).strip()
                     write_csv(
                         tmp,
                         w,
@@ -83,8 +88,11 @@ def run(args):
                             "model": str(args.model),
                             "input": inp,
                             "output": outp,
-                            "note": "first column t holds the angular frequency in rad/s",
+                            "omega_rad_s": "angular frequency (rad/s)",
+                            "magnitude": f"|{outp}/{inp}| ({unit or '1'})",
+                            "phase_deg": "phase of the response (degrees)",
                         },
+                        index="omega_rad_s",
                     )
             if args.plot:
                 from ..plotting import plot_bode
@@ -100,9 +108,14 @@ def run(args):
                     )
 
 
-def _text(model, lin, summary, inp, outp) -> str:
+def _gain_unit(model, inp, outp) -> str:
+    """ " m/V": the unit of the output per unit of the input, with a leading blank ("" for none)."""
     yu, uu = model.outputs[outp].unit, model.inputs[inp].unit
-    gain_unit = f" {yu or '1'}/{uu}" if uu else (f" {yu}" if yu else "")
+    return f" {yu or '1'}/{uu}" if uu else (f" {yu}" if yu else "")
+
+
+def _text(model, lin, summary, inp, outp) -> str:
+    gain_unit = _gain_unit(model, inp, outp)
     return "\n".join(
         [
             f"{model.name}: {outp}/{inp}, {len(lin.states)} states",

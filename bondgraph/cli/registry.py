@@ -8,6 +8,7 @@ stays fast; the framework is imported inside the command functions.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from dataclasses import dataclass, field
 from typing import Callable
@@ -103,10 +104,17 @@ def load(args):
         ("model_input", lm.model.inputs, "input"),
         ("model_output", lm.model.outputs, "output"),
     ):
-        if hasattr(args, attr) and getattr(args, attr) is None:
+        if not hasattr(args, attr):
+            continue
+        if getattr(args, attr) is None:
             if not declared:
                 raise UsageError(f"model {args.model} declares no {what}; a command on measured data needs one")
             setattr(args, attr, next(iter(declared)))
+        elif getattr(args, attr) not in declared:
+            from ..support.errors import did_you_mean
+
+            option = "--" + attr.replace("_", "-")
+            raise UsageError(f"{option}: " + did_you_mean(getattr(args, attr), declared, f"{what} of {args.model}"))
     return lm
 
 
@@ -201,7 +209,14 @@ def counter(label: str, unit: str = "simulations", quiet: bool = False):
 
 
 class Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one-line usage errors (exit status 2)."""
+    """An argument parser whose errors are one-line usage errors (exit status 2).
+
+    Negative numbers in every notation (``-1``, ``-.5``, ``-1e-3``) are read as values, not
+    options, so ``--dt -1e-3`` reaches the check that says what is wrong with it."""
+
+    def __init__(self, *a, **kw):
+        super().__init__(*a, **kw)
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
 
     def error(self, message):
         raise UsageError(f"{self.prog}: {message} (see {self.prog} --help)")

@@ -66,6 +66,7 @@ _CSV_FILE = re.compile(r"^\s*csv\s*\(.*?\bfile\s*=\s*([^,)]+)", re.S)
     ],
 )
 def run(args):
+    started = time.time()  # the summary's time includes compiling (the first run's most of it)
     from ..data import write_csv
     from ..model.signals import parse_signal
     from ..numerics.checks import check_start
@@ -90,12 +91,13 @@ def run(args):
             if _CSV_FILE.match(spec):
                 tables[name] = inputs[name]
         t = _times(args, exp, tables)
-        started = time.time()
         sim = Simulator(lm.model)
         check_start(sim, inputs=inputs, t0=float(t[0]))
         rtol = exp.rtol if args.rtol is None else args.rtol
         with progress("simulating", quiet=args.quiet) as bar:
+            ran = time.time()
             res = sim.run(t, inputs, method=args.method or exp.method, rtol=rtol, atol=args.atol, progress=bar)
+            ran = time.time() - ran
         cols = res.columns(args.states)
         meta = {"model": str(args.model), "method": res.stats["method"], "rtol": str(rtol)}
         for name, sig in inputs.items():
@@ -108,8 +110,8 @@ def run(args):
             meta[f"offset {name}"] = repr(offset)
             notes.append(f"{name} includes the output offset {offset:.4g} from {args.params_file}")
         if args.out:
-            with out.path(args.out) as tmp:
-                write_csv(tmp, res.t, cols, meta)
+            with out.path(args.out) as tmp, progress(f"writing {args.out}", quiet=args.quiet) as bar:
+                write_csv(tmp, res.t, cols, meta, progress=bar)
         else:
             _print_csv(res.t, cols)
         if args.plot:
@@ -121,10 +123,11 @@ def run(args):
                 plot_signals(res.t, {n: cols[n] for n in [*res.inputs, *res.outputs]}, units, tmp, title=lm.model.name)
     if not args.quiet:
         wrote = [p for p in (args.out, args.plot) if p]
+        total = time.time() - started
         print(
-            f"simulated {res.t[-1] - res.t[0]:g} s of {lm.model.name} in {time.time() - started:.2f} s "
+            f"simulated {res.t[-1] - res.t[0]:g} s of {lm.model.name} in {total:.2f} s "
             f"({res.stats['method']}{' on the tape interpreter' if sim.compiled.route == 'tape' else ''}, "
-            f"{res.stats['steps']} steps"
+            f"{res.stats['steps']} steps in {ran:.2f} s"
             + ("" if res.stats["reason"] == "asked for" else f"; auto: {res.stats['reason']}")
             + ")"
             + (f"; wrote {', '.join(wrote)}" if wrote else "")

@@ -40,6 +40,9 @@ def write_csv(
     t,
     columns: Mapping[str, object],
     metadata: Mapping[str, object] | None = None,
+    *,
+    index: str = "t",
+    progress=None,
 ) -> None:
     """Write a CSV file that :func:`read_csv` reads back identically, atomically.
 
@@ -50,6 +53,10 @@ def write_csv(
     validated like a :class:`Dataset` (finite, ``t`` strictly increasing, equal lengths), so
     a file is never written that :func:`read_csv` would refuse.  Written via
     :func:`~bondgraph.support.atomic.atomic_write`: on failure no partial file is left.
+
+    ``index`` names the first column (``"t"``, the time in s; e.g. ``"omega_rad_s"`` for a
+    frequency response, whose file :func:`read_csv` then does not read as a record).
+    ``progress(fraction)`` is called as blocks of rows are written (a large file takes seconds).
 
     Raises :class:`DataError` for invalid data, names, metadata, or if the file cannot be
     written (message names the file).
@@ -67,6 +74,8 @@ def write_csv(
             )
         value = _LINE_BREAKS.sub(" ", str(value)).strip()
         meta_lines.append(f"# {key}: {value}\n")
+    if index != "t":
+        _check_name(index, dst)
     ds = Dataset(t, columns, {}, dst)
     table = np.column_stack([ds.t, *ds.columns.values()])
     nrow, ncol = table.shape
@@ -74,10 +83,12 @@ def write_csv(
     try:
         with atomic_write(dst, "w", encoding="utf-8", newline="\n") as f:
             f.write("".join(meta_lines))
-            f.write(",".join(ds.names) + "\n")
+            f.write(",".join((index, *ds.names[1:])) + "\n")
             for start in range(0, nrow, _CHUNK_ROWS):
                 block = table[start : start + _CHUNK_ROWS]
                 f.write((row_fmt * len(block)) % tuple(block.ravel().tolist()))
+                if progress is not None:
+                    progress(min(start + _CHUNK_ROWS, nrow) / nrow)
     except OSError as exc:
         raise DataError(
             f"{dst}: cannot write the file ({exc.strerror or exc}); check that the directory exists and is writable"

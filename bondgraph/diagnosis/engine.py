@@ -13,6 +13,7 @@ import numpy as np
 
 from ..data import Dataset
 from ..model.graph import Model
+from ..model.memory import not_monotone
 from ..numerics.simulate import SimulationError
 from ..support import config
 from ..support.errors import BondGraphError
@@ -669,6 +670,7 @@ def _diagnose(
         ext_model.values.update({k: v for k, v in state.values.items() if k in ext_model.all_parameters()})
         ext_model.values[SENSOR_GAIN] = state.gain
         report.extended_model, report.extended_values = ext_model, dict(state.values)
+        report.notes += [f"the extended model's {why}" for why in not_monotone(ext_model)]
         report.predictions["extended"] = state.prediction
         if equations:
             from ..equations.derivation import derive

@@ -87,7 +87,8 @@ class Compensation:
     ``drive``/``predicted``: compensated drive and the model's response to it;
     ``linear_drive``/``linear_predicted``: the uncompensated (linear inverse) drive and response;
     ``history``: max |error| after each model simulation of the iteration; ``method``:
-    "operator inverse" or "iteration"."""
+    "operator inverse" or "iteration"; ``notes``: what the user must know about the result
+    (a drive clipped to the input's range, an operator that is not monotone)."""
 
     t: np.ndarray
     reference: np.ndarray
@@ -97,6 +98,7 @@ class Compensation:
     linear_predicted: np.ndarray
     method: str
     history: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
 
     @property
     def error(self) -> float:
@@ -123,6 +125,7 @@ class Compensation:
             "relative_error": self.error / span,
             "relative_error_uncompensated": self.linear_error / span,
             "improvement": self.improvement,
+            "notes": list(self.notes),
         }
 
 
@@ -157,6 +160,7 @@ def feedforward(
     tol: float = 1e-4,
     rtol: float = 1e-6,
     progress=None,
+    drive_range: tuple[float, float] | None = None,
 ) -> Compensation:
     """The drive of model input ``input`` that makes output ``output`` follow ``reference``
     (sampled at times ``t``, measured from the output at rest with zero drive).
@@ -164,7 +168,10 @@ def feedforward(
     ``model``: a :class:`~bondgraph.Model` or a :class:`~bondgraph.Simulator`; ``params``:
     parameter values; ``inputs``: signals for the model's other inputs (default 0).
     Iterates at most ``iterations`` simulations, stopping when the largest error is below
-    ``tol`` times the reference's range. ``progress(k)`` is called after each simulation."""
+    ``tol`` times the reference's range. ``progress(k)`` is called after each simulation.
+    ``drive_range``: (lowest, highest) drive the device accepts (default: the range the model
+    declares for ``input``, if any); a drive beyond it is clipped to it, with a note, and the
+    predicted output is the clipped drive's."""
     sim = model if isinstance(model, Simulator) else Simulator(model)
     t = np.asarray(t, float).ravel()
     ref = np.asarray(reference, float).ravel()
@@ -177,6 +184,14 @@ def feedforward(
     others = dict(inputs or {})
     theta = sim.theta(params)
     named = dict(zip([p.name for p in sim.eqs.params], theta))
+    if drive_range is None and input in sim.eqs.model.inputs:
+        drive_range = sim.eqs.model.inputs[input].range
+    notes = []
+    for ob in sim.eqs.operators:
+        c, d = sim.eqs.params.index(ob.params[0]), sim.eqs.params.index(ob.params[-1]) + 1
+        why = ob.operator.monotone_problem(np.array(theta[c:d], float)) if ob.params else ""
+        if why:
+            notes.append(f"operator {ob.symbol}: {why}; the drive below is the best the iteration found")
 
     def respond(drive):
         res = sim.run(t, {**others, input: PiecewiseLinear(t, drive)}, params=named, rtol=rtol)
@@ -241,8 +256,19 @@ def feedforward(
         best = (e_new, drive, x)
     history.append(float(best[0]))
     drive, x = best[1], best[2]
+    if drive_range is not None:
+        lo, hi = drive_range
+        outside = (drive < lo) | (drive > hi)
+        if outside.any():
+            notes.append(
+                f"the drive would span {drive.min():.4g} to {drive.max():.4g}, beyond the input's range "
+                f"{lo:g} to {hi:g} on {100 * outside.mean():.3g} % of the samples: clipped to the range (the "
+                f"predicted output and errors are the clipped drive's)"
+            )
+            drive = np.clip(drive, lo, hi)
+            x = respond(drive)
     # the linear inverse: proportional to the reference over the same drive range
     ref_span = float(np.ptp(ref))
     scale = float(np.ptp(drive)) / ref_span if ref_span > 0 else 0.0
     lin = float(np.mean(drive)) + (ref - float(np.mean(ref))) * scale
-    return Compensation(t, ref, drive, x, lin, respond(lin), method, history)
+    return Compensation(t, ref, drive, x, lin, respond(lin), method, history, notes)

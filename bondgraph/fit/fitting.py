@@ -25,11 +25,12 @@ from typing import Callable, Sequence
 
 from ..data import Dataset
 from ..model.modelfile import LoadedModel
+from ..model.parameters import FIT_FORMAT
 from ..support.errors import UsageError
 from .identify import FitResult, Identification, detect_linear
 
 #: the ``format`` entry of fit files
-FORMAT = "bondgraph-fit/1"
+FORMAT = FIT_FORMAT
 
 
 @dataclass

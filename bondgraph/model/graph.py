@@ -82,6 +82,7 @@ class Input:
     symbol: sp.Symbol
     unit: str = ""
     doc: str = ""
+    range: tuple[float, float] | None = None
 
 
 class Quantity(sp.Symbol):
@@ -405,13 +406,23 @@ class Model(Component):
         self.declared: list[Parameter] = []
         self.values: dict[str, Any] = {}
 
-    def input(self, name: str, unit: str = "", doc: str = "") -> sp.Symbol:
-        """Declare an input signal (e.g. the drive voltage ``V``); returns its symbol."""
+    def input(self, name: str, unit: str = "", doc: str = "", range: tuple[float, float] | None = None) -> sp.Symbol:
+        """Declare an input signal (e.g. the drive voltage ``V``); returns its symbol.
+
+        ``range``: (lowest, highest) value the device accepts (e.g. a unipolar amplifier's
+        (0, 120) V); ``bondgraph compensate`` keeps the drives it computes within it."""
         if name in self.inputs:
             return self.inputs[name].symbol
         _check_unit(self.name, f"input '{name}'", unit)
+        if range is not None:
+            lo, hi = (float(v) for v in range)
+            if not lo < hi:
+                raise ModelError(
+                    f"{self.name}: input '{name}' range {range!r} must be (lowest, highest), lowest < highest"
+                )
+            range = (lo, hi)
         sym = sp.Symbol(name, real=True)
-        self.inputs[name] = Input(name, sym, unit, doc)
+        self.inputs[name] = Input(name, sym, unit, doc, range)
         return sym
 
     def input_rate(self, name: str) -> sp.Symbol:

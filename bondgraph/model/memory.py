@@ -136,6 +136,12 @@ class MemoryOperator(ABC):
         default None means "not available": the exporter refuses a model that applies it."""
         return None
 
+    def monotone_problem(self, prm: np.ndarray) -> str:
+        """Optional: why the operator's output does not rise with its input for the parameters
+        ``prm`` (then it has no inverse and feedforward compensation cannot use it), or "" when
+        it does or the operator cannot tell.  The default says nothing."""
+        return ""
+
     # --- used by the framework -------------------------------------------------------
     def kernels(self) -> "OperatorKernels":
         """The compiled ``output`` and ``commit`` (compiled once per class and process)."""
@@ -155,3 +161,28 @@ class MemoryOperator(ABC):
 
         run_kernels(k.output, k.commit, v, mem, prm, y)
         return y
+
+
+def not_monotone(model) -> list[str]:
+    """For each memory operator of ``model`` whose output does not rise with its input at the
+    model's parameter values (:meth:`MemoryOperator.monotone_problem`): "operator NAME: why".
+
+    Parameters
+    ----------
+    model : bondgraph.Model
+        The model, with its parameter values (e.g. fitted ones) set.
+
+    Returns
+    -------
+    list of str
+        One line per operator that cannot be inverted; empty when every operator can (or
+        does not say).
+    """
+    table = model.parameter_table()
+    out = []
+    for name, ob in model.operators.items():
+        prm = np.array([float(table[s]) for s in ob.params], dtype=np.float64)
+        why = ob.operator.monotone_problem(prm)
+        if why:
+            out.append(f"operator {name}: {why}")
+    return out

@@ -212,6 +212,10 @@ def read_params_file(path: str | Path) -> dict[str, Any]:
     return read_fit_file(path)[0]
 
 
+#: the ``format`` entry of the fit files this version writes and reads (``bondgraph fit --out``)
+FIT_FORMAT = "bondgraph-fit/1"
+
+
 def read_fit_file(path: str | Path) -> tuple[dict[str, Any], dict[str | None, float]]:
     """(parameter values, output offsets) from a JSON parameter file.
 
@@ -242,6 +246,11 @@ def read_fit_file(path: str | Path) -> tuple[dict[str, Any], dict[str | None, fl
     except json.JSONDecodeError as exc:
         raise ParameterError(f"parameter file {path}:{exc.lineno}: not valid JSON ({exc.msg})") from None
     offsets: dict[str | None, float] = {}
+    if isinstance(data, dict) and "format" in data and data["format"] != FIT_FORMAT:
+        raise ParameterError(
+            f"parameter file {path}: format {data['format']!r} is not one this version reads "
+            f"({FIT_FORMAT}); write it again with this version's 'bondgraph fit --out', or upgrade bondgraph"
+        )
     if isinstance(data, dict) and "params" in data:
         if not isinstance(data["params"], dict):
             raise ParameterError(f"parameter file {path}: 'params' must be an object of name: value")

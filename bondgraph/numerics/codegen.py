@@ -29,6 +29,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from ..equations.system import Equations
 from ..support import config
+from ..support.progress import waiting
 from .jacobian import JacobianProgram, slope_symbol
 from .model_functions import ARGUMENTS, SIGNATURE, ModelFunctions
 
@@ -176,7 +177,8 @@ def compile_equations(eqs: Equations) -> ModelFunctions:
     """The numeric functions of ``eqs``: generated, cached and compiled by numba, or for long
     programs (more statements than ``codegen.tape_threshold``) the tape interpreter."""
     if len(eqs.program) > config.get("codegen.tape_threshold"):
-        from . import tape
+        with waiting("compiling the tape interpreter", status="the first run only: numba keeps it for later runs"):
+            from . import tape
 
         try:
             program = tape.build_tape(eqs)
@@ -236,7 +238,11 @@ def _load(eqs: Equations, src: str):
             setattr(module, f"op{k}_commit", kernels.commit)
         sys.modules[modname] = module  # numba finds the module's globals through sys.modules
         try:
-            spec.loader.exec_module(module)
+            with waiting(
+                f"compiling {eqs.model.name}",
+                status=f"{len(eqs.program)} statements; kept in {cache_dir()} for later runs of this structure",
+            ):
+                spec.loader.exec_module(module)
         except BaseException:
             del sys.modules[modname]
             raise

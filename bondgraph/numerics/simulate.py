@@ -34,12 +34,17 @@ from ..model.graph import Model
 from ..model.signals import Constant, Signal
 from ..support import config
 from ..support.errors import BondGraphError, ParameterError, SignalError, did_you_mean
+from ..support.progress import waiting
 from . import implicit
 from .codegen import compile_equations, parameter_vector
-from .integrators import STATUS, Flags, dopri5, eval_inputs, input_values, reversal_at
 from .model_functions import ModelFunctions
-from .signal_bank import SignalBank
 from .stiffness import DENSE_EIGEN, SparseJacobian, spectral_radius, stiffness
+
+# numba compiles the integrator as its module is imported (tens of seconds the first time after
+# an install, a fraction of a second from its cache after): said on stderr while it lasts
+with waiting("compiling the integrator", status="the first run only: numba keeps it for later runs"):
+    from .integrators import STATUS, Flags, dopri5, eval_inputs, input_values, reversal_at
+    from .signal_bank import SignalBank
 
 METHODS = ("auto", "dopri5", "radau5", "radau", "bdf", "lsoda")
 

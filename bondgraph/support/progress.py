@@ -12,6 +12,9 @@
             p.advance(status=f"{c.name}: gain {g:.2f}")    # one more done, with a status text
             p.note(f"{c.name} rejected: ...")               # a line of its own
 
+    with waiting("compiling the integrator"):              # one blocking call (no updates of
+        from . import integrators                           # its own): elapsed time, from a timer
+
 Modes: ``bar`` (one line redrawn in place, with the estimated time left; chosen when the
 stream is a terminal), ``lines`` (a plain line at most every ``interval`` seconds, 10 s by
 default; chosen otherwise, e.g. for a log file or CI), ``quiet`` (nothing).  ``auto``, the
@@ -24,6 +27,7 @@ work took.  Updates are cheap (a clock read when nothing is due) and thread-safe
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import sys
@@ -31,9 +35,12 @@ import threading
 import time
 from typing import IO
 
-__all__ = ["Progress", "MODES"]
+__all__ = ["Progress", "MODES", "waiting"]
 
 MODES = ("auto", "bar", "lines", "quiet")
+#: the mode of :class:`waiting` reports that are not given one (compilations started deep
+#: inside the framework): ``bondgraph --quiet`` makes it quiet for its run
+default_mode = "auto"
 
 
 class Progress:
@@ -206,3 +213,51 @@ def _duration(seconds: float) -> str:
         return f"{m} min {s:02d} s"
     h, m = divmod(m, 60)
     return f"{h} h {m:02d} min"
+
+
+class waiting:
+    """A :class:`Progress` with no amount, kept alive by a timer thread while one blocking call
+    runs (a compilation, an import): it shows the label and the time elapsed once the call has
+    taken more than ``delay`` seconds, and the time it took at the end.  ``mode`` as for
+    :class:`Progress`; the environment variable ``BONDGRAPH_PROGRESS`` applies.  Usable as a
+    context manager only; ``seconds`` holds the time the block took when it ends.  ``mode``
+    defaults to :data:`default_mode` (a command's ``--quiet`` sets it to quiet while it runs).
+    """
+
+    def __init__(self, label: str, *, status: str = "", mode: str | None = None, stream: IO | None = None, delay=1.0):
+        self.progress = Progress(label, mode=mode or default_mode, stream=stream, delay=delay)
+        self.progress.status = status
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.seconds = 0.0
+
+    def _tick(self) -> None:
+        while not self._stop.wait(0.2):
+            self.progress.update()
+
+    def __enter__(self) -> "waiting":
+        self.t0 = time.monotonic()
+        if self.progress.mode != "quiet":
+            self._thread = threading.Thread(target=self._tick, name="bondgraph-waiting", daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        self.seconds = time.monotonic() - self.t0
+        self.progress.status = ""
+        self.progress.__exit__(exc_type, exc, tb)
+
+
+@contextlib.contextmanager
+def quiet_if(quiet: bool):
+    """Within the block, :data:`default_mode` is quiet when ``quiet`` (restored after)."""
+    global default_mode
+    before = default_mode
+    default_mode = "quiet" if quiet else before
+    try:
+        yield
+    finally:
+        default_mode = before

@@ -120,6 +120,24 @@ class PrandtlIshlinskii(_PlayBank):
         n = self.n_memory
         return float(np.sum(prm[n : 2 * n][prm[:n] == 0.0]))
 
+    def monotone_problem(self, prm: np.ndarray) -> str:
+        """A branch's slope at a distance s from its last reversal is the sum of the weights of
+        the plays with 2 r_i < s: the output rises with the input exactly when every partial sum
+        (plays sorted by threshold) is positive; negative weights are named either way."""
+        n = self.n_memory
+        r, w = np.asarray(prm[:n], float), np.asarray(prm[n : 2 * n], float)
+        order = np.argsort(r, kind="stable")
+        sums = np.cumsum(w[order])
+        negative = [f"w{i + 1} = {w[i]:.3g}" for i in range(n) if w[i] < 0]
+        if np.all(sums > 0):
+            return ""
+        k = int(np.argmax(sums <= 0))
+        return (
+            f"not monotone, so it has no inverse for compensation: its weights summed up to the play of "
+            f"threshold {r[order][k]:.3g} give a slope of {sums[k]:.3g} (the output falls while the input "
+            f"rises there)" + (f"; negative weights {', '.join(negative)}" if negative else "")
+        )
+
     def inverse(self) -> "PrandtlIshlinskii":
         """The exact inverse PI operator (Krejci/Kuhnen), output units of v, input units of y.
 
