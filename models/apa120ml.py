@@ -131,8 +131,7 @@ TOLERANCE = {"c": 15.0, "l": 1.3, "T": 1.3}
 
 def build(p):
     g = Model("APA-120ML", __doc__.splitlines()[0])
-    # range: the 0-120 V unipolar drive of the experiments here (the paper does not state its amplifier)
-    V = g.input("V", "V", "drive voltage", range=(0.0, 120.0))
+    V = g.input("V", "V", "drive voltage")
     F = g.input("F", "N", "external force on the output, positive along x")
     if p.hysteresis == "none":
 
@@ -178,7 +177,7 @@ def loops_and_compensation(load):
 
     from bondgraph import Simulator
     from bondgraph.fit.compensate import feedforward
-    from bondgraph.plotting.panels import Curve, Figure, Panel
+    from bondgraph.plotting import Curve, Figure, Panel
     from library.identification import loop_width
 
     runs = {}

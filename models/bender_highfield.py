@@ -309,8 +309,8 @@ def response_family(load):
     import numpy as np
 
     from bondgraph import derive
-    from bondgraph.linear.linearize import linearize
-    from bondgraph.plotting.panels import Curve, Figure, Panel
+    from bondgraph import linearize
+    from bondgraph.plotting import Curve, Figure, Panel
 
     f = np.linspace(20.0, 3000.0, 3000)
     curves, fields, Q, peaks, numbers = [], [], [], [], {}

@@ -91,8 +91,8 @@ def bode_nmp(load):
     from scipy.optimize import brentq
 
     from bondgraph import derive
-    from bondgraph.linear.linearize import linearize
-    from bondgraph.plotting.panels import Curve, Figure, Panel
+    from bondgraph import linearize
+    from bondgraph.plotting import Curve, Figure, Panel
 
     w = np.geomspace(500.0, 60000.0, 2000)
     mag, phase, numbers = [], [], {}

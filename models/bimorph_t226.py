@@ -155,7 +155,7 @@ def resonance_curves(load):
     import numpy as np
 
     from bondgraph import Simulator
-    from bondgraph.plotting.panels import Curve, Figure, Panel
+    from bondgraph.plotting import Curve, Figure, Panel
     from library.bimorph import amplitude_equation_peak, amplitude_equation_roots
 
     lm = load(nonlinear=True)

@@ -277,7 +277,7 @@ def ellipses(load):
     """Fig. 11: tip x-y paths at 5-100 Hz (measured stroke), and Tables 5-6 against the model."""
     import numpy as np
 
-    from bondgraph.plotting.panels import Curve, Figure, Panel
+    from bondgraph.plotting import Curve, Figure, Panel
 
     paths, xs, ys, numbers = [], [], [], {}
     for f in FIGURE_FREQUENCIES:

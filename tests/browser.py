@@ -87,14 +87,15 @@ def open_page(path: Path, width: int = 1200, height: int = 900, wait_for: str = 
             browser.close()
 
 
-def assert_plots_drawn(png) -> None:
+def assert_plots_drawn(png, steps: int = 1) -> None:
     """The screenshot holds the measured curve (dark grey), the calibrated model (blue) and the
-    extended model (red) drawn over many pixels, not a blank page."""
+    model after the last of ``steps`` named steps (drawn last, over the others: the palette's
+    colour ``steps + 1``) over many pixels, not a blank page."""
     from PIL import Image
 
     from bondgraph.plotting.html_report import PALETTE
 
     rgb = np.asarray(Image.open(png).convert("RGB")).reshape(-1, 3).astype(int)
-    for colour in PALETTE[:3]:
+    for colour in (PALETTE[0], PALETTE[1], PALETTE[(steps + 1) % len(PALETTE)]):
         target = np.array([int(colour[i : i + 2], 16) for i in (1, 3, 5)])
         assert np.sum(np.abs(rgb - target).sum(axis=1) < 30) > 500, colour

@@ -151,7 +151,7 @@ def test_cli_report_opens_in_headless_chromium(p885_json):
     assert not log.problems(), log.problems()
     assert chain.startswith("Chain: " + " → ".join(f"{s['cause']} ×{s['gain']:.3g}" for s in out["steps"]))
     assert named == out["causes"]
-    assert_plots_drawn(shot)
+    assert_plots_drawn(shot, steps=len(out["causes"]))
 
 
 @pytest.mark.parametrize("problem,line", [("nan", 5), ("text", 6), ("time", 7)])

@@ -54,6 +54,11 @@ from fmpy.validation import validate_fmu  # noqa: E402
 
 RTOL = 1e-8
 TOL_CS, TOL_ME, TOL_ME_MEMORY = 2e-5, 1e-4, 5e-4
+#: models whose states include a stiff one (the P-885's amplifier charges the stack in 0.5 ms,
+#: a hundredth of a sample): both integrators hold it to their absolute tolerance only
+#: (rtol × its peak, 4e-15 C) at every step while it drifts quasi-statically, so its global
+#: error reaches a few 1e-5 of its peak (its outputs agree to 1e-9)
+STIFF_STATE = {"p885_stack": 3.0}
 
 #: (model file, --set overrides, test horizon in s): every file in models/, each memory-operator
 #: variant (Bouc-Wen, play PI, modified PI absolute and relative, Maxwell slip) and formulation
@@ -73,6 +78,8 @@ VARIANTS = [
     ("triangular_drive", {}, 0.03),
     ("triangular_drive", {"stroke": "hysteretic"}, 0.03),
     ("triangular_drive", {"formulation": "layers"}, 0.03),
+    ("p885_stack", {}, 0.2),
+    ("p885_stack", {"hysteresis": "none"}, 0.2),
 ]
 
 
@@ -132,7 +139,7 @@ def test_fmu_passes_fmpy_validation(exported):
 def test_cosimulation_matches_native(exported):
     path, _, exp, native, _ = exported
     dev = _deviation(path, exp, native, "CoSimulation")
-    assert max(dev.values()) < TOL_CS, dev
+    assert max(dev.values()) < TOL_CS * STIFF_STATE.get(path.stem, 1.0), dev
 
 
 def test_model_exchange_matches_native(exported):

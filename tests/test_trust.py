@@ -110,6 +110,11 @@ def test_p885_operator_weights_are_checked_where_used(tmp_path, capsys):
 def test_compensate_keeps_the_drive_within_the_declared_range(tmp_path, capsys):
     """A reference that needs a negative drive of a unipolar 0-120 V amplifier: the drive is
     clipped to the range the model file declares, and the output says so."""
+    model = (MODELS / "apa120ml.py").read_text()
+    plain = 'V = g.input("V", "V", "drive voltage")'
+    assert plain in model
+    APA = tmp_path / "apa_unipolar.py"
+    APA.write_text(model.replace(plain, 'V = g.input("V", "V", "drive voltage", range=(0.0, 120.0))'))
     t = np.linspace(0.0, 0.1, 201)
     write_csv(tmp_path / "ref.csv", t, {"x": 20e-6 * np.sin(2 * np.pi * 20 * t)}, {})
     out = tmp_path / "c.csv"

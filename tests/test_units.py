@@ -293,6 +293,8 @@ MODEL_CASES = [
     ("triangular_drive.py", {"formulation": "layers"}),
     ("triangular_drive.py", {"stroke": "hysteretic"}),
     ("triangular_drive.py", {"stroke": "measured", "formulation": "layers"}),
+    ("p885_stack.py", {}),
+    ("p885_stack.py", {"hysteresis": "none"}),
 ]
 
 

@@ -25,7 +25,7 @@ import sympy as sp
 from numba import njit
 
 from ..equations.derivation import derive
-from ..linear.lti import foh, linear_matrices
+from ..linear.lti import foh, linear_matrices, recursion
 from ..model.elements import C, I, R
 from ..model.graph import Model, Quantity
 from ..support.errors import BondGraphError
@@ -148,8 +148,14 @@ class Lure:
         ndarray
         """
         k = self.elements.index(element)
-        lti = self.lti[(self.inputs[1 + k], self.outputs[0])]
-        return lti.response(self.theta(values), self.dt, np.asarray(w, float)[:, None])[:, 0]
+        A, B, C, D = self._matrices(self.theta(values))
+        Phi, Gam, G1 = foh(A, B[:, [1 + k]], self.dt)
+        W = np.ascontiguousarray(np.asarray(w, float)[:, None])
+        Y = np.empty_like(W)
+        Dd = np.array([[D[0, 1 + k] + C[0] @ G1[:, 0]]])
+        X0 = -G1 * W[0, 0]  # at rest: x = ξ + Γ1·w = 0 at the first sample
+        recursion(Phi, Gam, np.ascontiguousarray(C[[0]]), Dd, X0, W, np.arange(W.shape[0]), Y)
+        return Y[:, 0]
 
     def hysteretic(
         self, values: Mapping[str, float], u: np.ndarray, element: str, kh: float, zmax: float

@@ -11,6 +11,7 @@ the candidates run in the calling process.
 from __future__ import annotations
 
 import multiprocessing as mp
+import pickle
 import queue
 import signal
 import threading
@@ -28,7 +29,17 @@ def _worker(run_candidate, ctx, calibrated, candidates, settings, tasks, results
         if task is None:
             return
         index, state, plausible, effort = task
-        results.put((index, run_candidate(ctx, state, calibrated, candidates[index], plausible, effort)))
+        outcome = run_candidate(ctx, state, calibrated, candidates[index], plausible, effort)
+        try:  # the queue pickles in a thread of its own, where a failure would be lost
+            pickle.dumps(outcome)
+        except Exception:  # noqa: BLE001 - e.g. a candidate class defined outside any module
+            outcome = UNPICKLABLE
+        results.put((index, outcome))
+
+
+#: a worker's answer for a candidate whose outcome cannot be sent back (its class or law
+#: terms live where a process cannot import them): the parent runs that candidate itself
+UNPICKLABLE = "unpicklable"
 
 
 def single_threaded_blas():
@@ -74,12 +85,16 @@ class Pool:
         for _ in order:
             while True:
                 try:
-                    yield self._results.get(timeout=0.2)
-                    break
+                    i, outcome = self._results.get(timeout=0.2)
                 except queue.Empty:
                     dead = [p for p in self._procs if not p.is_alive()]
                     if dead:
-                        raise RuntimeError(f"a diagnosis worker died (exit code {dead[0].exitcode})")
+                        raise RuntimeError(f"a diagnosis worker died (exit code {dead[0].exitcode})") from None
+                    continue
+                if isinstance(outcome, str) and outcome == UNPICKLABLE:
+                    outcome = run_candidate(self.ctx, state, self.calibrated, self.candidates[i], plausible, effort)
+                yield i, outcome
+                break
 
     def close(self, kill: bool = False) -> None:
         procs, self._procs = self._procs, []
