@@ -308,8 +308,7 @@ def response_family(load):
 
     import numpy as np
 
-    from bondgraph import derive
-    from bondgraph import linearize
+    from bondgraph import derive, linearize
     from bondgraph.plotting import Curve, Figure, Panel
 
     f = np.linspace(20.0, 3000.0, 3000)

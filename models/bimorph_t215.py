@@ -90,8 +90,7 @@ def bode_nmp(load):
     import numpy as np
     from scipy.optimize import brentq
 
-    from bondgraph import derive
-    from bondgraph import linearize
+    from bondgraph import derive, linearize
     from bondgraph.plotting import Curve, Figure, Panel
 
     w = np.geomspace(500.0, 60000.0, 2000)

@@ -114,7 +114,9 @@ def test_effect_kind_example_is_named_at_its_spring():
 
 
 def test_data_check_example_flags_micrometres():
-    mod = module_of(next(b for b in python_blocks("extending.md") if "def displacement_in_metres" in b), "extending_check")
+    mod = module_of(
+        next(b for b in python_blocks("extending.md") if "def displacement_in_metres" in b), "extending_check"
+    )
     assert mod.displacement_in_metres(Dataset([0.0, 1.0], {"x": [0.0, 12.0]}))
     assert not mod.displacement_in_metres(Dataset([0.0, 1.0], {"x": [0.0, 12e-6]}))
 
