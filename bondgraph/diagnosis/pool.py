@@ -30,9 +30,7 @@ def _worker(run_candidate, ctx, calibrated, candidates, settings, tasks, results
             return
         index, state, plausible, effort = task
         outcome = run_candidate(ctx, state, calibrated, candidates[index], plausible, effort)
-        try:  # the queue pickles in a thread of its own, where a failure would be lost
-            pickle.dumps(outcome)
-        except Exception:  # noqa: BLE001 - e.g. a candidate class defined outside any module
+        if not _picklable(outcome):  # e.g. a candidate class defined outside any module
             outcome = UNPICKLABLE
         results.put((index, outcome))
 
@@ -76,7 +74,7 @@ class Pool:
         ``effort``: a factor on the candidates' optimiser budgets."""
         run_candidate = self.run_candidate
         order = sorted(indices, key=lambda i: -getattr(self.candidates[i], "cost", 1))
-        if not self._procs:
+        if not self._procs or not _picklable((state, plausible)):
             for i in order:
                 yield i, run_candidate(self.ctx, state, self.calibrated, self.candidates[i], plausible, effort)
             return
@@ -121,6 +119,17 @@ class Pool:
 
     def __exit__(self, exc_type, exc, tb) -> None:
         self.close(kill=exc_type is not None)
+
+
+def _picklable(obj) -> bool:
+    """Whether ``obj`` can be sent to a worker (a queue pickles in a thread of its own, where a
+    failure is lost and the worker waits for ever): a chain state holding a law term of a
+    candidate defined outside any importable module cannot."""
+    try:
+        pickle.dumps(obj)
+    except Exception:  # noqa: BLE001 - any failure to pickle means: run it here
+        return False
+    return True
 
 
 def _main_thread() -> bool:
