@@ -130,18 +130,13 @@ def param_bounds(ctx: Context, name: str, value: float, factor: float | None = N
 
 def sensitivities(ctx: Context, names: Sequence[str], values: dict, raw: np.ndarray, rel: float = 0.01):
     """Output change per relative change of each parameter, on the fit part, with the
-    directions of the output itself and of a constant (sensor gain, offset) projected out.
-
-    Central differences: their error (rel² times the third derivative) stays far below the
-    pivot tolerance of :func:`select`, so an exact degeneracy (a force-driven mechanism whose
-    masses, stiffnesses and dampings scale together with the sensor gain) is seen as one;
-    forward differences leave ~rel of the columns' size in the null direction."""
+    directions of the output itself and of a constant (sensor gain, offset) projected out."""
     idx = ctx.ident.fit_idx
     cols = []
     for n in names:
-        up, down = dict(values), dict(values)
-        up[n], down[n] = values[n] * math.exp(rel), values[n] * math.exp(-rel)
-        cols.append((ctx.ident.predict(up) - ctx.ident.predict(down))[idx] / (2 * rel))
+        v = dict(values)
+        v[n] = values[n] * math.exp(rel)
+        cols.append((ctx.ident.predict(v) - raw)[idx] / rel)
     S = np.column_stack(cols) if cols else np.zeros((idx.size, 0))
     Q, _ = np.linalg.qr(np.column_stack([raw[idx], np.ones(idx.size)]))
     return S - Q @ (Q.T @ S)
