@@ -1,0 +1,228 @@
+"""Every public function and class carries a numpydoc docstring that matches its signature.
+
+The public objects are the names of the face (``bondgraph.__all__``, resolved one by one
+through its lazy ``__getattr__``), the names in the ``__all__`` of each stage package that
+declares one (submodules listed there are skipped), and the public methods and properties of
+every public class (no leading underscore, defined in ``bondgraph`` itself rather than
+inherited from outside it).  Each is checked by numpydoc's own validator
+(:func:`numpydoc.validate.validate`), the reference for the format, on four codes:
+
+* ``GL08`` the object has no docstring;
+* ``PR01`` a parameter of the signature is not documented;
+* ``PR02`` a documented parameter is not in the signature;
+* ``RT01`` a function that returns a value has no Returns section (not asked of properties
+  or of ``__init__``).
+
+The cases are one per stage, so a failure names the stage and lists each object with its
+codes.  A face name belongs to the stage of the module that defines it.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import sys
+import types
+
+import numpydoc.validate
+import pytest
+from test_layout import MODULES, STAGES, public_modules
+
+import bondgraph
+
+#: the codes the suite enforces (see the module docstring)
+CODES = ("GL08", "PR01", "PR02", "RT01")
+
+
+def _stage_of(module: str) -> str:
+    """The pipeline stage (``support``, ``data``, ...) of a dotted module name in ``bondgraph``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 and parts[1] in STAGES else "face"
+
+
+def _qualified(obj) -> str:
+    """The importable dotted path of a function or class: its defining module and qualname."""
+    return f"{obj.__module__}.{obj.__qualname__}"
+
+
+def _public_names() -> list[tuple[str, object]]:
+    """(stage, object) for every public name of the face and of each stage package's ``__all__``."""
+    found = []
+    for name in bondgraph.__all__:
+        value = getattr(bondgraph, name)
+        if not isinstance(value, types.ModuleType):
+            found.append((_stage_of(value.__module__), value))
+    for module in sorted(public_modules()):
+        if module == "bondgraph" or not MODULES[module][1]:
+            continue
+        package = importlib.import_module(module)
+        for name in getattr(package, "__all__", []):
+            if f"{module}.{name}" in MODULES:  # a submodule, not an object
+                continue
+            value = getattr(package, name)
+            if not isinstance(value, types.ModuleType):
+                found.append((_stage_of(module), value))
+    return found
+
+
+def _members(cls: type) -> list[tuple[str, bool]]:
+    """(qualified name, is a property) of the public methods and properties of ``cls`` that are
+    defined in a ``bondgraph`` class of its method resolution order."""
+    out, seen = [], set()
+    for klass in cls.__mro__:
+        if not klass.__module__.startswith("bondgraph"):
+            continue
+        for name, attr in vars(klass).items():
+            if name.startswith("_") or name in seen:
+                continue
+            seen.add(name)
+            if isinstance(attr, property):
+                out.append((f"{_qualified(klass)}.{name}", True))
+            elif isinstance(attr, (staticmethod, classmethod)) or inspect.isfunction(attr):
+                out.append((f"{_qualified(klass)}.{name}", False))
+    return out
+
+
+def public_objects() -> dict[str, list[tuple[str, bool]]]:
+    """stage -> (qualified name, is a property) of the public objects it defines, each once."""
+    by_stage: dict[str, list[tuple[str, bool]]] = {}
+    seen = set()
+
+    def add(stage: str, name: str, is_property: bool) -> None:
+        if name not in seen:
+            seen.add(name)
+            by_stage.setdefault(stage, []).append((name, is_property))
+
+    for stage, value in _public_names():
+        if not (inspect.isclass(value) or callable(value)) or not hasattr(value, "__qualname__"):
+            continue
+        add(stage, _qualified(value), False)
+        if inspect.isclass(value):
+            for name, is_property in _members(value):
+                add(stage, name, is_property)
+    return by_stage
+
+
+def problems(name: str, is_property: bool = False) -> list[str]:
+    """The enforced numpydoc codes that ``name`` (an importable dotted path) fails, as
+    ``"CODE message"`` lines."""
+    errors = numpydoc.validate.validate(name)["errors"]
+    skip_returns = is_property or name.endswith(".__init__")
+    return [f"{code} {message}" for code, message in errors if code in CODES and not (code == "RT01" and skip_returns)]
+
+
+OBJECTS = public_objects()
+
+#: stages whose docstrings are being completed on another branch: still collected and run, a
+#: failure expected until that branch is merged (then the entry is removed)
+PENDING = {
+    stage: "docstrings of this stage are completed on a parallel branch"
+    for stage in ("numerics", "linear", "export", "fit", "diagnosis", "plotting", "batch")
+}
+
+
+def _case(stage: str):
+    if stage in PENDING:
+        return pytest.param(stage, marks=pytest.mark.xfail(strict=False, reason=PENDING[stage]))
+    return stage
+
+
+@pytest.mark.parametrize("stage", [_case(s) for s in sorted(OBJECTS)])
+def test_public_docstrings_follow_numpydoc(stage):
+    failures = []
+    for name, is_property in OBJECTS[stage]:
+        found = problems(name, is_property)
+        if found:
+            failures.append(f"{name}: " + "; ".join(found))
+    assert not failures, f"{len(failures)} public object(s) of stage {stage!r}:\n" + "\n".join(failures)
+
+
+def test_every_stage_with_public_names_is_checked():
+    """The collection reaches the stages that hold the face's names and declare ``__all__``."""
+    for stage in ("support", "data", "model", "equations", "numerics", "linear", "export"):
+        assert OBJECTS.get(stage), stage
+
+
+@pytest.fixture
+def scratch_module(monkeypatch):
+    """An importable throw-away module holding deliberately bad and good docstrings."""
+    module = types.ModuleType("_docstring_scratch")
+
+    def undocumented(x):
+        return x
+
+    def missing_parameter(x, y):
+        """Add two numbers.
+
+        Parameters
+        ----------
+        x : float
+            The first.
+
+        Returns
+        -------
+        float
+            The sum.
+        """
+        return x + y
+
+    def extra_parameter(x):
+        """Double a number.
+
+        Parameters
+        ----------
+        x : float
+            The number.
+        z : float
+            Not a parameter at all.
+
+        Returns
+        -------
+        float
+            Twice ``x``.
+        """
+        return 2 * x
+
+    def no_returns(x):
+        """Double a number.
+
+        Parameters
+        ----------
+        x : float
+            The number.
+        """
+        return 2 * x
+
+    def good(x):
+        """Double a number.
+
+        Parameters
+        ----------
+        x : float
+            The number, in V.
+
+        Returns
+        -------
+        float
+            Twice ``x``, in V.
+        """
+        return 2 * x
+
+    for f in (undocumented, missing_parameter, extra_parameter, no_returns, good):
+        f.__module__, f.__qualname__ = module.__name__, f.__name__
+        setattr(module, f.__name__, f)
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    return module.__name__
+
+
+@pytest.mark.parametrize(
+    "function, code",
+    [("undocumented", "GL08"), ("missing_parameter", "PR01"), ("extra_parameter", "PR02"), ("no_returns", "RT01")],
+)
+def test_the_checker_catches_a_bad_docstring(scratch_module, function, code):
+    found = problems(f"{scratch_module}.{function}")
+    assert [p[:4] for p in found] == [code], found
+
+
+def test_the_checker_passes_a_good_docstring(scratch_module):
+    assert problems(f"{scratch_module}.good") == []
