@@ -371,7 +371,14 @@ class Component:
         return [b for b in self.bonds if b.tail[0] == name or b.head[0] == name]
 
     def check(self) -> None:
-        """Structural checks; raises ModelError naming the offending elements."""
+        """Check the graph's structure: it has bonds, every port is bonded, every junction
+        has at least two bonds.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            Naming the offending element and the fix.
+        """
         if not self.bonds:
             raise ModelError(f"{self.name}: the graph has no bonds")
         count: dict[str, int] = {n: 0 for n in self.elements}
