@@ -235,3 +235,13 @@ def test_the_checker_catches_a_bad_docstring(scratch_module, function, code):
 
 def test_the_checker_passes_a_good_docstring(scratch_module):
     assert problems(f"{scratch_module}.good") == []
+
+
+#: the project's own terms that public docstrings use: each is defined in docs/glossary.md
+GLOSSARY_TERMS = ("null", "static twin", "reading", "strained", "plausible device", "site", "Lur'e system", "screen")
+
+
+def test_the_glossary_defines_the_project_terms():
+    text = (MODULES["bondgraph"][0].parents[1] / "docs" / "glossary.md").read_text(encoding="utf-8").lower()
+    missing = [t for t in GLOSSARY_TERMS if f"**{t.lower()}**" not in text and f"**the {t.lower()}**" not in text]
+    assert not missing, f"docs/glossary.md does not define {missing}"
