@@ -59,7 +59,8 @@ class Equations:
     inputs : list of sympy.Symbol
         The model's inputs (source efforts or flows, e.g. a voltage in V).
     input_rates : list of sympy.Symbol
-        The time derivatives of inputs the equations use (derivative causality on a source).
+        The symbols ``du/dt`` of the input derivatives the equations use (in the input's
+        unit per s).
     params : list of sympy.Symbol
         The parameters, in SI units.
     program : list of Statement
@@ -73,9 +74,10 @@ class Equations:
     operators : list of OperatorBlock
         The memory operators (hysteresis, friction) the program calls.
     eliminated : list of str, optional
-        Storage elements in derivative causality whose state was eliminated.
+        One line per storage element in derivative causality whose state was eliminated,
+        for printing.
     loops : list of str, optional
-        The algebraic loops solved during derivation, described for printing.
+        One line per algebraic loop solved symbolically during derivation, for printing.
     bond_vars : dict of int to tuple of (sympy.Symbol, sympy.Symbol), optional
         Bond number -> its (effort, flow) program variables.
     units : UnitReport, optional

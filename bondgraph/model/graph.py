@@ -359,7 +359,7 @@ class Component:
         bondgraph.support.errors.ModelError
             If the parameter is declared twice.
         bondgraph.support.errors.ParameterError
-            If the name, unit or bounds are not valid.
+            If the name is not an identifier or the unit cannot be read.
         """
         decl = Parameter(name, float(value), unit, doc, bounds=bounds)
         if name in self.parameters:

@@ -27,7 +27,7 @@ class TwoPort(Element):
         The element's name.
     ratio : float or str or sympy.Expr
         The ratio (n of a transformer, r of a gyrator), in the unit that relates the two
-        ports' variables (e.g. N/V for an electromechanical transformer).
+        ports' variables.
 
     Raises
     ------
@@ -87,7 +87,7 @@ class TF(TwoPort):
     name : str
         The element's name.
     ratio : float or str or sympy.Expr
-        n, in (unit of e1)/(unit of e2), e.g. N/V for a piezo's electromechanical coupling.
+        n, in (unit of e1)/(unit of e2): V/N when p1 is electrical and p2 mechanical.
 
     Raises
     ------
