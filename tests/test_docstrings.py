@@ -72,12 +72,12 @@ PROPERTY = frozenset({"RT01"})
 PROTOCOL = frozenset({"PR01", "PR02"})
 
 
-def _members(cls: type) -> list[tuple[str, frozenset]]:
+def _members(cls: type, package: str = "bondgraph") -> list[tuple[str, frozenset]]:
     """(qualified name, codes skipped) of the public methods and properties of ``cls`` that
-    are defined in a ``bondgraph`` class of its method resolution order."""
+    are defined in a class of ``package`` in its method resolution order."""
     out, seen = [], set()
     for klass in cls.__mro__:
-        if not klass.__module__.startswith("bondgraph"):
+        if not klass.__module__.startswith(package):
             continue
         for name, attr in vars(klass).items():
             if name.startswith("_") or name in seen:
@@ -217,7 +217,28 @@ def scratch_module(monkeypatch):
         """
         return 2 * x
 
-    for f in (undocumented, missing_parameter, extra_parameter, no_returns, good):
+    class Device:
+        """A device.
+
+        Parameters
+        ----------
+        gain : float
+            In m/V.
+        """
+
+        def __init__(self, gain):
+            self.gain = gain
+
+        @property
+        def bare(self):
+            return self.gain
+
+        @property
+        def stroke(self):
+            """The stroke per 100 V, in m."""
+            return 100 * self.gain
+
+    for f in (undocumented, missing_parameter, extra_parameter, no_returns, good, Device):
         f.__module__, f.__qualname__ = module.__name__, f.__name__
         setattr(module, f.__name__, f)
     monkeypatch.setitem(sys.modules, module.__name__, module)
@@ -235,6 +256,14 @@ def test_the_checker_catches_a_bad_docstring(scratch_module, function, code):
 
 def test_the_checker_passes_a_good_docstring(scratch_module):
     assert problems(f"{scratch_module}.good") == []
+    assert problems(f"{scratch_module}.Device") == []
+
+
+def test_a_property_needs_a_docstring_but_no_returns_section(scratch_module):
+    members = dict(_members(sys.modules[scratch_module].Device, scratch_module))
+    assert set(members) == {f"{scratch_module}.Device.bare", f"{scratch_module}.Device.stroke"}
+    assert [p[:4] for p in problems(f"{scratch_module}.Device.bare", PROPERTY)] == ["GL08"]
+    assert problems(f"{scratch_module}.Device.stroke", PROPERTY) == []
 
 
 #: the project's own terms that public docstrings use: each is defined in docs/glossary.md
