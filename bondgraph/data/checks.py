@@ -52,9 +52,19 @@ def check_units(ds: Dataset, stacklevel: int = 1) -> list[str]:
     """Warn (:class:`DataWarning`) about columns that look like the wrong unit.
 
     Runs :func:`check_time_axis` and every installed check (see the module docstring);
-    deliberately conservative, so that correct data never warns.  Returns the messages (also
-    issued as warnings; ``stacklevel`` as for :func:`warnings.warn`, 1 = the caller of this
-    function).
+    deliberately conservative, so that correct data never warns.
+
+    Parameters
+    ----------
+    ds : Dataset
+        The data to check (time in s, other columns in SI units: V, m, N, ...).
+    stacklevel : int, optional
+        As for :func:`warnings.warn`: 1 (the default) blames the caller of this function.
+
+    Returns
+    -------
+    list of str
+        The messages, each also issued as a :class:`DataWarning`; empty for plausible data.
     """
     messages: list[str] = []
     for check in installed_checks():

@@ -266,27 +266,35 @@ def read_csv(
 ) -> Dataset:
     """Read a measured-data CSV file (format in :mod:`bondgraph.data.csv_format`) into a :class:`Dataset`.
 
-    Parameters
-    ----------
-    path:
-        The file.
-    required:
-        Canonical column names that must be present (after ``rename``); ``"t"`` always is.
-    rename:
-        File column name -> canonical name, e.g. ``{"Vin": "V", "disp": "x"}`` for
-        ``--input Vin --output disp``.  A file column that already has a target name (``V``
-        when ``Vin`` is mapped to ``V``) is dropped in favour of the mapped one.
-    check_units:
-        Run :func:`check_units` (``DataWarning`` for suspicious units).
-
     A column that holds no number at all (a note, a time stamp string) and that is neither
     ``t`` nor required is left out of the :class:`Dataset` instead of being refused.
 
-    Raises :class:`~bondgraph.support.errors.DataError` with a one-line ``FILE:LINE: problem; fix``
-    message for: a missing, unreadable or non-UTF-8 file; an empty file or one without a
-    header or data rows; a header that is numeric, has an empty or duplicate name, or lacks
-    a required column; a row with the wrong number of cells; an empty or non-numeric cell;
-    NaN or inf; time not strictly increasing; fewer than 2 rows.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    required : iterable of str, optional
+        Canonical column names that must be present (after ``rename``); ``"t"`` always is.
+    rename : mapping of str to str, optional
+        File column name -> canonical name, e.g. ``{"Vin": "V", "disp": "x"}`` for
+        ``--input Vin --output disp``.  A file column that already has a target name (``V``
+        when ``Vin`` is mapped to ``V``) is dropped in favour of the mapped one.
+    check_units : bool, optional
+        Run :func:`check_units` (``DataWarning`` for suspicious units); True by default.
+
+    Returns
+    -------
+    Dataset
+        The record: time in s and every numeric column, with the file's metadata.
+
+    Raises
+    ------
+    bondgraph.support.errors.DataError
+        With a one-line ``FILE:LINE: problem; fix`` message for: a missing, unreadable or
+        non-UTF-8 file; an empty file or one without a header or data rows; a header that
+        is numeric, has an empty or duplicate name, or lacks a required column; a row with
+        the wrong number of cells; an empty or non-numeric cell; NaN or inf; time not
+        strictly increasing; fewer than 2 rows.
     """
     src = os.fspath(path)
     if isinstance(src, bytes):

@@ -54,12 +54,29 @@ def write_csv(
     a file is never written that :func:`read_csv` would refuse.  Written via
     :func:`~bondgraph.support.atomic.atomic_write`: on failure no partial file is left.
 
-    ``index`` names the first column (``"t"``, the time in s; e.g. ``"omega_rad_s"`` for a
-    frequency response, whose file :func:`read_csv` then does not read as a record).
-    ``progress(fraction)`` is called as blocks of rows are written (a large file takes seconds).
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (replaced whole, or left as it was on failure).
+    t : array_like
+        The first column: time in s, strictly increasing (or what ``index`` names).
+    columns : mapping of str to array_like
+        The other columns by name, each as long as ``t``, in SI units (V, m, N, ...).
+    metadata : mapping of str to object, optional
+        Written as ``# key: value`` lines above the header.
+    index : str, optional
+        The first column's name: ``"t"`` (the default, time in s) or e.g.
+        ``"omega_rad_s"`` for a frequency response, whose file :func:`read_csv` then does
+        not read as a record.
+    progress : callable, optional
+        ``progress(fraction)`` is called as blocks of rows are written (a large file takes
+        seconds).
 
-    Raises :class:`DataError` for invalid data, names, metadata, or if the file cannot be
-    written (message names the file).
+    Raises
+    ------
+    bondgraph.support.errors.DataError
+        For invalid data, column names or metadata keys, or if the file cannot be written
+        (the message names the file).
     """
     dst = os.fspath(path)
     columns = dict(columns)

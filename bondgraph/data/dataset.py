@@ -26,20 +26,27 @@ def _as_vector(values, what: str, where: str) -> np.ndarray:
 class Dataset:
     """A time series of measured (or simulated) signals.
 
-    Attributes
-    ----------
-    t:
-        Time in seconds, float64, strictly increasing, at least 2 samples.
-    columns:
-        Every other column by name (``"V"``, ``"x"``, ...), float64, same length as ``t``,
-        in file order.
-    metadata:
-        ``# key: value`` comments of the file, in order (values are strings).
-    path:
-        The file it was read from, or ``None``.
-
     All arrays are private read-only copies (copy one with ``np.array(ds.t)`` to modify it);
-    values must be finite.  Violations raise :class:`~bondgraph.support.errors.DataError`.
+    values must be finite.  The fields below are also the attributes of the same names.
+
+    Parameters
+    ----------
+    t : array_like
+        Time in s, float64, strictly increasing, at least 2 samples.
+    columns : dict of str to array_like, optional
+        Every other column by name (``"V"`` in V, ``"x"`` in m, ...), float64, same length
+        as ``t``, in file order.  ``"t"`` may not appear here.
+    metadata : dict of str to str, optional
+        ``# key: value`` comments of the file, in order (values are kept as strings).
+    path : str or os.PathLike, optional
+        The file it was read from, or ``None``; used to name the data in error messages.
+
+    Raises
+    ------
+    bondgraph.support.errors.DataError
+        If a column is not numeric, not one-dimensional, of another length than ``t`` or
+        holds a non-finite value, if a column name is empty or ``"t"``, if ``t`` has fewer
+        than 2 samples or is not strictly increasing.
     """
 
     t: np.ndarray
@@ -104,8 +111,26 @@ class Dataset:
         return ("t", *self.columns)
 
     def column(self, name: str, option: str | None = None) -> np.ndarray:
-        """The column ``name`` (``"t"`` included); DataError listing the known names if absent.
-        ``option`` names the command-line option that chooses the column, for the hint."""
+        """The column ``name`` (``"t"`` included).
+
+        Parameters
+        ----------
+        name : str
+            The column's name.
+        option : str, optional
+            The command-line option that chooses the column (``"--input"``), named in the
+            hint of the error message.
+
+        Returns
+        -------
+        numpy.ndarray
+            The read-only column, in the unit of the file.
+
+        Raises
+        ------
+        bondgraph.support.errors.DataError
+            If there is no such column; the message lists the known names.
+        """
         if name == "t":
             return self.t
         try:
@@ -115,11 +140,43 @@ class Dataset:
             raise DataError(f"{self._where}: {did_you_mean(name, self.names, 'column')}{hint}") from None
 
     def input(self, name: str = "V") -> np.ndarray:
-        """The column that drives a model (by default ``V``)."""
+        """The column that drives a model.
+
+        Parameters
+        ----------
+        name : str, optional
+            The column's name, by default ``"V"`` (a voltage in V).
+
+        Returns
+        -------
+        numpy.ndarray
+            The read-only column.
+
+        Raises
+        ------
+        bondgraph.support.errors.DataError
+            If there is no such column (the hint names ``--input``).
+        """
         return self.column(name, "--input")
 
     def output(self, name: str = "x") -> np.ndarray:
-        """The column a model output is compared with (by default ``x``)."""
+        """The column a model output is compared with.
+
+        Parameters
+        ----------
+        name : str, optional
+            The column's name, by default ``"x"`` (a displacement in m).
+
+        Returns
+        -------
+        numpy.ndarray
+            The read-only column.
+
+        Raises
+        ------
+        bondgraph.support.errors.DataError
+            If there is no such column (the hint names ``--output``).
+        """
         return self.column(name, "--output")
 
     @property
@@ -148,8 +205,23 @@ class Dataset:
         return Dataset(self.t[index], {k: v[index] for k, v in self.columns.items()}, self.metadata, self.path)
 
     def slice(self, t0: float | None = None, t1: float | None = None) -> Dataset:
-        """The samples with ``t0 <= t <= t1`` (either bound may be None); times are kept
-        as they are (not shifted to start at 0)."""
+        """The samples with ``t0 <= t <= t1``; times are kept as they are (not shifted to 0).
+
+        Parameters
+        ----------
+        t0, t1 : float, optional
+            The window's bounds in s, inclusive; ``None`` leaves that side open.
+
+        Returns
+        -------
+        Dataset
+            The samples in the window, all columns and the metadata kept.
+
+        Raises
+        ------
+        bondgraph.support.errors.DataError
+            If the window holds fewer than 2 samples.
+        """
         lo = 0 if t0 is None else int(np.searchsorted(self.t, t0, "left"))
         hi = len(self) if t1 is None else int(np.searchsorted(self.t, t1, "right"))
         if hi - lo < 2:
@@ -160,8 +232,26 @@ class Dataset:
         return self._take(slice(lo, hi))
 
     def split(self, fraction: float = 0.7) -> tuple[Dataset, Dataset]:
-        """Split in time into (fit, validation): the first part covers the first
-        ``fraction`` of the time span, the second the rest.  No sample is in both."""
+        """Split in time into (fit, validation); no sample is in both.
+
+        Parameters
+        ----------
+        fraction : float, optional
+            The share of the time span (not of the samples) the first part covers, strictly
+            between 0 and 1; 0.7 by default.
+
+        Returns
+        -------
+        fit, validation : Dataset
+            The first ``fraction`` of the time span, and the rest.
+
+        Raises
+        ------
+        bondgraph.support.errors.UsageError
+            If ``fraction`` is not a number strictly between 0 and 1.
+        bondgraph.support.errors.DataError
+            If either part would hold fewer than 2 samples.
+        """
         if not (isinstance(fraction, (int, float)) and 0.0 < fraction < 1.0):
             raise UsageError(f"split fraction must be between 0 and 1 (exclusive), not {fraction!r}")
         t_split = self.t[0] + fraction * (self.t[-1] - self.t[0])
@@ -184,6 +274,25 @@ class Dataset:
         passband ripple is about 0.1 dB per IIR stage, and the first and last few output
         samples carry filter end effects.  Requires uniform sampling (use :meth:`resample`
         first otherwise).
+
+        Parameters
+        ----------
+        factor : int
+            Keep every ``factor``-th sample (1 returns the dataset itself).
+        ftype : {"iir", "fir"}, optional
+            The anti-alias filter, ``"iir"`` by default.
+
+        Returns
+        -------
+        Dataset
+            The decimated dataset, sample rate divided by ``factor``.
+
+        Raises
+        ------
+        bondgraph.support.errors.UsageError
+            If ``factor`` is not a positive integer or ``ftype`` is unknown.
+        bondgraph.support.errors.DataError
+            If the sampling is not uniform or fewer than 2 samples would remain.
         """
         if isinstance(factor, bool) or not isinstance(factor, (int, np.integer)) or factor < 1:
             raise UsageError(f"decimation factor must be a positive integer, not {factor!r}")
@@ -207,6 +316,24 @@ class Dataset:
 
         Meant to make slightly irregular sampling uniform at about the same rate.  There is
         no anti-alias filter: to reduce the rate of uniform data use :meth:`decimate`.
+
+        Parameters
+        ----------
+        dt : float
+            The new time step in s, positive.
+
+        Returns
+        -------
+        Dataset
+            The dataset on the uniform grid, every column interpolated linearly.
+
+        Raises
+        ------
+        bondgraph.support.errors.UsageError
+            If ``dt`` is not a positive finite number, or would make far more samples than
+            the data hold.
+        bondgraph.support.errors.DataError
+            If the grid would hold fewer than 2 samples.
         """
         t = sampling.uniform_grid(self.t[0], self.t[-1], dt, self._where, len(self))
         return Dataset(t, {k: np.interp(t, self.t, v) for k, v in self.columns.items()}, self.metadata, self.path)

@@ -15,10 +15,24 @@ from ..support.errors import DataError, UsageError
 
 
 def uniform_step(t, rtol: float | None = None) -> float | None:
-    """The mean sample interval (s) if ``t`` is uniformly sampled, else None.
+    """The mean sample interval if ``t`` is uniformly sampled, else None.
 
-    Uniform means every step is within ``rtol`` of the mean step, by default the setting
-    ``data.uniform_rtol`` (1 %: absorbs time stamps printed with few digits)."""
+    Uniform means every step is within ``rtol`` of the mean step.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times in s, increasing.
+    rtol : float, optional
+        The tolerance relative to the mean step; by default the setting
+        ``data.uniform_rtol`` (1 %: absorbs time stamps printed with few digits).
+
+    Returns
+    -------
+    float or None
+        The mean step in s, or ``None`` if the sampling is not uniform or ``t`` has fewer
+        than 2 samples.
+    """
     t = np.asarray(t, dtype=np.float64)
     if t.size < 2:
         return None

@@ -32,11 +32,19 @@ from ..support.errors import CausalityError
 
 @dataclass
 class Causality:
-    """Causal assignment of a model's bonds.
+    """Causal assignment of a model's bonds, as :func:`assign_causality` returns it.
 
-    ``effort_from[k]`` is ``(element, port)`` of the end of bond ``k`` that sets its effort.
-    ``derivative`` lists storage ports in derivative causality, ``arbitrary`` the bonds
-    (and resistors) whose causality was a free choice.
+    Parameters
+    ----------
+    model : Model
+        The model whose bonds are assigned.
+    effort_from : dict of int to tuple of (str, str)
+        ``effort_from[k]`` is ``(element, port)`` of the end of bond ``k`` that sets its
+        effort; the causal stroke is at the other end.
+    derivative : list of tuple of (str, str), optional
+        The storage ports (``(element, port)``) in derivative causality.
+    arbitrary : list of str, optional
+        The bonds (``"bond k"``) and resistors whose causality was a free choice.
     """
 
     model: Model
@@ -45,10 +53,35 @@ class Causality:
     arbitrary: list[str] = field(default_factory=list)
 
     def sets_effort(self, bond: Bond, end: tuple[str, str]) -> bool:
+        """Whether the element at ``end`` sets the effort of ``bond``.
+
+        Parameters
+        ----------
+        bond : Bond
+            A bond of the model.
+        end : tuple of (str, str)
+            ``(element, port)``, one end of ``bond``.
+
+        Returns
+        -------
+        bool
+            True if that end sets the effort (and so receives the flow).
+        """
         return self.effort_from[bond.index] == end
 
     def stroke_end(self, bond: Bond) -> tuple[str, str]:
-        """The end with the causal stroke (where the effort is an input)."""
+        """The end with the causal stroke (where the effort is an input).
+
+        Parameters
+        ----------
+        bond : Bond
+            A bond of the model.
+
+        Returns
+        -------
+        tuple of (str, str)
+            ``(element, port)`` of the end that receives the effort.
+        """
         return bond.head if self.effort_from[bond.index] == bond.tail else bond.tail
 
     def _repr_svg_(self) -> str:
@@ -58,6 +91,15 @@ class Causality:
         return svg(self.model, self.stroke_end, {e for e, _ in self.derivative})
 
     def table(self) -> list[dict]:
+        """The assignment as rows, one per bond, for printing.
+
+        Returns
+        -------
+        list of dict
+            Per bond: ``bond`` (its number), ``from`` and ``to`` (the half-arrow's tail and
+            head: power flows from tail to head when positive), ``effort_by`` and
+            ``flow_by`` (the ends that set effort and flow) and ``stroke_at``.
+        """
         rows = []
         for b in self.model.bonds:
             setter = self.effort_from[b.index]
@@ -228,7 +270,27 @@ class _Assigner:
 
 
 def assign_causality(model: Model) -> Causality:
-    """Run SCAP on ``model`` (after its structural check); see the module docstring."""
+    """Assign causality to every bond of ``model`` by SCAP (see the module docstring).
+
+    Parameters
+    ----------
+    model : Model
+        The acausal model; its structural check (:meth:`Model.check`) runs first.
+
+    Returns
+    -------
+    Causality
+        The element that sets each bond's effort, the storage ports in derivative causality
+        and the free choices.
+
+    Raises
+    ------
+    bondgraph.support.errors.ModelError
+        If the model fails its structural check (an unbonded port, an unknown element).
+    bondgraph.support.errors.CausalityError
+        If no causal assignment exists (two sources imposing the same variable, a conflict
+        no revision resolves); the message names the elements where it arises.
+    """
     model.check()
     a = _Assigner(model)
     elements = model.elements

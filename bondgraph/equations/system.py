@@ -43,8 +43,45 @@ class Statement:
 class Equations:
     """Explicit state-space form of a model as a straight-line program.
 
-    ``program`` is topologically ordered; ``rates[state]`` and ``outputs[name]`` are
-    expressions of program variables, states, inputs, input derivatives and parameters.
+    Built by :func:`~bondgraph.equations.derivation.derive`; the fields are also the
+    attributes of the same names.  Efforts and flows follow the power-in convention: the
+    power ``e * f`` of a bond is positive when it flows from the half-arrow's tail to its head.
+
+    Parameters
+    ----------
+    model : Model
+        The model the equations were derived from.
+    causality : Causality
+        Its causal assignment.
+    states : list of State
+        The state variables: displacements q, momenta p, internal states z, sensor
+        integrals x, each with its origin and initial value.
+    inputs : list of sympy.Symbol
+        The model's inputs (source efforts or flows, e.g. a voltage in V).
+    input_rates : list of sympy.Symbol
+        The symbols ``du/dt`` of the input derivatives the equations use (in the input's
+        unit per s).
+    params : list of sympy.Symbol
+        The parameters, in SI units.
+    program : list of Statement
+        The straight-line program ``var = expr`` in topological order; operator outputs
+        appear as calls ``h = H[v]``.
+    rates : dict of sympy.Symbol to sympy.Expr
+        ``rates[state]`` is the state's time derivative, an expression of program
+        variables, states, inputs, input rates and parameters.
+    outputs : dict of str to sympy.Expr
+        The named outputs, expressions of the same symbols.
+    operators : list of OperatorBlock
+        The memory operators (hysteresis, friction) the program calls.
+    eliminated : list of str, optional
+        One line per storage element in derivative causality whose state was eliminated,
+        for printing.
+    loops : list of str, optional
+        One line per algebraic loop solved symbolically during derivation, for printing.
+    bond_vars : dict of int to tuple of (sympy.Symbol, sympy.Symbol), optional
+        Bond number -> its (effort, flow) program variables.
+    units : UnitReport, optional
+        The unit check's result, ``None`` when not checked.
     """
 
     model: Model
@@ -65,11 +102,22 @@ class Equations:
 
     @property
     def state_symbols(self) -> list[sp.Symbol]:
+        """The states' symbols, in state order (the order of the state vector x)."""
         return [s.symbol for s in self.states]
 
     def program_values(self, roots=None) -> dict:
-        """Every program variable (or those ``roots`` depend on) as an expression of states,
-        inputs and parameters (operator outputs kept as symbols)."""
+        """Every program variable as an expression of states, inputs and parameters.
+
+        Parameters
+        ----------
+        roots : iterable of sympy.Expr, optional
+            Only the variables these expressions depend on; all by default.
+
+        Returns
+        -------
+        dict of sympy.Symbol to sympy.Expr
+            Program variable -> its expression, operator outputs kept as symbols.
+        """
         full: dict = {}
         for st in self.program if roots is None else self.needed(roots)[0]:
             if st.op is None:
@@ -77,13 +125,38 @@ class Equations:
         return full
 
     def substituted(self, exprs: dict) -> dict:
-        """``exprs`` with every program variable substituted (operator outputs kept as symbols)."""
+        """``exprs`` with every program variable substituted.
+
+        Parameters
+        ----------
+        exprs : dict
+            Values are sympy expressions of program variables, states, inputs and parameters.
+
+        Returns
+        -------
+        dict
+            The same keys, each expression with the program substituted (operator outputs
+            kept as symbols).
+        """
         full = self.program_values()
         return {k: v.xreplace(full) for k, v in exprs.items()}
 
     def needed(self, roots) -> tuple[list[Statement], set]:
-        """The program statements ``roots`` depend on, in program order, and every symbol the
-        roots reach through them (the one backward dependency walk of the framework)."""
+        """The program statements ``roots`` depend on (the framework's one backward
+        dependency walk).
+
+        Parameters
+        ----------
+        roots : iterable of sympy.Expr
+            The expressions whose dependencies are wanted.
+
+        Returns
+        -------
+        statements : list of Statement
+            The statements the roots depend on, in program order.
+        symbols : set of sympy.Symbol
+            Every symbol the roots reach through them.
+        """
         need = set().union(set(), *(r.free_symbols for r in roots))
         keep = []
         for st in reversed(self.program):
@@ -99,13 +172,35 @@ class Equations:
         return latex_display(self)
 
     def state_equations(self) -> dict[sp.Symbol, sp.Expr]:
-        """x' = f(x, u, θ) fully substituted."""
+        """The state equations x' = f(x, u, θ), fully substituted.
+
+        Returns
+        -------
+        dict of sympy.Symbol to sympy.Expr
+            State -> its time derivative (units of the state per s), operator outputs kept
+            as symbols.
+        """
         return self.substituted(self.rates)
 
     def output_equations(self) -> dict[str, sp.Expr]:
+        """The outputs y = g(x, u, θ), fully substituted.
+
+        Returns
+        -------
+        dict of str to sympy.Expr
+            Output name -> its expression, operator outputs kept as symbols.
+        """
         return self.substituted(self.outputs)
 
     def operator_inputs(self) -> dict[sp.Symbol, sp.Expr]:
+        """What each memory operator is driven by, fully substituted.
+
+        Returns
+        -------
+        dict of sympy.Symbol to sympy.Expr
+            Operator output h (of ``h = H[v]``) -> its input v as an expression of states,
+            inputs and parameters.
+        """
         return self.substituted({st.var: st.expr for st in self.program if st.op is not None})
 
     def jacobian(
@@ -115,7 +210,24 @@ class Equations:
 
         An operator output h = H[v] gets slope ``op_gains[h]`` (0 if not given: frozen memory).
         Entries of nonlinear laws hold program variables; ``inline`` substitutes them (for
-        generated code, which computes the program anyway, pass False)."""
+        generated code, which computes the program anyway, pass False).
+
+        Parameters
+        ----------
+        roots : list of sympy.Expr
+            The expressions to differentiate (rows).
+        wrt : list of sympy.Symbol
+            The symbols to differentiate with respect to (columns).
+        op_gains : dict of sympy.Symbol to sympy.Expr, optional
+            Operator output -> its small-signal slope dh/dv; outputs not listed get 0.
+        inline : bool, optional
+            Substitute program variables in the entries (True by default).
+
+        Returns
+        -------
+        sympy.Matrix
+            ``len(roots)`` x ``len(wrt)``, entry (i, j) = ∂roots[i]/∂wrt[j].
+        """
         wrt_set = set(wrt)
         grad: dict = {}
         for st in self.program:

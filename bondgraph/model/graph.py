@@ -89,8 +89,14 @@ class Quantity(sp.Symbol):
     """Placeholder for a port variable (effort, flow, state, displacement) of an element.
 
     Created by :meth:`Component.effort` and friends; resolved to the bond variables when
-    equations are derived.  ``what`` is one of e, f, q, p, x and ``endpoint`` is the
-    element (and port) it refers to.
+    equations are derived.  A sympy symbol, usable in output and law expressions.
+
+    Parameters
+    ----------
+    what : {"e", "f", "q", "p", "x"}
+        Effort, flow into the element (power-in), displacement, momentum, or a state.
+    endpoint : str
+        The element (and port) it refers to: ``"elem"`` or ``"elem.port"``.
     """
 
     def __new__(cls, what: str, endpoint: str):
@@ -106,7 +112,17 @@ class Quantity(sp.Symbol):
 
 
 class Component:
-    """A bond-graph fragment: elements, bonds, exposed ports, own parameters and blocks."""
+    """A bond-graph fragment: elements, bonds, exposed ports, own parameters and blocks.
+
+    Adding a component to another copies its elements under its name (``creep.k1``).
+
+    Parameters
+    ----------
+    name : str
+        The component's name, the prefix of its elements once added to another.
+    doc : str, optional
+        One line on what it models, shown in printouts.
+    """
 
     def __init__(self, name: str, doc: str = ""):
         self.name = name
@@ -121,7 +137,23 @@ class Component:
 
     # ---- building -------------------------------------------------------------------
     def add(self, *items):
-        """Add elements or components; returns the (last) item added."""
+        """Add elements or components.
+
+        Parameters
+        ----------
+        *items : Element or Component
+            What to add; a component's elements are copied under ``<component>.<name>``.
+
+        Returns
+        -------
+        Element or Component or None
+            The last item added (None if none was given), so ``k = m.add(C("k", 1e-6))``.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If an item is neither an element nor a component, or its name is taken.
+        """
         for item in items:
             if isinstance(item, Component):
                 self._add_component(item)
@@ -137,7 +169,26 @@ class Component:
             raise ModelError(f"{self.name}: the name '{name}' is used twice")
 
     def bond(self, a: str, b: str) -> Bond:
-        """Connect endpoint ``a`` to ``b`` (half-arrow a → b); see the module docstring."""
+        """Connect endpoint ``a`` to ``b``, the half-arrow from a to b.
+
+        Positive power flows from ``a`` to ``b``: e·f > 0 means energy moves from a to b.
+
+        Parameters
+        ----------
+        a, b : str
+            Endpoints: ``"element"`` for one-ports and junctions, ``"element.port"`` for
+            multiports, ``"component.port"`` for a component's exposed ports.
+
+        Returns
+        -------
+        Bond
+            The new bond, numbered from 1.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If an endpoint is unknown, both are the same element, or a port is bonded already.
+        """
         tail, head = self.resolve(a), self.resolve(b)
         if tail[0] == head[0]:
             raise ModelError(f"{self.name}: bond {a} → {b} connects element '{tail[0]}' to itself")
@@ -158,7 +209,18 @@ class Component:
         return bd
 
     def unbond(self, a: str, b: str) -> None:
-        """Remove the bond a → b (to splice elements into an existing graph)."""
+        """Remove the bond a → b (to splice elements into an existing graph).
+
+        Parameters
+        ----------
+        a, b : str
+            The bond's tail and head endpoints, as given to :meth:`bond`.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If there is no such bond.
+        """
         ta, hb = self.resolve(a), self.resolve(b)
         for bd in self.bonds:
             if (
@@ -172,11 +234,41 @@ class Component:
         raise ModelError(f"{self.name}: there is no bond {a} → {b}")
 
     def chain(self, *endpoints: str) -> list[Bond]:
-        """Bond a → b → c ... in sequence."""
+        """Bond a → b → c ... in sequence.
+
+        Parameters
+        ----------
+        *endpoints : str
+            The endpoints in order; each consecutive pair is bonded as by :meth:`bond`.
+
+        Returns
+        -------
+        list of Bond
+            The new bonds, one fewer than the endpoints.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            As :meth:`bond`.
+        """
         return [self.bond(a, b) for a, b in zip(endpoints, endpoints[1:])]
 
     def expose(self, port: str, endpoint: str):
-        """Make ``endpoint`` reachable from outside as ``<component>.<port>``."""
+        """Make ``endpoint`` reachable from outside as ``<component>.<port>``.
+
+        Parameters
+        ----------
+        port : str
+            The name the outside uses.
+        endpoint : str
+            The endpoint inside the component.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the port is exposed twice, would hide an element of that name, or the endpoint
+            is unknown.
+        """
         if port in self.ports:
             raise ModelError(f"{self.name}: port '{port}' exposed twice")
         if port in self.elements and endpoint != port:
@@ -185,7 +277,24 @@ class Component:
         self.ports[port] = endpoint
 
     def resolve(self, endpoint: str) -> tuple[str, str | None]:
-        """(element, port) for an endpoint string; port None means 'a new junction port'."""
+        """The element and port an endpoint string names.
+
+        Parameters
+        ----------
+        endpoint : str
+            ``"element"``, ``"element.port"`` or an exposed port's name.
+
+        Returns
+        -------
+        tuple of (str, str or None)
+            ``(element, port)``; the port is None for a junction (a new junction port).
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the endpoint is not a string, names a multiport without its port, or is
+            unknown (the message suggests close names).
+        """
         if not isinstance(endpoint, str):
             raise ModelError(f"{self.name}: endpoint must be a string like 'm' or 'tf.p1', got {endpoint!r}")
         if endpoint in self.ports and self.ports[endpoint] != endpoint:
@@ -206,6 +315,13 @@ class Component:
         raise ModelError(f"{self.name}: " + did_you_mean(endpoint, self.endpoint_names(), "element or port"))
 
     def endpoint_names(self) -> list[str]:
+        """Every endpoint string that :meth:`resolve` accepts.
+
+        Returns
+        -------
+        list of str
+            Exposed ports, one-ports and junctions by name, multiports as ``elem.port``.
+        """
         names = list(self.ports)
         for n, e in self.elements.items():
             if isinstance(e, Junction) or len(e.ports) == 1:
@@ -218,7 +334,33 @@ class Component:
     def parameter(
         self, name: str, value: float, unit: str = "", doc: str = "", bounds: tuple[float, float] | None = None
     ) -> sp.Symbol:
-        """Declare a real parameter owned by this component; returns its symbol."""
+        """Declare a real parameter owned by this component.
+
+        Parameters
+        ----------
+        name : str
+            The parameter's name (``<component>.<name>`` once the component is added).
+        value : float
+            Its value, in ``unit``.
+        unit : str, optional
+            Its SI unit, e.g. ``"N/m"`` (see :mod:`bondgraph.model.units`).
+        doc : str, optional
+            One line on what it is.
+        bounds : tuple of (float, float), optional
+            (lowest, highest) allowed value, for fitting.
+
+        Returns
+        -------
+        sympy.Symbol
+            The parameter's symbol, for laws and expressions.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the parameter is declared twice.
+        bondgraph.support.errors.ParameterError
+            If the name is not an identifier or the unit cannot be read.
+        """
         decl = Parameter(name, float(value), unit, doc, bounds=bounds)
         if name in self.parameters:
             raise ModelError(f"{self.name}: parameter '{name}' declared twice")
@@ -226,7 +368,33 @@ class Component:
         return decl.symbol
 
     def state(self, name: str, rate, x0=0, unit: str = "", doc: str = "") -> sp.Symbol:
-        """An internal state z with dz/dt = rate (DE-based memory such as Bouc–Wen)."""
+        """Declare an internal state z with dz/dt = rate (DE-based memory such as Bouc–Wen).
+
+        Parameters
+        ----------
+        name : str
+            The state's name and symbol.
+        rate : sympy.Expr or float or str
+            dz/dt, in the state's unit per s; may use port quantities, inputs, input rates,
+            parameters (use :meth:`set_rate` when it needs the state's own symbol).
+        x0 : sympy.Expr or float or str, optional
+            The initial value, 0 by default.
+        unit : str, optional
+            The state's SI unit.
+        doc : str, optional
+            One line on what it is.
+
+        Returns
+        -------
+        sympy.Symbol
+            The state's symbol.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the state is declared twice, the unit is not a unit, or rate or x0 are not
+            scalar expressions.
+        """
         if name in self.internal_states:
             raise ModelError(f"{self.name}: internal state '{name}' declared twice")
         _check_unit(self.name, f"internal state '{name}'", unit)
@@ -237,12 +405,48 @@ class Component:
         return sym
 
     def set_rate(self, name: str, rate):
-        """Set the rate of an internal state declared earlier (for rates that use its symbol)."""
+        """Set the rate of an internal state declared earlier (for rates that use its symbol).
+
+        Parameters
+        ----------
+        name : str
+            The state, as declared by :meth:`state`.
+        rate : sympy.Expr or float or str
+            dz/dt, in the state's unit per s.
+
+        Raises
+        ------
+        KeyError
+            If no such state was declared.
+        bondgraph.support.errors.ModelError
+            If ``rate`` is not a scalar expression.
+        """
         self.internal_states[name].rate = sympify(rate, f"state '{name}' rate")
 
     def operator(self, name: str, op: MemoryOperator, input) -> sp.Symbol:
-        """Apply a memory operator to ``input``; returns the symbol of its output.
-        Its parameters become model parameters ``<name>.<pname>``."""
+        """Apply a memory operator (hysteresis, friction) to an expression.
+
+        The operator's parameters become model parameters ``<name>.<pname>``.
+
+        Parameters
+        ----------
+        name : str
+            The output's name and symbol.
+        op : MemoryOperator
+            The operator; its kernels are compiled and checked now.
+        input : sympy.Expr or float or str
+            What drives it: an expression of port quantities, inputs, states, parameters.
+
+        Returns
+        -------
+        sympy.Symbol
+            The symbol of the operator's output, h = op[input].
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the name is taken, ``op`` is not a MemoryOperator, or a kernel is broken.
+        """
         if name in self.operators:
             raise ModelError(f"{self.name}: operator '{name}' declared twice")
         if not isinstance(op, MemoryOperator):
@@ -257,18 +461,83 @@ class Component:
         return sym
 
     def effort(self, endpoint: str) -> Quantity:
+        """The effort at an endpoint (V, N, ...; never sign-flipped).
+
+        Parameters
+        ----------
+        endpoint : str
+            ``"element"`` or ``"element.port"``.
+
+        Returns
+        -------
+        Quantity
+            A placeholder, resolved to the bond effort when equations are derived.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the endpoint is unknown.
+        """
         return self._quantity("e", endpoint)
 
     def flow(self, endpoint: str) -> Quantity:
-        """Flow *into* the element at ``endpoint`` (power-in convention)."""
+        """The flow *into* the element at an endpoint (power-in convention; A, m/s, ...).
+
+        Parameters
+        ----------
+        endpoint : str
+            ``"element"`` or ``"element.port"``.
+
+        Returns
+        -------
+        Quantity
+            A placeholder, resolved when equations are derived.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the endpoint is unknown.
+        """
         return self._quantity("f", endpoint)
 
     def displacement(self, endpoint: str) -> Quantity:
-        """Time integral of the flow into ``endpoint`` (q of a C; position of a mass)."""
+        """The time integral of the flow into an endpoint (q of a C: C or m).
+
+        Parameters
+        ----------
+        endpoint : str
+            ``"element"`` or ``"element.port"``.
+
+        Returns
+        -------
+        Quantity
+            A placeholder, resolved when equations are derived.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the endpoint is unknown.
+        """
         return self._quantity("q", endpoint)
 
     def momentum(self, endpoint: str) -> Quantity:
-        """Time integral of the effort at ``endpoint`` (p of an I)."""
+        """The time integral of the effort at an endpoint (p of an I: N·s or V·s).
+
+        Parameters
+        ----------
+        endpoint : str
+            ``"element"`` or ``"element.port"``.
+
+        Returns
+        -------
+        Quantity
+            A placeholder, resolved when equations are derived.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the endpoint is unknown.
+        """
         return self._quantity("p", endpoint)
 
     def _quantity(self, what: str, endpoint: str) -> Quantity:
@@ -332,18 +601,54 @@ class Component:
 
     # ---- roles and rewriting ----------------------------------------------------------------------
     def tag(self, element: str, role: str) -> None:
-        """Give an element a role (e.g. "stiffness", "damping", "polarization") that model
-        extensions (diagnosis) use to find where an effect belongs."""
+        """Give an element a role that model extensions (diagnosis) use to find where an
+        effect belongs.
+
+        Parameters
+        ----------
+        element : str
+            The element's name.
+        role : str
+            What it stands for in the physics: ``"stiffness"``, ``"damping"``,
+            ``"polarization"``, ...
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If there is no such element.
+        """
         if element not in self.elements:
             raise ModelError(f"{self.name}: " + did_you_mean(element, self.elements, "element"))
         self.elements[element].role = role
 
     def with_role(self, role: str) -> list[str]:
-        """Names of the elements tagged ``role``, in insertion order."""
+        """The elements tagged with a role.
+
+        Parameters
+        ----------
+        role : str
+            The role, as given to :meth:`tag`.
+
+        Returns
+        -------
+        list of str
+            Their names, in insertion order.
+        """
         return [n for n, e in self.elements.items() if getattr(e, "role", None) == role]
 
     def replace(self, element: Element) -> None:
-        """Swap an element for another of the same name and ports (e.g. a new law)."""
+        """Swap an element for another of the same name and ports (e.g. a new law).
+
+        Parameters
+        ----------
+        element : Element
+            The new element; it keeps the old one's role.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If there is no element of that name or the ports differ.
+        """
         old = self.elements.get(element.name)
         if old is None:
             raise ModelError(f"{self.name}: " + did_you_mean(element.name, self.elements, "element"))
@@ -353,7 +658,13 @@ class Component:
         self.elements[element.name] = element
 
     def substitute(self, mapping: dict) -> None:
-        """Replace symbols everywhere (element laws, internal states, operator inputs, outputs)."""
+        """Replace symbols everywhere (element laws, internal states, operator inputs, outputs).
+
+        Parameters
+        ----------
+        mapping : dict of sympy.Symbol to sympy.Expr
+            As for :meth:`sympy.Basic.xreplace`.
+        """
         self.elements = {n: e.xreplace(mapping) for n, e in self.elements.items()}
         for st in self.internal_states.values():
             st.rate, st.x0 = st.rate.xreplace(mapping), st.x0.xreplace(mapping)
@@ -363,15 +674,40 @@ class Component:
             o.expr = o.expr.xreplace(mapping)
 
     def copy(self):
-        """An independent copy (rewrites of the copy leave this model untouched)."""
+        """An independent copy (rewrites of the copy leave this model untouched).
+
+        Returns
+        -------
+        Component
+            A deep copy, of the same class.
+        """
         return copy.deepcopy(self)
 
     # ---- views ---------------------------------------------------------------------------------
     def bonds_of(self, name: str) -> list[Bond]:
+        """The bonds at an element.
+
+        Parameters
+        ----------
+        name : str
+            The element's name.
+
+        Returns
+        -------
+        list of Bond
+            The bonds with the element at either end, in bond order.
+        """
         return [b for b in self.bonds if b.tail[0] == name or b.head[0] == name]
 
     def check(self) -> None:
-        """Structural checks; raises ModelError naming the offending elements."""
+        """Check the graph's structure: it has bonds, every port is bonded, every junction
+        has at least two bonds.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            Naming the offending element and the fix.
+        """
         if not self.bonds:
             raise ModelError(f"{self.name}: the graph has no bonds")
         count: dict[str, int] = {n: 0 for n in self.elements}
@@ -397,7 +733,15 @@ class Component:
 
 
 class Model(Component):
-    """A complete bond-graph model: a component with inputs and named outputs."""
+    """A complete bond-graph model: a component with inputs and named outputs.
+
+    Parameters
+    ----------
+    name : str
+        The model's name, used in printouts and error messages.
+    doc : str, optional
+        One line on what it models.
+    """
 
     def __init__(self, name: str, doc: str = ""):
         super().__init__(name, doc)
@@ -407,10 +751,32 @@ class Model(Component):
         self.values: dict[str, Any] = {}
 
     def input(self, name: str, unit: str = "", doc: str = "", range: tuple[float, float] | None = None) -> sp.Symbol:
-        """Declare an input signal (e.g. the drive voltage ``V``); returns its symbol.
+        """Declare an input signal (e.g. the drive voltage ``V``).
 
-        ``range``: (lowest, highest) value the device accepts (e.g. a unipolar amplifier's
-        (0, 120) V); ``bondgraph compensate`` keeps the drives it computes within it."""
+        Declaring an input twice returns the first declaration's symbol.
+
+        Parameters
+        ----------
+        name : str
+            The input's name and symbol.
+        unit : str, optional
+            Its SI unit, e.g. ``"V"``.
+        doc : str, optional
+            One line on what it is.
+        range : tuple of (float, float), optional
+            (lowest, highest) value the device accepts (e.g. a unipolar amplifier's
+            (0, 120) V); ``bondgraph compensate`` keeps the drives it computes within it.
+
+        Returns
+        -------
+        sympy.Symbol
+            The input's symbol.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the unit is not a unit or the range is not (lowest, highest).
+        """
         if name in self.inputs:
             return self.inputs[name].symbol
         _check_unit(self.name, f"input '{name}'", unit)
@@ -426,14 +792,49 @@ class Model(Component):
         return sym
 
     def input_rate(self, name: str) -> sp.Symbol:
-        """Symbol of the time derivative of input ``name`` (for rate-dependent laws and states)."""
+        """The symbol of an input's time derivative (for rate-dependent laws and states).
+
+        Parameters
+        ----------
+        name : str
+            A declared input.
+
+        Returns
+        -------
+        sympy.Symbol
+            ``d<name>/dt``, in the input's unit per s.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If there is no such input.
+        """
         if name not in self.inputs:
             raise ModelError(f"{self.name}: " + did_you_mean(name, self.inputs, "input"))
         return input_rate_symbol(self.inputs[name].symbol)
 
     def output(self, name: str, expr, unit: str = "", doc: str = "") -> None:
-        """Declare a named output; ``expr`` may use port quantities, states, inputs, parameters.
-        A string ``"elem.e"``, ``"elem.f"``, ``"elem.q"``, ``"elem.p"`` names a port quantity."""
+        """Declare a named output.
+
+        Parameters
+        ----------
+        name : str
+            The output's name.
+        expr : sympy.Expr or str
+            An expression of port quantities, states, inputs and parameters; or a string
+            ``"elem.e"``, ``"elem.f"`` (flow into elem), ``"elem.q"``, ``"elem.p"`` naming a
+            port quantity.
+        unit : str, optional
+            Its SI unit, e.g. ``"m"``.
+        doc : str, optional
+            One line on what it is.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If the output is declared twice, the unit is not a unit, or the expression is
+            not valid.
+        """
         if name in self.outputs:
             raise ModelError(f"{self.name}: output '{name}' declared twice")
         _check_unit(self.name, f"output '{name}'", unit)
@@ -445,18 +846,38 @@ class Model(Component):
         self.outputs[name] = Output(name, sympify(expr, f"output '{name}'"), unit, doc)
 
     def parameter_table(self) -> dict[sp.Symbol, float]:
-        """Numeric value of every symbolic parameter (declared by the file or by components)."""
+        """The numeric value of every symbolic parameter (declared by the file or by components).
+
+        Returns
+        -------
+        dict of sympy.Symbol to float
+            Parameter symbol -> its current value, in its SI unit.
+        """
         table = {d.symbol: float(self.values[d.name]) for d in self.declared if d.symbolic}
         for name, (decl, val) in self.parameters.items():
             table[decl.symbol] = float(self.values.get(name, val))
         return table
 
     def all_parameters(self) -> dict[str, Parameter]:
+        """Every parameter declaration: the model file's and the components'.
+
+        Returns
+        -------
+        dict of str to Parameter
+            Name -> declaration.
+        """
         out = {d.name: d for d in self.declared}
         out.update({n: d for n, (d, _) in self.parameters.items()})
         return out
 
     def storage_elements(self):
+        """The storage elements (C, I, C-fields).
+
+        Returns
+        -------
+        list of Element
+            In insertion order.
+        """
         return [e for e in self.elements.values() if e.is_storage]
 
     def _repr_svg_(self) -> str:

@@ -61,9 +61,19 @@ class CSource:
     * ``void initial(double v0, double *mem, int n_mem, const double *prm, int n_prm)``:
       writes the memory at rest at ``v0``, as :meth:`MemoryOperator.initial_memory` returns it.
 
-    ``helpers`` are complete C definitions (``static`` functions) the bodies call; a helper
-    shared by several operators is emitted once, so one name must always carry the same text.
     ``<math.h>`` is included.
+
+    Parameters
+    ----------
+    output : str
+        The body of ``output``.
+    commit : str
+        The body of ``commit``.
+    initial : str
+        The body of ``initial``.
+    helpers : tuple of str, optional
+        Complete C definitions (``static`` functions) the bodies call; a helper shared by
+        several operators is emitted once, so one name must always carry the same text.
     """
 
     output: str
@@ -95,7 +105,13 @@ class MemoryOperator(ABC):
         """How the units of the parameters follow from the input's and the output's, for
         dimensional analysis: parameter name -> (a, b) with [parameter] = [v]^a·[y]^b (a
         threshold in units of v is (1, 0), a weight in y per v (-1, 1), a pure number (0, 0)).
-        Parameters left out get their units where the model uses them, or none.  Default: none."""
+        Parameters left out get their units where the model uses them, or none.
+
+        Returns
+        -------
+        dict of str to tuple of (int, int)
+            Parameter name -> exponents (a, b); the default is empty.
+        """
         return {}
 
     @abstractmethod
@@ -109,21 +125,70 @@ class MemoryOperator(ABC):
 
     @abstractmethod
     def initial_memory(self, v0: float, prm: np.ndarray) -> np.ndarray:
-        """Memory at rest with input ``v0``."""
+        """The memory at rest with a given input.
+
+        Parameters
+        ----------
+        v0 : float
+            The input, in the operator's input unit.
+        prm : numpy.ndarray
+            The operator's parameters, in ``parameter_names`` order.
+
+        Returns
+        -------
+        numpy.ndarray
+            The memory vector, ``n_memory`` float64 values.
+        """
 
     @abstractmethod
     def small_signal_gain(self, prm: np.ndarray) -> float:
-        """dy/dv for a small excursion from the initial state; used by linearisation."""
+        """dy/dv for a small excursion from the initial state; used by linearisation.
+
+        Parameters
+        ----------
+        prm : numpy.ndarray
+            The operator's parameters.
+
+        Returns
+        -------
+        float
+            The slope, in output unit per input unit.
+        """
 
     @staticmethod
     @abstractmethod
     def output(v, mem, prm):
-        """Output for input ``v`` with frozen memory (pure)."""
+        """The output for an input with the memory frozen (pure; compiled by numba).
+
+        Parameters
+        ----------
+        v : float
+            The input.
+        mem : numpy.ndarray
+            The memory at the last accepted step; not modified.
+        prm : numpy.ndarray
+            The operator's parameters.
+
+        Returns
+        -------
+        float
+            The output y, continuous in ``v``.
+        """
 
     @staticmethod
     @abstractmethod
     def commit(v, mem, prm):
-        """Advance ``mem`` in place to input ``v`` (accepted steps only)."""
+        """Advance the memory in place to an input (called on accepted steps only; compiled by numba).
+
+        Parameters
+        ----------
+        v : float
+            The input at the end of the accepted step.
+        mem : numpy.ndarray
+            The memory, updated in place.
+        prm : numpy.ndarray
+            The operator's parameters.
+        """
 
     def inverse(self) -> "MemoryOperator | None":
         """Optional: an operator G with G[H[v]] = v from rest (the exact inverse), for feedforward
@@ -139,19 +204,54 @@ class MemoryOperator(ABC):
     def monotone_problem(self, prm: np.ndarray) -> str:
         """Optional: why the operator's output does not rise with its input for the parameters
         ``prm`` (then it has no inverse and feedforward compensation cannot use it), or "" when
-        it does or the operator cannot tell.  The default says nothing."""
+        it does or the operator cannot tell.  The default says nothing.
+
+        Parameters
+        ----------
+        prm : numpy.ndarray
+            The operator's parameters.
+
+        Returns
+        -------
+        str
+            The reason, or ``""``.
+        """
         return ""
 
     # --- used by the framework -------------------------------------------------------
     def kernels(self) -> "OperatorKernels":
-        """The compiled ``output`` and ``commit`` (compiled once per class and process)."""
+        """The compiled ``output`` and ``commit`` (compiled once per class and process).
+
+        Returns
+        -------
+        OperatorKernels
+            The numba-compiled kernels.
+
+        Raises
+        ------
+        bondgraph.support.errors.ModelError
+            If numba cannot compile a kernel (naming the operator, the function and the rule).
+        """
         from .operator_kernels import compile_kernels  # numba is imported when first needed
 
         return compile_kernels(type(self))
 
     def run(self, v: np.ndarray, prm: np.ndarray | None = None) -> np.ndarray:
         """Apply the operator to a sampled input sequence, from rest at ``v[0]``, with the
-        compiled kernels the integrator uses (output, then commit, at every sample)."""
+        compiled kernels the integrator uses (output, then commit, at every sample).
+
+        Parameters
+        ----------
+        v : numpy.ndarray
+            The input samples.
+        prm : numpy.ndarray, optional
+            The parameters; ``parameter_values()`` by default.
+
+        Returns
+        -------
+        numpy.ndarray
+            The output at every sample, as long as ``v``.
+        """
         prm = np.array(self.parameter_values() if prm is None else prm, dtype=np.float64)  # private,
         v = np.array(v, dtype=np.float64)  # writable copies
         mem = np.array(self.initial_memory(float(v[0]), prm), dtype=np.float64)

@@ -29,11 +29,31 @@ _FALSE = {"false", "no", "off", "0"}
 class Parameter:
     """A declared model parameter.
 
-    ``default`` fixes the kind: float (symbolic unless ``symbolic=False``), int, bool, or
-    str (then ``choices`` lists the allowed values).  ``unit`` is a unit string
-    (:mod:`bondgraph.model.units`: ``"N/m"``, ``"N*s/m"``, ``"1"`` for a pure number, ``""``
-    when not declared: dimensional analysis then infers it); a string that cannot be read is a
-    ParameterError here.  ``bounds`` (lower, upper) are used by fitting and checked by ``--set``.
+    Parameters
+    ----------
+    name : str
+        An identifier (letters, digits, ``_`` and ``.``).
+    default : float or int or bool or str
+        The default value; its type fixes the kind: float (real, symbolic unless
+        ``symbolic=False``), int, bool, or str (then ``choices`` lists the allowed values).
+    unit : str, optional
+        A unit string (:mod:`bondgraph.model.units`: ``"N/m"``, ``"N*s/m"``, ``"1"`` for a
+        pure number); ``""`` when not declared: dimensional analysis then infers it.
+    doc : str, optional
+        One line on what it is.
+    choices : tuple of str, optional
+        The allowed values of a text parameter.
+    symbolic : bool, optional
+        Whether the model sees a sympy symbol (True) or the number; by default True for a
+        real parameter, False for the others.
+    bounds : tuple of (float, float), optional
+        (lower, upper), in ``unit``: used by fitting and checked by ``--set``.
+
+    Raises
+    ------
+    bondgraph.support.errors.ParameterError
+        If the name is not an identifier, the unit cannot be read, a text parameter has no
+        choices, or the default is not one of them.
     """
 
     name: str
@@ -59,6 +79,7 @@ class Parameter:
 
     @property
     def kind(self) -> str:
+        """The kind the default fixes: ``"bool"``, ``"int"``, ``"choice"`` or ``"real"``."""
         if isinstance(self.default, bool):
             return "bool"
         if isinstance(self.default, int):
@@ -69,10 +90,27 @@ class Parameter:
 
     @property
     def symbol(self) -> sp.Symbol:
+        """The real sympy symbol of the parameter's name."""
         return sp.Symbol(self.name, real=True)
 
     def parse(self, text: str) -> Any:
-        """Convert a command-line string to this parameter's kind; ParameterError if impossible."""
+        """Convert a command-line string to this parameter's kind.
+
+        Parameters
+        ----------
+        text : str
+            The value as typed (``"1.2e7"``, ``"yes"``); a non-string goes to :meth:`coerce`.
+
+        Returns
+        -------
+        float or int or bool or str
+            The value, checked against choices and bounds.
+
+        Raises
+        ------
+        bondgraph.support.errors.ParameterError
+            If the text is not a value of this kind, not finite, or out of bounds.
+        """
         if not isinstance(text, str):
             return self.coerce(text)
         s = text.strip()
@@ -101,7 +139,25 @@ class Parameter:
             ) from None
 
     def coerce(self, value: Any) -> Any:
-        """Check a Python value against kind, choices and bounds; return it normalised."""
+        """Check a Python value against kind, choices and bounds.
+
+        Parameters
+        ----------
+        value : object
+            The value (a string for a bool is parsed).
+
+        Returns
+        -------
+        float or int or bool or str
+            The value normalised to the kind (an integral float becomes an int for an int
+            parameter, an int a float for a real one).
+
+        Raises
+        ------
+        bondgraph.support.errors.ParameterError
+            If the value is not of the kind, not finite, not one of the choices, or out of
+            bounds.
+        """
         kind = self.kind
         if kind == "bool":
             if isinstance(value, bool):
@@ -133,6 +189,13 @@ class Parameter:
         return v
 
     def expected(self) -> str:
+        """What a value of this kind looks like, for error messages.
+
+        Returns
+        -------
+        str
+            E.g. ``"a real number"``, ``"one of fast, exact"``.
+        """
         return {
             "bool": "true or false",
             "int": "an integer",

@@ -33,7 +33,24 @@ NPAR = 6
 
 @dataclass(frozen=True)
 class Signal:
-    """An input signal: ``kind`` code, parameter row, optional (t, v) table, breakpoints."""
+    """An input signal, encoded for the compiled integrator.
+
+    Made by the factories (:func:`Step`, :func:`Sine`, ...) or :func:`parse_signal` rather
+    than directly.
+
+    Parameters
+    ----------
+    kind : int
+        The kind code (:data:`CONST`, :data:`STEP`, :data:`RAMP`, :data:`SINE`,
+        :data:`CHIRP`, :data:`TRIANGLE`, :data:`PWL`).
+    par : tuple of float
+        The parameter row, :data:`NPAR` values (times in s, frequencies in Hz, phases in
+        rad, values in the input's unit).
+    table_t, table_v : tuple of float, optional
+        The (time in s, value) table of a piecewise-linear signal.
+    label : str, optional
+        How the signal is printed.
+    """
 
     kind: int
     par: tuple
@@ -42,9 +59,21 @@ class Signal:
     label: str = ""
 
     def breakpoints(self, t0: float, t1: float, kinks: bool = False) -> list[float]:
-        """Times in (t0, t1) where the signal jumps (the integrator restarts there); with
-        ``kinks`` also where its slope jumps (ramp start, table knots, triangle corners), for
-        models whose laws use input rates or whose memory operators reverse there."""
+        """The times where the signal jumps (the integrator restarts there).
+
+        Parameters
+        ----------
+        t0, t1 : float
+            The open time window, in s.
+        kinks : bool, optional
+            Also where the slope jumps (ramp start, table knots, triangle corners), for
+            models whose laws use input rates or whose memory operators reverse there.
+
+        Returns
+        -------
+        list of float
+            The times in (t0, t1), in s.
+        """
         if self.kind == STEP:
             out = [self.par[1]]
         elif not kinks:
@@ -67,23 +96,82 @@ class Signal:
 
 
 def Constant(value: float = 0.0) -> Signal:
+    """A constant input.
+
+    Parameters
+    ----------
+    value : float, optional
+        The value, in the input's unit; 0 by default.
+
+    Returns
+    -------
+    Signal
+        The signal, for ``inputs={"V": ...}`` of a simulation.
+    """
     return Signal(CONST, _row(value), label=f"{value:g}")
 
 
 def Step(amplitude: float = 1.0, t0: float = 0.0, offset: float = 0.0) -> Signal:
-    """offset for t < t0, offset + amplitude from t0 on."""
+    """A step: offset for t < t0, offset + amplitude from t0 on.
+
+    Parameters
+    ----------
+    amplitude : float, optional
+        The jump, in the input's unit.
+    t0 : float, optional
+        The time of the jump, in s.
+    offset : float, optional
+        The value before the jump.
+
+    Returns
+    -------
+    Signal
+        The signal, for ``inputs={"V": ...}`` of a simulation.
+    """
     return Signal(
         STEP, _row(amplitude, t0, offset), label=f"step(amplitude={amplitude:g}, t0={t0:g}, offset={offset:g})"
     )
 
 
 def Ramp(slope: float = 1.0, t0: float = 0.0, offset: float = 0.0) -> Signal:
-    """offset + slope·max(0, t − t0)."""
+    """A ramp: offset + slope·max(0, t − t0).
+
+    Parameters
+    ----------
+    slope : float, optional
+        The rate, in the input's unit per s.
+    t0 : float, optional
+        When the ramp starts, in s.
+    offset : float, optional
+        The value before it starts.
+
+    Returns
+    -------
+    Signal
+        The signal, for ``inputs={"V": ...}`` of a simulation.
+    """
     return Signal(RAMP, _row(slope, t0, offset), label=f"ramp(slope={slope:g}, t0={t0:g}, offset={offset:g})")
 
 
 def Sine(amplitude: float = 1.0, frequency: float = 1.0, phase: float = 0.0, offset: float = 0.0) -> Signal:
-    """offset + amplitude·sin(2π·frequency·t + phase°)."""
+    """A sine: offset + amplitude·sin(2π·frequency·t + phase°).
+
+    Parameters
+    ----------
+    amplitude : float, optional
+        The amplitude (half the peak-to-peak), in the input's unit.
+    frequency : float, optional
+        In Hz.
+    phase : float, optional
+        In degrees.
+    offset : float, optional
+        The mean value.
+
+    Returns
+    -------
+    Signal
+        The signal, for ``inputs={"V": ...}`` of a simulation.
+    """
     return Signal(
         SINE,
         _row(amplitude, frequency, math.radians(phase), offset),
@@ -94,7 +182,32 @@ def Sine(amplitude: float = 1.0, frequency: float = 1.0, phase: float = 0.0, off
 def Chirp(
     amplitude: float = 1.0, f0: float = 1.0, f1: float = 100.0, t1: float = 1.0, phase: float = 0.0, offset: float = 0.0
 ) -> Signal:
-    """Linear sweep from f0 at t=0 to f1 at t1 (continues beyond t1, like scipy.signal.chirp)."""
+    """A linear frequency sweep from f0 at t = 0 to f1 at t1 (continuing beyond t1, like
+    :func:`scipy.signal.chirp`).
+
+    Parameters
+    ----------
+    amplitude : float, optional
+        In the input's unit.
+    f0, f1 : float, optional
+        The frequencies at t = 0 and at ``t1``, in Hz.
+    t1 : float, optional
+        The time at which the frequency is ``f1``, in s; positive.
+    phase : float, optional
+        In degrees.
+    offset : float, optional
+        The mean value.
+
+    Returns
+    -------
+    Signal
+        The signal, for ``inputs={"V": ...}`` of a simulation.
+
+    Raises
+    ------
+    bondgraph.support.errors.SignalError
+        If ``t1`` is not positive.
+    """
     if t1 <= 0:
         raise SignalError("chirp: t1 must be positive")
     return Signal(
@@ -105,8 +218,25 @@ def Chirp(
 
 
 def Triangle(amplitude: float = 1.0, frequency: float = 1.0, phase: float = 0.0, offset: float = 0.0) -> Signal:
-    """Symmetric triangle between offset ± amplitude; like
-    ``offset + amplitude·scipy.signal.sawtooth(2π·f·t + phase°, width=0.5)``."""
+    """A symmetric triangle between offset ± amplitude; like
+    ``offset + amplitude·scipy.signal.sawtooth(2π·f·t + phase°, width=0.5)``.
+
+    Parameters
+    ----------
+    amplitude : float, optional
+        In the input's unit.
+    frequency : float, optional
+        In Hz.
+    phase : float, optional
+        In degrees.
+    offset : float, optional
+        The mean value.
+
+    Returns
+    -------
+    Signal
+        The signal, for ``inputs={"V": ...}`` of a simulation.
+    """
     return Signal(
         TRIANGLE,
         _row(amplitude, frequency, math.radians(phase), offset),
@@ -115,7 +245,28 @@ def Triangle(amplitude: float = 1.0, frequency: float = 1.0, phase: float = 0.0,
 
 
 def PiecewiseLinear(times, values, label: str = "") -> Signal:
-    """Linear interpolation between (time, value) samples, constant outside."""
+    """Linear interpolation between (time, value) samples, constant outside.
+
+    Parameters
+    ----------
+    times : array_like
+        Sample times in s, strictly increasing.
+    values : array_like
+        Values at those times, in the input's unit.
+    label : str, optional
+        How the signal is printed; ``pwl(N points)`` by default.
+
+    Returns
+    -------
+    Signal
+        The signal, for ``inputs={"V": ...}`` of a simulation.
+
+    Raises
+    ------
+    bondgraph.support.errors.SignalError
+        If times and values are not equal-length 1-D arrays, hold NaN or inf, or the times
+        do not increase strictly.
+    """
     t = np.asarray(times, float)
     v = np.asarray(values, float)
     if t.ndim != 1 or t.shape != v.shape or t.size < 1:

@@ -60,6 +60,25 @@ class CausalConflict(Exception):
 
 
 def sympify(value, what: str) -> sp.Expr:
+    """A number, string or sympy expression as a scalar sympy expression.
+
+    Parameters
+    ----------
+    value : object
+        A number, an expression string (``"k/2"``) or a sympy expression.
+    what : str
+        What the value is, named in the error message (``"C 'k' capacitance"``).
+
+    Returns
+    -------
+    sympy.Expr
+        The scalar expression.
+
+    Raises
+    ------
+    bondgraph.support.errors.ModelError
+        If ``value`` cannot be read as a scalar expression.
+    """
     try:
         expr = sp.sympify(value)
     except (sp.SympifyError, TypeError):
@@ -70,7 +89,28 @@ def sympify(value, what: str) -> sp.Expr:
 
 
 def law(fn_or_expr, placeholder: sp.Symbol, what: str) -> sp.Expr:
-    """A law given as an expression or as a callable of the placeholder symbol."""
+    """A constitutive law given as an expression or as a callable of the placeholder symbol.
+
+    Parameters
+    ----------
+    fn_or_expr : callable or sympy.Expr or number
+        The law: ``lambda q: q / Cp`` is called with ``placeholder``; an expression is
+        taken as it is (written in the placeholder).
+    placeholder : sympy.Symbol
+        The symbol of the law's argument (:data:`Q`, :data:`P`, :data:`E` or :data:`F`).
+    what : str
+        What the law is, named in the error message.
+
+    Returns
+    -------
+    sympy.Expr
+        The law as an expression of ``placeholder``.
+
+    Raises
+    ------
+    bondgraph.support.errors.ModelError
+        If the law does not give a scalar expression.
+    """
     if callable(fn_or_expr) and not isinstance(fn_or_expr, sp.Basic):
         return sympify(fn_or_expr(placeholder), what)
     return sympify(fn_or_expr, what)
@@ -78,7 +118,22 @@ def law(fn_or_expr, placeholder: sp.Symbol, what: str) -> sp.Expr:
 
 @lru_cache(maxsize=4096)
 def invert(expr: sp.Expr, var: sp.Symbol, value: sp.Expr) -> sp.Expr | None:
-    """``var`` such that ``expr(var) = value``; None unless sympy finds exactly one solution."""
+    """Solve ``expr(var) = value`` for ``var`` (a law inverted).
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        The law, an expression of ``var``.
+    var : sympy.Symbol
+        The unknown.
+    value : sympy.Expr
+        The law's value.
+
+    Returns
+    -------
+    sympy.Expr or None
+        ``var`` as an expression of ``value``; None unless sympy finds exactly one solution.
+    """
     if expr.is_polynomial(var) and sp.degree(expr, var) == 1:
         a = sp.diff(expr, var)
         return sp.cancel((value - expr.subs(var, 0)) / a)
@@ -90,37 +145,128 @@ def invert(expr: sp.Expr, var: sp.Symbol, value: sp.Expr) -> sp.Expr | None:
 
 
 class EquationBuilder(Protocol):
-    """What an element may do in :meth:`Element.equations` (implemented by the deriver)."""
+    """What an element may do in :meth:`Element.equations` (implemented by the deriver).
+
+    A protocol: elements call its methods, the deriver of
+    :mod:`bondgraph.equations.derivation` implements them.  ``model_name`` names the model
+    in error messages.
+    """
 
     model_name: str
 
     def assign(self, var: sp.Symbol, expr: sp.Expr, origin: str) -> None:
-        """``var = expr``: every bond variable is computed exactly once, by one element."""
+        """Record ``var = expr``: every bond variable is computed exactly once, by one element.
+
+        Parameters
+        ----------
+        var : sympy.Symbol
+            The variable computed (a bond effort or flow).
+        expr : sympy.Expr
+            Its value, in program variables, states, inputs and parameters.
+        origin : str
+            The element (and port) that computes it, for printouts and error messages.
+        """
 
     def symbol(self, base: str) -> sp.Symbol:
-        """A fresh real symbol named ``base`` (made unique)."""
+        """A fresh real symbol.
+
+        Parameters
+        ----------
+        base : str
+            The name wanted; a suffix makes it unique in the model.
+
+        Returns
+        -------
+        sympy.Symbol
+            The new symbol.
+        """
 
     def state(self, base: str, kind: str, x0: sp.Expr, origin: str) -> sp.Symbol:
-        """A new state (``kind``: ``q`` displacement, ``p`` momentum, ``z`` other), initial value ``x0``."""
+        """Declare a new state variable.
+
+        Parameters
+        ----------
+        base : str
+            The state's name (made unique).
+        kind : {"q", "p", "z"}
+            ``q`` a generalized displacement (charge in C, position in m), ``p`` a momentum
+            (N·s, V·s), ``z`` another internal state.
+        x0 : sympy.Expr
+            The initial value, in the state's unit.
+        origin : str
+            The element that owns the state.
+
+        Returns
+        -------
+        sympy.Symbol
+            The state's symbol; give its rate with :meth:`rate`.
+        """
 
     def rate(self, state: sp.Symbol, expr: sp.Expr) -> None:
-        """d(state)/dt = expr."""
+        """Give a state's time derivative, d(state)/dt = expr.
+
+        Parameters
+        ----------
+        state : sympy.Symbol
+            A state declared by :meth:`state`.
+        expr : sympy.Expr
+            Its rate, in the state's unit per s.
+        """
 
     def derivative(self, base: str, stored: sp.Expr, origin: str) -> sp.Symbol:
-        """A symbol for d(stored)/dt, where ``stored`` is an algebraic function of states and
-        inputs (a storage port in derivative causality); the deriver solves for it."""
+        """A symbol for d(stored)/dt of a storage port in derivative causality.
+
+        Parameters
+        ----------
+        base : str
+            The symbol's name (made unique).
+        stored : sympy.Expr
+            The stored quantity, an algebraic function of states and inputs.
+        origin : str
+            The element (and port) it belongs to.
+
+        Returns
+        -------
+        sympy.Symbol
+            The symbol; the deriver solves for its value.
+        """
 
     def quantity(self, what: str, key: str, expr: sp.Expr) -> None:
-        """The value of port quantity ``what`` (e, f, q, p) of endpoint ``key`` in user expressions."""
+        """Give the value of a port quantity that user expressions (outputs) may name.
+
+        Parameters
+        ----------
+        what : {"e", "f", "q", "p"}
+            Effort, flow, displacement or momentum.
+        key : str
+            The endpoint (``elem`` or ``elem.port``).
+        expr : sympy.Expr
+            Its value.
+        """
 
 
 class Port:
     """One port of an element during equation derivation.
 
-    ``e`` and ``f`` are the bond's effort and flow symbols; ``sign`` is +1 where the bond's
-    half-arrow points into the element, else -1, so the power-in flow is ``f_in = sign·f``;
-    ``sets_effort`` is the assigned causality; ``key`` names the port in user expressions
-    (``elem`` for one-ports and junctions, ``elem.port`` otherwise)."""
+    Parameters
+    ----------
+    name : str
+        The port's name in its element (``"p"`` for one-ports).
+    key : str
+        The port's name in user expressions: ``elem`` for one-ports and junctions,
+        ``elem.port`` otherwise.
+    e, f : sympy.Symbol
+        The bond's effort and flow symbols (flow oriented by the half-arrow).
+    sign : int
+        +1 where the bond's half-arrow points into the element, else -1, so the power-in
+        flow is ``f_in = sign·f`` and the power into the element is ``e·f_in``.
+    sets_effort : bool
+        The assigned causality: True if the element sets the effort on this port.
+    origin : str
+        The element (and port), for printouts and error messages.
+    eqs : EquationBuilder
+        The deriver the port's ``set_*`` methods record into.
+    """
 
     __slots__ = ("name", "key", "e", "f", "sign", "sets_effort", "origin", "_eqs", "_f_in")
 
@@ -137,19 +283,49 @@ class Port:
         return self._f_in
 
     def set_effort(self, expr) -> None:
+        """Set the bond effort (efforts are never sign-flipped).
+
+        Parameters
+        ----------
+        expr : sympy.Expr
+            The effort's value (V, N, ...).
+        """
         self._eqs.assign(self.e, expr, self.origin)
 
     def set_flow(self, expr) -> None:
-        """Set the bond flow (as oriented by the half-arrow)."""
+        """Set the bond flow as oriented by the half-arrow.
+
+        Parameters
+        ----------
+        expr : sympy.Expr
+            The flow's value (A, m/s, ...), positive from the half-arrow's tail to its head.
+        """
         self._eqs.assign(self.f, expr, self.origin)
 
     def set_flow_in(self, expr) -> None:
-        """Set the flow into the element."""
+        """Set the flow into the element (power-in convention).
+
+        Parameters
+        ----------
+        expr : sympy.Expr
+            The flow into the element; the bond flow becomes ``sign·expr``.
+        """
         self._eqs.assign(self.f, self.sign * expr, self.origin)
 
 
 class Element(ABC):
-    """Base class: a named element with named ports; subclasses implement the protocol above."""
+    """Base class: a named element with named ports; subclasses implement the protocol above.
+
+    Parameters
+    ----------
+    name : str
+        The element's name: a non-empty word without spaces or punctuation.
+
+    Raises
+    ------
+    bondgraph.support.errors.ModelError
+        If the name is not such a word.
+    """
 
     kind = "element"
     #: names of attributes holding sympy expressions (substituted on rename/extension)
@@ -168,37 +344,118 @@ class Element(ABC):
 
     @property
     def ports(self) -> tuple[str, ...]:
+        """The port names, ``("p",)`` for a one-port."""
         return ONE_PORT
 
     # ---- causality ---------------------------------------------------------------------------
     def preferred_causality(self, port: str) -> bool | None:
-        """True: prefers to set the effort on ``port``; False: prefers to take it; None: no preference."""
+        """The causality the element prefers on a port.
+
+        Parameters
+        ----------
+        port : str
+            A port name.
+
+        Returns
+        -------
+        bool or None
+            True: prefers to set the effort on ``port``; False: prefers to take it; None: no
+            preference.
+        """
         return None
 
     def allows_causality(self, port: str, sets_effort: bool) -> bool:
-        """Whether the element can work with ``sets_effort`` on ``port``."""
+        """Whether the element can work in a causality.
+
+        Parameters
+        ----------
+        port : str
+            A port name.
+        sets_effort : bool
+            The causality asked about: True if the element would set the effort.
+
+        Returns
+        -------
+        bool
+            False if the element cannot (e.g. a law that cannot be inverted).
+        """
         return True
 
     def propagate_causality(self, known: Mapping[str, bool | None]) -> dict[str, bool]:
-        """Causality forced on other ports by the ``known`` ones; CausalConflict if impossible."""
+        """The causality forced on other ports by the known ones.
+
+        Parameters
+        ----------
+        known : mapping of str to bool or None
+            Port name -> True if the element sets the effort there, False if not, None if
+            not yet known.
+
+        Returns
+        -------
+        dict of str to bool
+            The ports whose causality follows, with that causality.
+
+        Raises
+        ------
+        CausalConflict
+            If ``known`` is impossible for the element.
+        """
         return {}
 
     # ---- equations ---------------------------------------------------------------------------
     @abstractmethod
     def equations(self, ports: Mapping[str, Port], eqs: EquationBuilder) -> None:
-        """Constitutive relations for the assigned causality (see the module docstring)."""
+        """Write the constitutive relations for the assigned causality.
+
+        Parameters
+        ----------
+        ports : mapping of str to Port
+            Port name -> its bond variables, sign and causality.
+        eqs : EquationBuilder
+            Where the element declares its states, their rates and the variables it computes.
+        """
 
     def describe(self) -> str:
-        """One-line constitutive relation in the element's own variables."""
+        """The constitutive relation, for printouts.
+
+        Returns
+        -------
+        str
+            One line in the element's own variables (``"e = q/Cp"``).
+        """
         return self.kind
 
     # ---- symbols -----------------------------------------------------------------------------
     def renamed(self, name: str) -> "Element":
+        """A copy under another name (when a component's elements are prefixed).
+
+        Parameters
+        ----------
+        name : str
+            The new name.
+
+        Returns
+        -------
+        Element
+            A shallow copy with ``name`` changed.
+        """
         new = copy.copy(self)
         new.name = name
         return new
 
     def xreplace(self, mapping) -> "Element":
+        """A copy with symbols replaced in every symbolic attribute.
+
+        Parameters
+        ----------
+        mapping : dict of sympy.Symbol to sympy.Expr
+            As for :meth:`sympy.Basic.xreplace` (e.g. a parameter's symbol -> its prefixed one).
+
+        Returns
+        -------
+        Element
+            The copy.
+        """
         new = copy.copy(self)
         for attr in self.symbolic_attrs:
             val = getattr(self, attr)
@@ -209,6 +466,13 @@ class Element(ABC):
         return new
 
     def free_symbols(self) -> set:
+        """The symbols the element's laws and initial values use (parameters, inputs).
+
+        Returns
+        -------
+        set of sympy.Symbol
+            Without the law placeholders.
+        """
         out = set()
         for attr in self.symbolic_attrs:
             val = getattr(self, attr)

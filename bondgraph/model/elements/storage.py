@@ -52,20 +52,75 @@ class _OnePortStorage(Element):
 
     @property
     def symbolic_attrs(self) -> tuple[str, ...]:
+        """The attributes holding sympy expressions: the law, the initial value, the energy."""
         return ("law", f"{self._state}0", "energy")
 
     def stored(self, value: sp.Expr) -> sp.Expr | None:
-        """The stored quantity for a value of the port variable the law gives (law inverted)."""
+        """The stored quantity for a value of the port variable the law gives (law inverted).
+
+        Parameters
+        ----------
+        value : sympy.Expr
+            The effort (for C) or flow (for I) on the port.
+
+        Returns
+        -------
+        sympy.Expr or None
+            The displacement q (C) or momentum p (I) that gives it; None if the law cannot
+            be inverted.
+        """
         inv = invert(self.law, self._var, self._value)
         return None if inv is None else inv.xreplace({self._value: value})
 
     def preferred_causality(self, port):
+        """Integral causality: a C prefers to set the effort, an I to take it.
+
+        Parameters
+        ----------
+        port : str
+            The port, ``"p"``.
+
+        Returns
+        -------
+        bool
+            True for C, False for I.
+        """
         return self._law_gives_effort
 
     def allows_causality(self, port, sets_effort):
+        """Integral causality always; derivative causality only when the law can be inverted.
+
+        Parameters
+        ----------
+        port : str
+            The port, ``"p"``.
+        sets_effort : bool
+            The causality asked about.
+
+        Returns
+        -------
+        bool
+            Whether the element can work in it.
+        """
         return sets_effort == self._law_gives_effort or invert(self.law, self._var, self._value) is not None
 
     def equations(self, ports, eqs):
+        """In integral causality a state (q or p) with rate f_in (C) or e (I) and the law
+        setting the port variable; in derivative causality the stored quantity from the law
+        inverted and its time derivative.
+
+        Parameters
+        ----------
+        ports : mapping of str to Port
+            Port name -> its bond variables, sign and causality.
+        eqs : EquationBuilder
+            Where the element declares its states, their rates and the variables it computes.
+
+        Raises
+        ------
+        bondgraph.support.errors.CausalityError
+            If the port is in derivative causality and the law cannot be inverted.
+        """
         port = ports["p"]
         gives_effort = self._law_gives_effort
         value, rate = (port.e, port.f_in) if gives_effort else (port.f_in, port.e)
@@ -88,13 +143,41 @@ class _OnePortStorage(Element):
         eqs.quantity(self._state, port.key, x)
 
     def describe(self):
+        """The law in the element's own variable.
+
+        Returns
+        -------
+        str
+            ``"e = q/C"`` for a C, ``"f = p/m"`` for an I.
+        """
         return f"{'e' if self._law_gives_effort else 'f'} = {self.law.xreplace({self._var: sp.Symbol(self._state)})}"
 
 
 class C(_OnePortStorage):
-    """Capacitor (spring, capacitance).  ``C(name, 1e-6)`` is linear e = q/C;
-    ``law=lambda q: ...`` gives e(q); ``energy=lambda q: ...`` gives e = dU/dq.
-    ``q0`` is the initial displacement."""
+    """Capacitor (spring, capacitance): e = law(q), dq/dt = f_in (power-in).
+
+    Give exactly one of ``C``, ``law`` and ``energy``.
+
+    Parameters
+    ----------
+    name : str
+        The element's name.
+    C : float or str or sympy.Expr, optional
+        The capacitance of a linear element, e = q/C: in F for a capacitor (q in C, e in V),
+        in m/N (a compliance) for a spring (q in m, e in N).
+    law : callable or sympy.Expr, optional
+        The effort as a function of the displacement, ``law=lambda q: ...``.
+    energy : callable or sympy.Expr, optional
+        The stored energy U(q) in J, ``energy=lambda q: ...``; the effort is e = dU/dq.
+    q0 : float or str or sympy.Expr, optional
+        The initial displacement (C or m), 0 by default.
+
+    Raises
+    ------
+    bondgraph.support.errors.ModelError
+        If not exactly one of ``C``, ``law`` and ``energy`` is given, or a value is not a
+        scalar expression.
+    """
 
     kind = "C"
     _var, _value, _state, _law_gives_effort, _modulus = Q, E, "q", True, "capacitance"
@@ -104,8 +187,30 @@ class C(_OnePortStorage):
 
 
 class I(_OnePortStorage):
-    """Inertia (mass, inductance).  ``I(name, m)`` is linear f = p/m; ``law=lambda p: ...``
-    gives f(p); ``energy=lambda p: ...`` gives f = dT/dp.  ``p0`` is the initial momentum."""
+    """Inertia (mass, inductance): f_in = law(p), dp/dt = e (power-in).
+
+    Give exactly one of ``I``, ``law`` and ``energy``.
+
+    Parameters
+    ----------
+    name : str
+        The element's name.
+    I : float or str or sympy.Expr, optional
+        The inertia of a linear element, f = p/I: a mass in kg (p in N·s, f in m/s) or an
+        inductance in H (p in V·s, f in A).
+    law : callable or sympy.Expr, optional
+        The flow as a function of the momentum, ``law=lambda p: ...``.
+    energy : callable or sympy.Expr, optional
+        The kinetic energy T(p) in J, ``energy=lambda p: ...``; the flow is f = dT/dp.
+    p0 : float or str or sympy.Expr, optional
+        The initial momentum (N·s or V·s), 0 by default.
+
+    Raises
+    ------
+    bondgraph.support.errors.ModelError
+        If not exactly one of ``I``, ``law`` and ``energy`` is given, or a value is not a
+        scalar expression.
+    """
 
     kind = "I"
     _var, _value, _state, _law_gives_effort, _modulus = P, F, "p", False, "inertia"
@@ -115,10 +220,35 @@ class I(_OnePortStorage):
 
 
 class CField(Element):
-    """Multiport capacitor.  Efforts e_i = ∂U/∂q_i for an energy U of the port
-    displacements.  Give ``stiffness`` K (e = K·q), ``compliance`` S (q = S·e), or
-    ``energy=lambda q: ...`` where ``q`` maps port name → symbol.  ``q0`` maps port
-    names to initial displacements."""
+    """Multiport capacitor: efforts e_i = ∂U/∂q_i for an energy U of the port displacements,
+    dq_i/dt = f_in,i (power-in at every port).
+
+    Give exactly one of ``stiffness``, ``compliance`` and ``energy``.  A piezoelectric
+    transducer is a two-port C-field of charge (C) and displacement (m).
+
+    Parameters
+    ----------
+    name : str
+        The element's name.
+    ports : sequence of str
+        Two or more distinct port names.
+    stiffness : array_like, optional
+        The symmetric matrix K with e = K·q (entries in the units effort/displacement of the
+        ports, e.g. N/m, V/C, V/m).
+    compliance : array_like, optional
+        The symmetric matrix S with q = S·e (the inverse of K).
+    energy : callable, optional
+        ``energy=lambda q: ...`` gives U in J, where ``q`` maps port name -> its
+        displacement symbol.
+    q0 : mapping of str to float, optional
+        Port name -> initial displacement; 0 for ports not named.
+
+    Raises
+    ------
+    bondgraph.support.errors.ModelError
+        If fewer than two or repeated port names are given, not exactly one of the laws, a
+        matrix of the wrong shape or not symmetric, or ``q0`` names an unknown port.
+    """
 
     kind = "C-field"
     symbolic_attrs = ("energy_expr", "q0")
@@ -165,23 +295,71 @@ class CField(Element):
 
     @property
     def ports(self):
+        """The port names, in the order of the matrix rows."""
         return self._ports
 
     def efforts(self) -> dict[str, sp.Expr]:
-        """e_i(q) in placeholder symbols."""
+        """The efforts as functions of the displacements.
+
+        Returns
+        -------
+        dict of str to sympy.Expr
+            Port name -> e_i = ∂U/∂q_i, in the placeholder symbols ``self.placeholders``.
+        """
         return {pn: sp.diff(self.energy_expr, self.placeholders[pn]) for pn in self._ports}
 
     def stiffness_matrix(self) -> sp.Matrix:
+        """The Hessian of the energy, ∂²U/∂q_i∂q_j (the matrix K of a linear field).
+
+        Returns
+        -------
+        sympy.Matrix
+            n x n in port order, in the placeholder symbols for a nonlinear field.
+        """
         qs = [self.placeholders[pn] for pn in self._ports]
         return sp.hessian(self.energy_expr, qs)
 
     def free_symbols(self):
+        """The symbols of the energy and initial values, without the placeholders.
+
+        Returns
+        -------
+        set of sympy.Symbol
+            Parameters and inputs the field uses.
+        """
         return super().free_symbols() - set(self.placeholders.values())
 
     def preferred_causality(self, port):
+        """Integral causality: the field prefers to set the effort on every port.
+
+        Parameters
+        ----------
+        port : str
+            A port name.
+
+        Returns
+        -------
+        bool
+            True.
+        """
         return True
 
     def equations(self, ports, eqs):
+        """A state q_i per port in integral causality with e_i = ∂U/∂q_i; the displacements of
+        ports in derivative causality solved from their given efforts.
+
+        Parameters
+        ----------
+        ports : mapping of str to Port
+            Port name -> its bond variables, sign and causality.
+        eqs : EquationBuilder
+            Where the element declares its states, their rates and the variables it computes.
+
+        Raises
+        ------
+        bondgraph.support.errors.CausalityError
+            If ports are in derivative causality and the field cannot be solved for them.
+        """
         efforts = self.efforts()
         deriv = [pn for pn in self._ports if not ports[pn].sets_effort]
         q = {}
@@ -213,5 +391,12 @@ class CField(Element):
             eqs.quantity("q", port.key, q[pn])
 
     def describe(self):
+        """The field's energy.
+
+        Returns
+        -------
+        str
+            ``"U = ..."`` in the port displacements ``q_<port>``.
+        """
         named = {v: sp.Symbol(f"q_{k}") for k, v in self.placeholders.items()}
         return f"U = {self.energy_expr.xreplace(named)}"
