@@ -49,7 +49,30 @@ def connect(
     scheduler: Any = None, workers: int | None = None, say: Callable[[str], None] | None = None
 ) -> Iterator[Any]:
     """A ``distributed.Client`` for the duration of a ``with`` block (see the module docstring);
-    ``say`` receives one line on where the jobs run and the dashboard address, if any."""
+    ``say`` receives one line on where the jobs run and the dashboard address, if any.
+
+    Parameters
+    ----------
+    scheduler : str or distributed.Client, optional
+        Where the jobs run: None for an embedded ``LocalCluster`` (closed at the end of the
+        block), a scheduler address (``tcp://head:8786``), or a client to use as it is.
+    workers : int, optional
+        Worker processes of the embedded cluster (default: the setting's worker count); only
+        without ``scheduler``.
+    say : callable, optional
+        ``say(line)`` receives one line on where the jobs run.
+
+    Yields
+    ------
+    distributed.Client
+        The client the jobs are submitted to.
+
+    Raises
+    ------
+    UsageError
+        dask is not installed, ``workers`` with a scheduler or client, fewer than one worker,
+        or a scheduler that cannot be reached.
+    """
     distributed = require_dask()
     say = say or (lambda s: None)
     if isinstance(scheduler, distributed.Client):
