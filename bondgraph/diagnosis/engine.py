@@ -361,7 +361,19 @@ def load_candidates(model: Model | None = None) -> list[Candidate]:
     kinds at every site of the model (law terms of its springs and dampers, :mod:`.laws`;
     missing modes, :mod:`.modes`) and the candidates of the ``bondgraph.diagnosis`` entry
     points (each a callable returning a list; a domain library's).  Without a model, the
-    entry points' only."""
+    entry points' only.
+
+    Parameters
+    ----------
+    model : Model, optional
+        The model whose sites give the framework's candidates.
+
+    Returns
+    -------
+    list of Candidate
+        The framework's candidates for ``model``, then the entry points' (each entry point is
+        loaded and called here).
+    """
     from importlib.metadata import entry_points
 
     out: list[Candidate] = [] if model is None else law_kinds(model) + restoring_kinds(model) + mode_kinds(model)
@@ -372,7 +384,19 @@ def load_candidates(model: Model | None = None) -> list[Candidate]:
 
 def model_file_options(module) -> dict:
     """The diagnosis options a model file declares: ``CALIBRATE`` (calibrate_first) and
-    ``TOLERANCE`` (tolerance)."""
+    ``TOLERANCE`` (tolerance).
+
+    Parameters
+    ----------
+    module : module
+        The loaded model file.
+
+    Returns
+    -------
+    dict
+        ``calibrate_first`` and ``tolerance``, keyword arguments of :func:`diagnose` (None
+        where the file declares nothing).
+    """
     return {"calibrate_first": getattr(module, "CALIBRATE", None), "tolerance": getattr(module, "TOLERANCE", None)}
 
 
@@ -407,7 +431,60 @@ def diagnose(
     causes on the extended model until none passes; ``progress``: a
     :class:`bondgraph.support.progress.Progress` (one count per candidate fitted, notes for the
     stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
-    the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
+    the calibration and remove it first (default: the setting ``diagnosis.drift``).
+
+    Parameters
+    ----------
+    model : Model
+        The linear model of the device (its parameters at their nominal values).
+    data : Dataset
+        The measured record: the drive and the output against time (s).
+    candidates : sequence of Candidate, optional
+        The causes to try (default: :func:`load_candidates` of the model).
+    calibrate_first : sequence of str, optional
+        Parameter names or glob patterns preferred when linear parameters cannot be told
+        apart (the model file's ``CALIBRATE``).
+    input : str, optional
+        The model input the data drive (default: the model's first declared input).
+    output : str, optional
+        The model output compared with the data (default: its first declared output).
+    data_input : str, optional
+        The data column of the drive (default: the same name as ``input``).
+    data_output : str, optional
+        The data column of the output (default: the same name as ``output``).
+    validation : float, optional
+        Share of the record held out as validation blocks, between 0 and 1.
+    workers : int, optional
+        Parallel processes fitting candidates.
+    chain : bool, optional
+        Keep naming causes on the extended model until none passes (False: one step).
+    progress : Progress or callable, optional
+        A :class:`bondgraph.support.progress.Progress` (one count per candidate fitted, notes
+        for the stages) or any callable taking a line of text.
+    source : str, optional
+        What the model is called in the report (e.g. the model file's path).
+    equations : bool, optional
+        Render the extended model's equations into the report (:attr:`Report.equations`).
+    tolerance : mapping of str to float, optional
+        {pattern: factor} of plausible device-to-device spread of the parameters (the model
+        file's ``TOLERANCE``; others ``diagnosis.tolerance``).
+    drift : bool, optional
+        Solve a linear sensor drift with the calibration and remove it first (default: the
+        setting ``diagnosis.drift``).
+
+    Returns
+    -------
+    Report
+        Every step of the chain, every candidate's verdict, the causes named and the gain.
+
+    Raises
+    ------
+    DataError
+        The output does not follow the drive (constant, or no coherence with it), or the
+        record cannot be used (the message names the column and what to check).
+    BondGraphError
+        A bad input or output name, or a model that cannot be derived or simulated.
+    """
     drift = bool(config.get("diagnosis.drift")) if drift is None else bool(drift)
 
     def run(reading: str, drift: bool, chain: bool = chain, decide=None):

@@ -93,12 +93,37 @@ class LawTerm(Candidate):
         return f"{type(self).__name__}({self.cause} at {self.site_name})"
 
     def elements(self, model) -> list[str]:
-        """The elements it acts on in ``model``."""
+        """The elements it acts on in ``model``.
+
+        Parameters
+        ----------
+        model : Model
+            The model to look in.
+
+        Returns
+        -------
+        list of str
+            The site's elements when the site is in ``model``, else none; without a site, the
+            elements tagged :attr:`role`.
+        """
         if self.site is not None:
             return list(self.site.elements) if self.site.present(model) else []
         return list(model.with_role(self.role))
 
     def applies(self, view):
+        """True, or why the term cannot act here: no element at the site (or with the role), or
+        the site's modes are faster than the data resolve.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        bool or str
+            True when the candidate applies; otherwise a short reason.
+        """
         if not self.elements(view.model):
             return (
                 f"no element is tagged '{self.role}'"
@@ -116,19 +141,85 @@ class LawTerm(Candidate):
     @abstractmethod
     def term(c, r2, x, a):
         """The term added to the law (sympy arithmetic: it is compiled; ``a`` is None without a
-        partner)."""
+        partner).
+
+        Parameters
+        ----------
+        c : sympy.Expr or float
+            The coefficient (the new parameter; 0 leaves the law as it was).
+        r2 : sympy.Expr or float
+            The centring amplitude², in the square of the variable's unit.
+        x : sympy.Expr or numpy.ndarray
+            The element's own variable: displacement q of a C, flow f of an R.
+        a : sympy.Expr or numpy.ndarray or None
+            The partner's displacement or the drive, or None without a partner.
+
+        Returns
+        -------
+        sympy.Expr or numpy.ndarray
+            The term, in the unit of the law's output (effort of a C or an R); evaluated on
+            arrays as well for the exact linear route.
+        """
 
     def partner(self, model, el) -> str | None:
-        """The element whose displacement the term of ``el`` uses, :data:`DRIVE`, or None."""
+        """The element whose displacement the term of ``el`` uses, :data:`DRIVE`, or None.
+
+        Parameters
+        ----------
+        model : Model
+            The current model.
+        el : str
+            The element the term acts on.
+
+        Returns
+        -------
+        str or None
+            The partner element's name, :data:`DRIVE`, or None (the default: no partner).
+        """
         return None
 
     @abstractmethod
     def refs(self, view, el, x, a) -> tuple[float, float]:
         """(scale of the coefficient, r²) of element ``el`` from its variable's series ``x``
-        (and the partner's ``a``) in the current model."""
+        (and the partner's ``a``) in the current model.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        el : str
+            The element.
+        x : numpy.ndarray
+            Its variable's series in the current model (q of a C, f of an R).
+        a : numpy.ndarray or None
+            The partner's series, or None without a partner.
+
+        Returns
+        -------
+        scale : float
+            The coefficient's scale: the coefficient at which the term is comparable to the law.
+        r2 : float
+            The centring amplitude², in the square of the variable's unit.
+        """
 
     def build(self, view, coefs: dict, r2s: dict):
-        """The current model with the term on each element of ``coefs``."""
+        """The current model with the term on each element of ``coefs``.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        coefs : dict of str to float
+            Element → coefficient (the new parameter's value).
+        r2s : dict of str to float
+            Element → centring amplitude².
+
+        Returns
+        -------
+        Model
+            A new model: the current one rewritten, with parameters ``PREFIX_EL`` and
+            ``PREFIX_r2_EL`` and the term added to each element's law.
+        """
         model = view.rewrite()
         for el in coefs:
             c = model.parameter(f"{self.prefix}_{el}", coefs[el], "", f"{self.label}: {el}", bounds=(0, 1e40))
@@ -157,7 +248,19 @@ class LawTerm(Candidate):
     def screen(self, view) -> float | None:
         """The share (0-1) of the current residual's energy on the fit part that the term
         explains to first order (module docstring), or None when the model is no Lur'e system
-        (the kind is then fitted in full)."""
+        (the kind is then fitted in full).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        float or None
+            The squared correlation of the residual with the filtered regressor on the fit
+            part, between 0 and 1, or None.
+        """
         els = self.elements(view.model)
         partners = {el: self.partner(view.model, el) for el in els}
         try:
@@ -181,6 +284,24 @@ class LawTerm(Candidate):
         return float((q @ r) ** 2 / ((q @ q) * (r @ r)))
 
     def fit(self, view):
+        """Fit the coefficients with the calibration (the scan of the class notes).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        Extension
+            The model with the term on the site's elements, the values fitted and the
+            prediction.
+
+        Raises
+        ------
+        SimulationError
+            The extended model cannot be simulated at any point of the scan.
+        """
         els = self.elements(view.model)
         partners = {el: self.partner(view.model, el) for el in els}
         names = [f"{self.prefix}_{el}" for el in els]

@@ -50,7 +50,19 @@ class Site:
     role: str | None = None
 
     def present(self, model: Model) -> bool:
-        """Whether every element of the site is still in ``model`` with its kind."""
+        """Whether every element of the site is still in ``model`` with its kind.
+
+        Parameters
+        ----------
+        model : Model
+            The model to look in (e.g. one extended by an earlier cause).
+
+        Returns
+        -------
+        bool
+            True when every element is there with its kind (always for the drive and the
+            sensor).
+        """
         cls = KINDS.get(self.kind)
         return cls is None or all(isinstance(model.elements.get(e), cls) for e in self.elements)
 

@@ -42,7 +42,28 @@ from ..support.errors import DataError, ParameterError, UsageError, did_you_mean
 
 @dataclass
 class Spec:
-    """How one parameter is fitted: start value, bounds, scale, log transform, linearity."""
+    """How one parameter is fitted: start value, bounds, scale, log transform, linearity.
+
+    The optimiser works on z, the parameter mapped by :meth:`to_z`: z = log v for a log
+    parameter, z = v / scale otherwise.
+
+    Parameters
+    ----------
+    name : str
+        The model parameter.
+    start : float
+        Start value, in the parameter's unit.
+    lower, upper : float, optional
+        Bounds, same unit (default unbounded; a log parameter needs ``lower`` > 0 for a
+        finite lower z bound).
+    scale : float, optional
+        Typical magnitude, same unit (used when not ``log``).
+    log : bool, optional
+        Fit log v (a positive parameter spanning decades).
+    linear : bool, optional
+        The output is linear in this parameter: it is solved by bounded linear least squares
+        at each step of the nonlinear ones instead of being searched for.
+    """
 
     name: str
     start: float
@@ -53,12 +74,44 @@ class Spec:
     linear: bool = False
 
     def to_z(self, v: float) -> float:
+        """The optimiser's coordinate of a value.
+
+        Parameters
+        ----------
+        v : float
+            The parameter's value, in its unit (> 0 for a log parameter).
+
+        Returns
+        -------
+        float
+            log v for a log parameter, v / scale otherwise.
+        """
         return math.log(v) if self.log else v / self.scale
 
     def from_z(self, z: float) -> float:
+        """The value at an optimiser coordinate (the inverse of :meth:`to_z`).
+
+        Parameters
+        ----------
+        z : float
+            The optimiser's coordinate.
+
+        Returns
+        -------
+        float
+            exp z for a log parameter, z · scale otherwise, in the parameter's unit.
+        """
         return math.exp(z) if self.log else z * self.scale
 
     def z_bounds(self) -> tuple[float, float]:
+        """The bounds mapped to the optimiser's coordinate.
+
+        Returns
+        -------
+        lower, upper : float
+            The bounds in z (infinite where the value's bound is, or for a log parameter's
+            lower bound when it is not positive).
+        """
         if self.log:
             return (
                 math.log(self.lower) if self.lower > 0 else -np.inf,
