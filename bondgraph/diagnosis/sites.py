@@ -113,5 +113,18 @@ def element_sites(model: Model, kinds: tuple[str, ...] = ("C", "I", "R")) -> lis
 
 def generic_sites(model: Model, kind: str) -> list[Site]:
     """The element sites of one kind at which the generic effect kinds act (roles in
-    :data:`GENERIC_ROLES`)."""
+    :data:`GENERIC_ROLES`).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    kind : {"C", "I", "R"}
+        The element kind.
+
+    Returns
+    -------
+    list of Site
+        The sites, in the order their first element was added.
+    """
     return [s for s in element_sites(model, (kind,)) if s.role in GENERIC_ROLES]
