@@ -41,7 +41,17 @@ DESIGNS = ("random", "lhs", "grid", "oat")
 
 @dataclass(frozen=True)
 class Distribution:
-    """A continuous distribution (a frozen ``scipy.stats`` one) with its low/high for OAT runs."""
+    """A continuous distribution (a frozen ``scipy.stats`` one) with its low/high for OAT runs.
+
+    Parameters
+    ----------
+    text : str
+        How it is written, e.g. ``"normal(3000, 150)"``.
+    dist : scipy.stats.rv_continuous (frozen)
+        The distribution.
+    low, high : float
+        The values of one-at-a-time runs, in the parameter's unit.
+    """
 
     text: str
     dist: Any
@@ -49,7 +59,18 @@ class Distribution:
     high: float
 
     def ppf(self, u: np.ndarray) -> np.ndarray:
-        """Inverse CDF: the values at probabilities ``u`` (0 < u < 1)."""
+        """Inverse CDF: the values at probabilities ``u`` (0 < u < 1).
+
+        Parameters
+        ----------
+        u : numpy.ndarray
+            Probabilities.
+
+        Returns
+        -------
+        numpy.ndarray
+            The values, in the parameter's unit.
+        """
         return np.asarray(self.dist.ppf(u), float)
 
     def __str__(self):
@@ -58,17 +79,27 @@ class Distribution:
 
 @dataclass(frozen=True)
 class Grid:
-    """Grid levels of one parameter (numbers, or choices of a structural parameter)."""
+    """Grid levels of one parameter (numbers, or choices of a structural parameter).
+
+    Parameters
+    ----------
+    text : str
+        How it is written, e.g. ``"linspace(1, 2, 5)"``.
+    levels : tuple
+        The levels, in run order.
+    """
 
     text: str
     levels: tuple
 
     @property
     def low(self):
+        """The first level (the low value of one-at-a-time runs)."""
         return self.levels[0]
 
     @property
     def high(self):
+        """The last level (the high value of one-at-a-time runs)."""
         return self.levels[-1]
 
     def __str__(self):
@@ -342,7 +373,18 @@ def parse_space(items: Sequence[str]) -> dict[str, Distribution | Grid]:
 
 
 def default_design(space: Mapping[str, Distribution | Grid]) -> str:
-    """``grid`` when every parameter has grid levels, else ``random``."""
+    """``grid`` when every parameter has grid levels, else ``random``.
+
+    Parameters
+    ----------
+    space : mapping of str to Distribution or Grid
+        The parameter space.
+
+    Returns
+    -------
+    str
+        ``"grid"`` or ``"random"``.
+    """
     return "grid" if space and all(isinstance(s, Grid) for s in space.values()) else "random"
 
 
@@ -354,7 +396,32 @@ def design_points(
     nominal: Mapping[str, Any] | None = None,
 ) -> list[dict]:
     """The runs of ``design`` over ``space`` (see the module docstring); ``nominal`` holds the
-    model's values, needed by ``oat``."""
+    model's values, needed by ``oat``.
+
+    Parameters
+    ----------
+    space : mapping of str to Distribution or Grid
+        The parameter space.
+    design : {"random", "lhs", "grid", "oat"}
+        The design.
+    draws : int, optional
+        Number of runs of ``random`` and ``lhs`` (a positive integer).
+    seed : int, optional
+        Seed of ``numpy.random.default_rng``.
+    nominal : mapping, optional
+        The model's values of the parameters (``oat``).
+
+    Returns
+    -------
+    list of dict
+        One ``{parameter: value}`` per run, in a fixed order.
+
+    Raises
+    ------
+    UsageError
+        An empty space, an unknown design, a design that does not fit the space (a grid
+        without levels, sampling of grid levels), a missing nominal value, or bad ``draws``.
+    """
     if not space:
         raise UsageError("nothing to vary: give at least one parameter, e.g. --vary 'K=uniform(9e6, 12e6)'")
     if design not in DESIGNS:
