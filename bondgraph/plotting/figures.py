@@ -102,7 +102,22 @@ def varies(y) -> bool:
 
 def envelope(t, y, limit: int = 20000):
     """At most about ``limit`` points that keep every bucket's minimum and maximum (a
-    million-sample signal draws as fast as a short one and loses no peak)."""
+    million-sample signal draws as fast as a short one and loses no peak).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    y : numpy.ndarray
+        Samples at ``t``.
+    limit : int, optional
+        About the most points returned.
+
+    Returns
+    -------
+    t, y : numpy.ndarray
+        The thinned samples in time order (the inputs themselves when short enough).
+    """
     n = t.size
     if n <= limit:
         return t, y

@@ -134,7 +134,20 @@ class Figure:
 
 
 def render(figure: Figure, path: str) -> None:
-    """Draw ``figure`` and write it atomically to ``path`` (png, pdf or svg)."""
+    """Draw ``figure`` and write it atomically to ``path`` (png, pdf or svg).
+
+    Parameters
+    ----------
+    figure : Figure
+        The figure to draw.
+    path : str
+        The image to write.
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     from .figures import pyplot, save
 
     plt = pyplot()
