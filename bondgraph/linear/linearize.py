@@ -238,7 +238,29 @@ class LinearModel:
 
 
 def symbolic_matrices(eqs: Equations, input: str, output: str, op_gains: dict | None = None):
-    """Symbolic (A, B, C, D) in the parameters and the operating point symbols."""
+    """Symbolic (A, B, C, D) in the parameters and the operating point symbols.
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    input : str
+        The input's name.
+    output : str
+        The output's name.
+    op_gains : dict, optional
+        Operator output symbol → its small-signal slope (0 when not given: frozen memory).
+
+    Returns
+    -------
+    A, B, C, D : sympy.Matrix
+        n × n, n × 1, 1 × n and 1 × 1.
+
+    Raises
+    ------
+    UsageError
+        An unknown input or output.
+    """
     names = [str(u) for u in eqs.inputs]
     if input not in names:
         raise UsageError(did_you_mean(input, names, "input"))
