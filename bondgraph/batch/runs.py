@@ -310,7 +310,31 @@ def simulate(
 # ---- shared by the batch kinds -------------------------------------------------------------------
 def checked_model(model, params: Mapping | None, sets: Sequence[Mapping] | None = None, names: Iterable[str] = ()):
     """The model file built with ``params`` (errors now, not in every job), after checking that
-    every parameter named by the sets (and ``names``) exists."""
+    every parameter named by the sets (and ``names``) exists.
+
+    Parameters
+    ----------
+    model : str or path-like
+        The model file.
+    params : mapping, optional
+        Values applied to every job.
+    sets : sequence of mapping, optional
+        The parameter sets.
+    names : iterable of str, optional
+        Further parameter names to check (e.g. those to fit).
+
+    Returns
+    -------
+    LoadedModel
+        The model file built with ``params``.
+
+    Raises
+    ------
+    ParameterError
+        A set or ``names`` names a parameter the model does not have.
+    BondGraphError
+        The model file cannot be loaded.
+    """
     from ..model.modelfile import load_model
 
     lm = load_model(model, dict(params or {}))
@@ -323,7 +347,29 @@ def checked_model(model, params: Mapping | None, sets: Sequence[Mapping] | None 
 
 def model_io(lm, input: str | None, output: str | None, required: bool = True) -> tuple:
     """(input, output) of the model: the names given (checked), else its first declared ones;
-    a model without inputs or outputs is an error when ``required``, else gives ``None``."""
+    a model without inputs or outputs is an error when ``required``, else gives ``None``.
+
+    Parameters
+    ----------
+    lm : LoadedModel
+        The loaded model file.
+    input : str or None
+        The input named, if any.
+    output : str or None
+        The output named, if any.
+    required : bool, optional
+        Both must exist (a run on measured data).
+
+    Returns
+    -------
+    tuple
+        (input, output), each a name or None.
+
+    Raises
+    ------
+    UsageError
+        A name the model does not declare, or none declared when ``required``.
+    """
     names = []
     for given, declared, what in ((input, lm.model.inputs, "input"), (output, lm.model.outputs, "output")):
         if given is not None and given not in declared:
@@ -339,7 +385,41 @@ def model_io(lm, input: str | None, output: str | None, required: bool = True) -
 def simulation_options(
     lm, params, metrics, inputs, t_end, dt, method, rtol, input=None, output=None, data_input=None, data_output=None
 ) -> Options:
-    """Options of simulation jobs: the model's experiment with the given overrides, checked."""
+    """Options of simulation jobs: the model's experiment with the given overrides, checked.
+
+    Parameters
+    ----------
+    lm : LoadedModel
+        The loaded model file.
+    params : mapping or None
+        Values applied to every job.
+    metrics : sequence of str
+        The metrics' texts.
+    inputs : mapping or None
+        Input signals overriding the experiment's.
+    t_end : float or None
+        Simulated time, s.
+    dt : float or None
+        Output sample interval, s.
+    method : str or None
+        The integrator.
+    rtol : float or None
+        Its relative tolerance.
+    input, output : str, optional
+        The model input and output of runs on data.
+    data_input, data_output : str, optional
+        The data's columns when their names differ.
+
+    Returns
+    -------
+    Options
+        The options of every simulation job.
+
+    Raises
+    ------
+    UsageError
+        A bad metric, input, time or method.
+    """
     from ..numerics.simulate import METHODS
 
     parsed = parse_metrics(metrics)
@@ -379,7 +459,25 @@ def simulation_options(
 
 
 def data_jobs(data: Sequence, sets: Sequence[Mapping] | None) -> list[Job]:
-    """One job per (data file, parameter set), data files outermost."""
+    """One job per (data file, parameter set), data files outermost.
+
+    Parameters
+    ----------
+    data : sequence of str or path-like
+        The data files.
+    sets : sequence of mapping or None
+        The parameter sets (default: one empty set).
+
+    Returns
+    -------
+    list of Job
+        The jobs, numbered from 0.
+
+    Raises
+    ------
+    UsageError
+        No data file.
+    """
     if not data:
         raise UsageError("give at least one data file")
     jobs = []
@@ -403,7 +501,30 @@ def execute(
     per_task: int | None = None,
 ) -> Table:
     """Run ``jobs`` on the cluster, ``per_task`` jobs per Dask task (default: sized to the
-    number of jobs and workers); the table in job order."""
+    number of jobs and workers); the table in job order.
+
+    Parameters
+    ----------
+    opts : Options
+        What every job shares.
+    jobs : sequence of Job
+        The jobs.
+    scheduler : str or distributed.Client, optional
+        Where they run (see :func:`~bondgraph.batch.connect`).
+    workers : int, optional
+        Worker processes of the embedded cluster.
+    progress : callable, optional
+        ``progress(done, total)`` as tasks finish.
+    say : callable, optional
+        ``say(line)`` receives status lines.
+    per_task : int, optional
+        Jobs per Dask task.
+
+    Returns
+    -------
+    Table
+        One row per job, in job order (a task whose worker died gives its jobs an ``error``).
+    """
     rows: list[dict] = []
     done = [0]
 
