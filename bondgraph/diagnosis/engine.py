@@ -34,7 +34,22 @@ from .view import View
 
 @dataclass
 class Outcome:
-    """A candidate's result with what the parent needs to decide and to extend."""
+    """A candidate's result with what the parent needs to decide and to extend.
+
+    Parameters
+    ----------
+    result : CandidateResult
+        The candidate's result (scores filled in later by :func:`assess`).
+    extension : Extension, optional
+        What its fit returned (None when it was skipped or failed).
+    raw : numpy.ndarray, optional
+        The extended model's raw prediction.
+    linear_refit : numpy.ndarray, optional
+        The current model with its linear parameters refitted from where the candidate left
+        them, raw.
+    static : numpy.ndarray, optional
+        The same freedom without memory (for a memory effect), raw.
+    """
 
     result: CandidateResult
     extension: Extension | None = None
@@ -56,7 +71,28 @@ def run_candidate(
     """Fit one candidate on the chain state (in a worker or in the calling process).  A linear
     structural candidate starts from the plausible device instead, when one is given
     (``(state, bounds)``: the calibration within tolerance), and refits within its bounds.
-    ``effort``: a factor on its optimisers' evaluation budgets (see :func:`polish_race`)."""
+    ``effort``: a factor on its optimisers' evaluation budgets (see :func:`polish_race`).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    calibrated : sequence of str
+        The calibrated linear parameters.
+    cand : Candidate
+        The candidate.
+    plausible : tuple of (State, dict) or None, optional
+        The plausible device's state and bounds.
+    effort : float, optional
+        Factor on its optimisers' evaluation budgets.
+
+    Returns
+    -------
+    Outcome
+        The outcome; a candidate that raises gets its error in ``result.error``.
+    """
     started = time.time()
     res = CandidateResult(cand.cause, cand.label, cand.kind, effort=float(effort), site=cand.site_name)
     if cand.kind == LINEAR and plausible is not None:
@@ -104,7 +140,24 @@ def effect_errors(
     """(errors before, errors after) of an outcome on every sample: after, its prediction with
     sensor gain and offset solved on ``ctx``'s fit part; before, the state's (or the plausible
     device's, for a candidate fitted on it), or the current model refitted from where the
-    candidate left its linear parameters when that is better (only the effect is credited)."""
+    candidate left its linear parameters when that is better (only the effect is credited).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    oc : Outcome
+        The candidate's outcome.
+    e_state : numpy.ndarray
+        Errors of the current state on every sample.
+    e_plaus : numpy.ndarray or None
+        Errors of the plausible device on every sample (for candidates fitted on it).
+
+    Returns
+    -------
+    before, after : numpy.ndarray
+        The errors, output units.
+    """
     y, val = ctx.y, ctx.ident.val_mask
     g, b, _, _ = score(ctx, oc.raw)
     before = e_plaus if oc.result.against == "plausible" and e_plaus is not None else e_state
@@ -125,14 +178,54 @@ def second_fold(
     effort: float = 1.0,
 ) -> Comparison | None:
     """The candidate fitted again with other validation blocks (``ctx`` refolded) and compared
-    there as on the first fold; None when it fails."""
+    there as on the first fold; None when it fails.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    calibrated : sequence of str
+        The calibrated linear parameters.
+    cand : Candidate
+        The candidate.
+    plausible : tuple of (State, dict) or None
+        The plausible device's state and bounds.
+    e_plaus : numpy.ndarray or None
+        Errors of the plausible device on every sample (for candidates fitted on it).
+    effort : float, optional
+        Factor on its optimisers' evaluation budgets.
+
+    Returns
+    -------
+    Comparison or None
+        The comparison on the second fold.
+    """
     oc = run_candidate(ctx, state, calibrated, cand, plausible, effort)
     return None if oc.raw is None else effect_comparison(ctx, state, oc, e_plaus)
 
 
 def effect_comparison(ctx: Context, state: State, oc: Outcome, e_plaus: np.ndarray | None = None) -> Comparison:
     """The outcome's errors after against before (:func:`effect_errors`), compared on ``ctx``'s
-    validation blocks."""
+    validation blocks.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    oc : Outcome
+        The candidate's outcome.
+    e_plaus : numpy.ndarray or None, optional
+        Errors of the plausible device on every sample (for candidates fitted on it).
+
+    Returns
+    -------
+    Comparison
+        After against before.
+    """
     return compare(*effect_errors(ctx, oc, ctx.y - state.prediction, e_plaus), ctx.blocks)
 
 
@@ -145,7 +238,30 @@ def assess(
     reference, whichever is better) explains over it.  ``confirm(outcome, e_plaus)``: the
     comparison on a second fold (:func:`second_fold`), asked for candidates whose gain passes
     but whose significance falls short by less than ``diagnosis.confirm_margin`` standard
-    errors (a record whose evidence sits in a few blocks); the two folds' z are combined."""
+    errors (a record whose evidence sits in a few blocks); the two folds' z are combined.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    view : View
+        The current state's view.
+    outcomes : list of Outcome
+        The candidates' outcomes (their results are filled in).
+    plausible : State, optional
+        The plausible device's state.
+    confirm : callable, optional
+        ``confirm(outcome, e_plaus)`` → the second fold's comparison.
+
+    Returns
+    -------
+    step : Step
+        The chain step.
+    winner : Outcome or None
+        The outcome named, or None.
+    """
     idx, y = ctx.ident.fit_idx, ctx.y
     drive = state.drive if state.drive is not None else ctx.u
     ref_cols, ref_pred = reference_prediction(view.respond, drive, state.raw, y, idx, ctx.dt, ctx.span)
@@ -249,7 +365,22 @@ def near_the_bar(ctx: Context, state: State, oc: Outcome) -> bool:
     """Whether an outcome fitted with ``diagnosis.screen_effort`` of the budget is fitted again
     with the full budget before its chain step is judged: its validation gain reaches
     ``diagnosis.screen_gain``, a margin below the bar (a fit stopped early explains less than it
-    can: the ones far below the bar stay below it)."""
+    can: the ones far below the bar stay below it).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    oc : Outcome
+        The candidate's outcome.
+
+    Returns
+    -------
+    bool
+        Whether to fit it again.
+    """
     return oc.raw is not None and effect_comparison(ctx, state, oc).gain >= config.get("diagnosis.screen_gain")
 
 
@@ -257,7 +388,18 @@ def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
     """The outcomes to fit again with more effort before one is named: when two or more passing
     candidates are within ``diagnosis.polish_margin`` of the best gain over the flexible linear
     reference and one of them stopped before its optimiser converged, those of them that did
-    not converge (the ranking must not reward the optimiser that got further in its budget)."""
+    not converge (the ranking must not reward the optimiser that got further in its budget).
+
+    Parameters
+    ----------
+    outcomes : list of Outcome
+        The assessed outcomes.
+
+    Returns
+    -------
+    list of Outcome
+        Those to fit again (empty when there is no close race).
+    """
     passing = [oc for oc in outcomes if oc.result.passed]
     if len(passing) < 2:
         return []
@@ -325,7 +467,24 @@ def _why(winner, outcomes, rms_state, rms_ref, noise) -> str:
 
 
 def advance(ctx: Context, state: State, oc: Outcome, view: View) -> State:
-    """The chain state after naming ``oc``'s cause (``view``: the current state's)."""
+    """The chain state after naming ``oc``'s cause (``view``: the current state's).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    oc : Outcome
+        The candidate's outcome.
+    view : View
+        The current state's view.
+
+    Returns
+    -------
+    State
+        The extended model's state.
+    """
     ext = oc.extension
     g, b, _, _ = score(ctx, oc.raw)
     before = state.drive if state.drive is not None else state.core_drive
@@ -770,6 +929,15 @@ def drift_step(ctx: Context, state: State, solved: float | None) -> tuple[Step, 
     cause must (``on-bound``, ``useful-gain``, ``significant``) and its RMS is at least
     ``diagnosis.drift_share`` of the output's: a drift that large is a finding about the
     measurement, where a smaller one is removed as a nuisance (and said in a note).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    solved : float or None
+        The linear sensor drift the calibration removed, output units per second.
 
     Returns
     -------
