@@ -210,8 +210,10 @@ def param_bounds(ctx: Context, name: str, value: float, factor: float | None = N
 
     Returns
     -------
-    lower, upper : float
-        Bounds of |value|.
+    lower : float
+        Lower bound of |value|.
+    upper : float
+        Upper bound of |value|.
     """
     spread = config.get("diagnosis.spread") if factor is None else factor
     lo, hi = abs(value) / spread, abs(value) * spread

@@ -155,8 +155,10 @@ def effect_errors(
 
     Returns
     -------
-    before, after : numpy.ndarray
-        The errors, output units.
+    before : numpy.ndarray
+        The errors before, output units.
+    after : numpy.ndarray
+        The errors after, output units.
     """
     y, val = ctx.y, ctx.ident.val_mask
     g, b, _, _ = score(ctx, oc.raw)

@@ -142,8 +142,10 @@ class Param:
 
         Returns
         -------
-        lower, upper : float
-            The bounds of z.
+        lower : float
+            log lower.
+        upper : float
+            log upper.
         """
         return math.log(self.lower), math.log(self.upper)
 

@@ -108,9 +108,11 @@ class Spec:
 
         Returns
         -------
-        lower, upper : float
-            The bounds in z (infinite where the value's bound is, or for a log parameter's
-            lower bound when it is not positive).
+        lower : float
+            The lower bound in z (−inf where the value's is, or for a log parameter whose
+            lower bound is not positive).
+        upper : float
+            The upper bound in z (inf where the value's is).
         """
         if self.log:
             return (
@@ -233,8 +235,10 @@ def split_masks(
 
     Returns
     -------
-    fit, validation : numpy.ndarray
-        Boolean masks over the samples.
+    fit : numpy.ndarray
+        Boolean mask of the fit part.
+    validation : numpy.ndarray
+        Boolean mask of the validation part.
 
     Raises
     ------

@@ -253,8 +253,14 @@ def symbolic_matrices(eqs: Equations, input: str, output: str, op_gains: dict | 
 
     Returns
     -------
-    A, B, C, D : sympy.Matrix
-        n × n, n × 1, 1 × n and 1 × 1.
+    A : sympy.Matrix
+        n × n.
+    B : sympy.Matrix
+        n × 1.
+    C : sympy.Matrix
+        1 × n.
+    D : sympy.Matrix
+        1 × 1.
 
     Raises
     ------

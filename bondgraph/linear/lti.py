@@ -594,8 +594,12 @@ def foh(A: np.ndarray, B: np.ndarray, dt: float):
 
     Returns
     -------
-    Phi, Gamma, Gamma1 : numpy.ndarray
-        Φ (n × n), Γ (n × m) and Γ1 (n × m).
+    Phi : numpy.ndarray
+        Φ, n × n.
+    Gamma : numpy.ndarray
+        Γ, n × m.
+    Gamma1 : numpy.ndarray
+        Γ1, n × m.
     """
     n, m = B.shape
     em = np.zeros((n + 2 * m, n + 2 * m))

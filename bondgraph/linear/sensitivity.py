@@ -282,8 +282,12 @@ def jordan_foh(lam: np.ndarray, dt: float):
 
     Returns
     -------
-    Phi, Gamma, Gamma1 : numpy.ndarray
-        Φ (K, 2, 2), Γ (K, 2) and Γ1 (K, 2), complex.
+    Phi : numpy.ndarray
+        Φ, (K, 2, 2), complex.
+    Gamma : numpy.ndarray
+        Γ, (K, 2), complex.
+    Gamma1 : numpy.ndarray
+        Γ1, (K, 2), complex.
     """
     K = lam.size
     em = np.zeros((K, 4, 4), complex)

@@ -115,8 +115,10 @@ def envelope(t, y, limit: int = 20000):
 
     Returns
     -------
-    t, y : numpy.ndarray
-        The thinned samples in time order (the inputs themselves when short enough).
+    t : numpy.ndarray
+        The thinned times in order (the input itself when short enough).
+    y : numpy.ndarray
+        The samples at them.
     """
     n = t.size
     if n <= limit:
