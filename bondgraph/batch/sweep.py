@@ -220,7 +220,8 @@ def sweep(
     rtol : float, optional
         Relative tolerance of the integrator.
     input, output : str, optional
-        The model's input and output the metrics refer to (default: the model's own).
+        The model input and output the linear metrics (``resonance``, ``damping``) are
+        linearised between (default: the model's first declared ones).
     scheduler : str or distributed.Client, optional
         Where the runs execute (see :func:`~bondgraph.batch.connect`).
     workers : int, optional
