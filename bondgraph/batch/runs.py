@@ -264,9 +264,11 @@ def simulate(
     rtol : float, optional
         Relative tolerance of the integrator (default: the experiment's).
     input : str, optional
-        The model input driven by the data (default: the model's first declared input).
+        The model input driven by the data, and the input of the linear metrics (default:
+        the model's first declared input).
     output : str, optional
-        The model output compared with the data (default: the model's first declared output).
+        The model output compared with the data (``rms``), and the output of the linear
+        metrics (default: the model's first declared output).
     data_input : str, optional
         The data's column for ``input`` when its name differs.
     data_output : str, optional
