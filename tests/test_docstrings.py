@@ -122,21 +122,7 @@ def problems(name: str, skip: frozenset = frozenset()) -> list[str]:
 
 OBJECTS = public_objects()
 
-#: stages whose docstrings are being completed on another branch: still collected and run, a
-#: failure expected until that branch is merged (then the entry is removed)
-PENDING = {
-    stage: "docstrings of this stage are completed on a parallel branch"
-    for stage in ("numerics", "linear", "export", "diagnosis", "plotting", "batch")
-}
-
-
-def _case(stage: str):
-    if stage in PENDING:
-        return pytest.param(stage, marks=pytest.mark.xfail(strict=False, reason=PENDING[stage]))
-    return stage
-
-
-@pytest.mark.parametrize("stage", [_case(s) for s in sorted(OBJECTS)])
+@pytest.mark.parametrize("stage", sorted(OBJECTS))
 def test_public_docstrings_follow_numpydoc(stage):
     failures = []
     for name, skip in OBJECTS[stage]:

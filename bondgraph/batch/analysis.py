@@ -28,7 +28,21 @@ from .table import Table
 
 
 def summary(table: Table, metrics: Sequence[str]) -> list[dict]:
-    """Per output: runs with a value, runs without, mean, sample std, min, 5/50/95 % percentiles, max."""
+    """Per output: runs with a value, runs without, mean, sample std, min, 5/50/95 % percentiles, max.
+
+    Parameters
+    ----------
+    table : Table
+        The runs.
+    metrics : sequence of str
+        The metric columns.
+
+    Returns
+    -------
+    list of dict
+        Per metric: ``metric``, ``n``, ``failed`` and, when ``n`` > 0, ``mean``, ``std``,
+        ``min``, ``p5``, ``median``, ``p95``, ``max`` in the metric's unit.
+    """
     out = []
     for m in metrics:
         y = table.column(m)
@@ -51,7 +65,26 @@ def summary(table: Table, metrics: Sequence[str]) -> list[dict]:
 
 def sensitivity(table: Table, params: Sequence[str], metric: str, design: str) -> dict:
     """Ranking of ``params`` by their effect on ``metric`` (see the module docstring):
-    ``{"metric", "baseline", "ranking": [{"parameter", "low", "high", "swing", ...}, ...]}``."""
+    ``{"metric", "baseline", "ranking": [{"parameter", "low", "high", "swing", ...}, ...]}``.
+
+    Parameters
+    ----------
+    table : Table
+        The runs.
+    params : sequence of str
+        The varied parameters.
+    metric : str
+        The metric column.
+    design : {"random", "lhs", "grid", "oat"}
+        How the runs were drawn (it decides how effects are estimated).
+
+    Returns
+    -------
+    dict
+        ``metric``, ``baseline`` and ``ranking`` (largest swing first; ``low``/``high`` are
+        the metric at the parameter's low and high end, in the metric's unit), and for
+        random and lhs designs ``r2`` and each parameter's ``src`` and ``spearman``.
+    """
     y = table.column(metric)
     if design == "oat":
         base = float(y[0])

@@ -28,7 +28,18 @@ INSTALL_HINT = "pip install -e '.[dask]' (or pip install 'dask[distributed]')"
 
 
 def require_dask():
-    """The ``distributed`` module, or a UsageError naming the extra to install."""
+    """The ``distributed`` module, or a UsageError naming the extra to install.
+
+    Returns
+    -------
+    module
+        ``distributed``.
+
+    Raises
+    ------
+    UsageError
+        Dask is not installed.
+    """
     try:
         import distributed
     except ImportError:
@@ -37,7 +48,13 @@ def require_dask():
 
 
 def default_workers() -> int:
-    """One worker per CPU core this process may use."""
+    """One worker per CPU core this process may use.
+
+    Returns
+    -------
+    int
+        The number of cores in this process's affinity set (at least 1).
+    """
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # not on Linux
@@ -49,7 +66,30 @@ def connect(
     scheduler: Any = None, workers: int | None = None, say: Callable[[str], None] | None = None
 ) -> Iterator[Any]:
     """A ``distributed.Client`` for the duration of a ``with`` block (see the module docstring);
-    ``say`` receives one line on where the jobs run and the dashboard address, if any."""
+    ``say`` receives one line on where the jobs run and the dashboard address, if any.
+
+    Parameters
+    ----------
+    scheduler : str or distributed.Client, optional
+        Where the jobs run: None for an embedded ``LocalCluster`` (closed at the end of the
+        block), a scheduler address (``tcp://head:8786``), or a client to use as it is.
+    workers : int, optional
+        Worker processes of the embedded cluster (default: the setting's worker count); only
+        without ``scheduler``.
+    say : callable, optional
+        ``say(line)`` receives one line on where the jobs run.
+
+    Yields
+    ------
+    distributed.Client
+        The client the jobs are submitted to.
+
+    Raises
+    ------
+    UsageError
+        dask is not installed, ``workers`` with a scheduler or client, fewer than one worker,
+        or a scheduler that cannot be reached.
+    """
     distributed = require_dask()
     say = say or (lambda s: None)
     if isinstance(scheduler, distributed.Client):
@@ -118,7 +158,18 @@ def _dashboard_address() -> str | None:
 
 
 def dashboard(client) -> str | None:
-    """The dashboard address of the client's scheduler, if it serves one."""
+    """The dashboard address of the client's scheduler, if it serves one.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        The client.
+
+    Returns
+    -------
+    str or None
+        The dashboard's URL, or None.
+    """
     try:
         services = client.scheduler_info().get("services", {})
     except Exception:  # noqa: BLE001 - a missing dashboard is no error
@@ -127,6 +178,18 @@ def dashboard(client) -> str | None:
 
 
 def worker_count(client) -> int:
+    """Number of workers the client's scheduler has now.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        The client.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
     return max(1, len(client.scheduler_info()["workers"]))
 
 
@@ -142,7 +205,28 @@ def run_tasks(
 
     ``on_result(index, result)`` is called as each task completes.  A task that raises on its
     worker (or whose worker dies) gives ``failed(chunk, exception)`` instead.  On any exception
-    here, Ctrl-C included, every task is cancelled before it propagates."""
+    here, Ctrl-C included, every task is cancelled before it propagates.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        The client.
+    fn : callable
+        ``fn(chunk, **kwargs)`` → a list, run on a worker.
+    chunks : sequence of list
+        The chunks of jobs.
+    kwargs : dict, optional
+        Further keyword arguments of ``fn``.
+    on_result : callable, optional
+        ``on_result(index, result)`` as each task completes.
+    failed : callable, optional
+        ``failed(chunk, exception)`` → the result of a task that failed (default: raise).
+
+    Returns
+    -------
+    list of list
+        Each chunk's result, in chunk order.
+    """
     distributed = require_dask()
     futures = client.map(fn, list(chunks), pure=False, **(kwargs or {}))
     index = {f.key: i for i, f in enumerate(futures)}
@@ -174,11 +258,38 @@ def _task_exception(fut) -> BaseException:
 
 
 def chunked(items: Sequence, size: int) -> list[list]:
+    """``items`` in consecutive chunks of ``size`` (the last one shorter).
+
+    Parameters
+    ----------
+    items : sequence
+        The items.
+    size : int
+        Items per chunk (at least 1).
+
+    Returns
+    -------
+    list of list
+        The chunks, in order.
+    """
     return [list(items[i : i + size]) for i in range(0, len(items), size)]
 
 
 def chunk_size(n_jobs: int, n_workers: int) -> int:
     """Jobs per task for many short jobs: about ``batch.tasks_per_worker`` tasks per worker (load
-    balance, progress) and at most ``batch.max_jobs_per_task`` jobs per task (a prompt Ctrl-C)."""
+    balance, progress) and at most ``batch.max_jobs_per_task`` jobs per task (a prompt Ctrl-C).
+
+    Parameters
+    ----------
+    n_jobs : int
+        Number of jobs.
+    n_workers : int
+        Number of workers.
+
+    Returns
+    -------
+    int
+        Jobs per task, at least 1.
+    """
     per_worker, largest = config.get("batch.tasks_per_worker"), config.get("batch.max_jobs_per_task")
     return max(1, min(largest, math.ceil(n_jobs / (per_worker * n_workers))))

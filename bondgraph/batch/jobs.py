@@ -29,7 +29,19 @@ from ..support.errors import BondGraphError
 
 @dataclass(frozen=True)
 class Job:
-    """One row of the table: its index, parameter values, and data file (path and label)."""
+    """One row of the table: its index, parameter values, and data file (path and label).
+
+    Parameters
+    ----------
+    index : int
+        The job's number (the table's ``job`` column).
+    params : tuple, optional
+        (name, value) pairs of the job's parameter set.
+    data : str, optional
+        Absolute path of its data file.
+    label : str, optional
+        The data file as the user gave it (the table's ``data`` column).
+    """
 
     index: int
     params: tuple = ()
@@ -39,7 +51,43 @@ class Job:
 
 @dataclass(frozen=True)
 class Options:
-    """What every job of a batch shares."""
+    """What every job of a batch shares.
+
+    Parameters
+    ----------
+    kind : {"diagnose", "fit", "simulate"}
+        What each job does.
+    model : str
+        Absolute path of the model file.
+    base : tuple, optional
+        (name, value) pairs applied to every job.
+    input : str, optional
+        The model input driven by the data's column.
+    output : str, optional
+        The model output compared with the data's column.
+    data_input : str, optional
+        The data's column for ``input`` when its name differs.
+    data_output : str, optional
+        The data's column for ``output`` when its name differs.
+    validation : float, optional
+        Diagnose and fit: the held-out share.
+    names : tuple, optional
+        Fit: the parameters to fit.
+    fit : dict, optional
+        Fit: ``split``, ``loss`` and ``starts``.
+    metrics : tuple, optional
+        Simulate: the :class:`~bondgraph.batch.metrics.Metric` objects.
+    times : tuple, optional
+        Simulate without data: (t_end, dt), s.
+    inputs : dict, optional
+        Simulate: input signals by name.
+    method : str, optional
+        Simulate: the integrator.
+    rtol : float, optional
+        Simulate: its relative tolerance.
+    settings : dict, optional
+        The caller's :mod:`bondgraph.config` snapshot, restored on the worker.
+    """
 
     kind: str  # "diagnose", "fit" or "simulate"
     model: str  # absolute path of the model file
@@ -60,12 +108,40 @@ class Options:
 
 
 def run_chunk(jobs: list[Job], opts: Options) -> list[dict]:
-    """Run jobs one after the other on this worker; one row each."""
+    """Run jobs one after the other on this worker; one row each.
+
+    Parameters
+    ----------
+    jobs : list of Job
+        The jobs.
+    opts : Options
+        What every job of the batch shares.
+
+    Returns
+    -------
+    list of dict
+        One row per job (:func:`run_job`).
+    """
     config.restore(opts.settings)
     return [run_job(job, opts) for job in jobs]
 
 
 def run_job(job: Job, opts: Options) -> dict:
+    """Run one job; its exception, if any, becomes the row's ``error``.
+
+    Parameters
+    ----------
+    job : Job
+        The job.
+    opts : Options
+        What every job of the batch shares.
+
+    Returns
+    -------
+    dict
+        ``job``, ``data``, the job's parameters, its results, ``error`` ("" on success),
+        ``warnings`` (if any) and ``seconds`` (wall time, s).
+    """
     row: dict[str, Any] = {"job": job.index}
     if job.data is not None:
         row["data"] = job.label or job.data
@@ -86,7 +162,18 @@ def run_job(job: Job, opts: Options) -> dict:
 
 
 def describe(exc: BaseException) -> str:
-    """One line for the table: the message of a user-facing error, else type and message."""
+    """One line for the table: the message of a user-facing error, else type and message.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception.
+
+    Returns
+    -------
+    str
+        The line, whitespace collapsed.
+    """
     text = str(exc) if isinstance(exc, BondGraphError) else f"{type(exc).__name__}: {exc}"
     return " ".join(text.split()) or type(exc).__name__
 
@@ -117,7 +204,23 @@ def _diagnose(job: Job, opts: Options) -> dict:
 
 def diagnosis_row(loaded, data, opts: Options) -> dict:
     """The diagnosis of one record (the one call of the diagnosis API in batch runs): cause,
-    causes, gain, RMS before and after, and the best gain of each candidate cause."""
+    causes, gain, RMS before and after, and the best gain of each candidate cause.
+
+    Parameters
+    ----------
+    loaded : LoadedModel
+        The model file, loaded with the job's values.
+    data : Dataset
+        The record.
+    opts : Options
+        What every job of the batch shares.
+
+    Returns
+    -------
+    dict
+        ``cause``, ``causes``, ``gain``, ``baseline_rms``, ``extended_rms`` and
+        ``gain:CAUSE`` per candidate cause.
+    """
     from ..diagnosis import diagnose, model_file_options
 
     report = diagnose(
@@ -214,7 +317,22 @@ def built(path: str, values: Mapping[str, Any]):
     Values of structural parameters (integers, choices, flags, reals declared
     ``symbolic=False``) select a memoised build; the others are checked against their
     declarations and returned for :meth:`Simulator.run`.  A name the file does not declare (a
-    component's parameter) is numeric when the built equations keep it as a symbol."""
+    component's parameter) is numeric when the built equations keep it as a symbol.
+
+    Parameters
+    ----------
+    path : str
+        The model file.
+    values : mapping of str to object
+        Parameter values (text or numbers).
+
+    Returns
+    -------
+    sim : Simulator
+        The memoised build.
+    numeric : dict of str to float
+        The values to pass as ``params``.
+    """
     stamp = _stamp(path)
     declared = _declared(path, stamp)
     structural, numeric, other = {}, {}, {}
@@ -262,6 +380,12 @@ def _simulator(path: str, stamp: tuple, structural: tuple):
 
 
 def memo_info() -> dict:
-    """Hits and misses of this process' memo of built simulators (for tests and benchmarks)."""
+    """Hits and misses of this process' memo of built simulators (for tests and benchmarks).
+
+    Returns
+    -------
+    dict
+        ``hits``, ``misses`` and ``pid``.
+    """
     info = _simulator.cache_info()
     return {"hits": info.hits, "misses": info.misses, "pid": os.getpid()}

@@ -45,7 +45,18 @@ _SPEC = re.compile(r"^\s*([a-z0-9]+)\s*(?:\(\s*([^()]*?)\s*\))?\s*$")
 
 @dataclass(frozen=True)
 class Metric:
-    """One scalar output: ``kind`` applied to signal ``arg`` (or mode number for linear kinds)."""
+    """One scalar output: ``kind`` applied to signal ``arg`` (or mode number for linear kinds).
+
+    Parameters
+    ----------
+    text : str
+        The metric as written (the table's column name), e.g. ``"peak(x)"``.
+    kind : str
+        ``peak``, ``max``, ``min``, ``mean``, ``rms``, ``p2p``, ``final``, ``steady``,
+        ``resonance`` or ``damping``.
+    arg : str or int
+        The signal's name, or the mode number (from 1) of a linear kind.
+    """
 
     text: str
     kind: str
@@ -53,10 +64,30 @@ class Metric:
 
     @property
     def linear(self) -> bool:
+        """Whether it comes from the linearisation (``resonance``, ``damping``)."""
         return self.kind in _LINEAR
 
     def of(self, result, linear=None) -> float:
-        """The value on a :class:`~bondgraph.numerics.simulate.SimResult` (and its ``LinearModel``)."""
+        """The value on a :class:`~bondgraph.numerics.simulate.SimResult` (and its ``LinearModel``).
+
+        Parameters
+        ----------
+        result : SimResult
+            The run.
+        linear : LinearModel, optional
+            The model linearised at the initial state (needed by the linear kinds).
+
+        Returns
+        -------
+        float
+            The value, in the signal's unit (Hz for ``resonance``, dimensionless for
+            ``damping``).
+
+        Raises
+        ------
+        UsageError
+            The run has no such signal, or the linear model too few oscillatory modes.
+        """
         if self.linear:
             return mode_property(linear, self.kind, int(self.arg))
         y = result.outputs.get(self.arg)  # outputs first: looking up an input samples every input
@@ -71,6 +102,23 @@ class Metric:
 
 
 def parse_metric(text: str) -> Metric:
+    """A metric from its text (``--metric SPEC``; see the module docstring).
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"peak(x)"``, ``"steady(x)"``, ``"resonance"``, ``"damping(2)"``.
+
+    Returns
+    -------
+    Metric
+        The parsed metric.
+
+    Raises
+    ------
+    UsageError
+        An unknown kind, a signal metric without a signal, or a mode number below 1.
+    """
     m = _SPEC.match(text)
     kinds = ", ".join([*_SIGNAL, *_LINEAR])
     if not m or (m.group(1) not in _SIGNAL and m.group(1) not in _LINEAR):
@@ -90,6 +138,23 @@ def parse_metric(text: str) -> Metric:
 
 
 def parse_metrics(texts: Sequence[str]) -> list[Metric]:
+    """Several metrics (:func:`parse_metric`), each given once.
+
+    Parameters
+    ----------
+    texts : sequence of str
+        The metrics' texts.
+
+    Returns
+    -------
+    list of Metric
+        In the order given.
+
+    Raises
+    ------
+    UsageError
+        A bad metric, or one given twice.
+    """
     out = [parse_metric(t) for t in texts]
     seen = set()
     for m in out:
@@ -100,7 +165,27 @@ def parse_metrics(texts: Sequence[str]) -> list[Metric]:
 
 
 def mode_property(lin, kind: str, k: int) -> float:
-    """Natural frequency (Hz) or damping ratio of the k-th oscillatory mode of ``lin``."""
+    """Natural frequency (Hz) or damping ratio of the k-th oscillatory mode of ``lin``.
+
+    Parameters
+    ----------
+    lin : LinearModel
+        The linearised model.
+    kind : {"resonance", "damping"}
+        Which property.
+    k : int
+        The mode, counted from the lowest natural frequency (1 = the lowest).
+
+    Returns
+    -------
+    float
+        ωn/2π in Hz, or the damping ratio ζ.
+
+    Raises
+    ------
+    UsageError
+        The model has fewer than ``k`` oscillatory modes.
+    """
     p = lin.poles
     p = p[p.imag > 1e-9 * np.maximum(np.abs(p), 1.0)]
     p = p[np.argsort(np.abs(p))]

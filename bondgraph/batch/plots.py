@@ -10,7 +10,20 @@ from ..plotting import pyplot, save
 def plot_sweep(result, path: str) -> None:
     """One column per metric: its histogram over the runs (mean and ±1 std marked) on top,
     the tornado plot of its sensitivity below (bars from the baseline to the output at each
-    parameter's low and high value, the largest swing on top)."""
+    parameter's low and high value, the largest swing on top).
+
+    Parameters
+    ----------
+    result : SweepResult
+        The sweep.
+    path : str
+        The image to write (png, pdf or svg; written atomically).
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     plt = pyplot()
     metrics = result.metrics
     n = len(metrics)

@@ -49,7 +49,53 @@ def diagnose(
     say=None,
 ) -> Table:
     """Diagnose every data file (× parameter set): ``cause``, ``causes``, ``gain``,
-    ``baseline_rms``, ``extended_rms`` and the best gain of each candidate cause (``gain:CAUSE``)."""
+    ``baseline_rms``, ``extended_rms`` and the best gain of each candidate cause (``gain:CAUSE``).
+
+    Parameters
+    ----------
+    model : str or path-like
+        The model file (built once here, so that its errors come before any job).
+    data : sequence of str or path-like
+        The measured CSV records, one job per file (× parameter set).
+    sets : sequence of mapping, optional
+        Parameter sets, each ``{parameter: value}`` (SI units), one job per set and data file
+        (default: one empty set); see :func:`read_sets`.
+    params : mapping of str to float, optional
+        Values applied to every job, like ``--set``.
+    input : str, optional
+        The model input driven by the data (default: the model's first declared input).
+    output : str, optional
+        The model output compared with the data (default: the model's first declared output).
+    data_input : str, optional
+        The data's column for ``input`` when its name differs.
+    data_output : str, optional
+        The data's column for ``output`` when its name differs.
+    validation : float, optional
+        Share of the record held out for validation, between 0 and 1 (default 0.3).
+    scheduler : str or distributed.Client, optional
+        Where the jobs run (see :func:`~bondgraph.batch.connect`; default: an embedded local
+        cluster).
+    workers : int, optional
+        Worker processes of the embedded cluster.
+    progress : callable, optional
+        ``progress(done, total)``, called as jobs finish.
+    say : callable, optional
+        ``say(line)`` receives status lines (where the jobs run).
+
+    Returns
+    -------
+    Table
+        One row per job, in job order: ``job``, ``data``, the set's parameters, the results
+        (empty for a failed job), ``warnings``, ``seconds`` and ``error``.
+
+    Raises
+    ------
+    UsageError
+        A bad option or model file, no data file, or no cluster (before any job runs; a job
+        that fails is reported in its row's ``error``).
+    ParameterError
+        A parameter set names a parameter the model does not have.
+    """
     lm = checked_model(model, params, sets)
     input, output = model_io(lm, input, output)
     opts = Options(
@@ -87,7 +133,63 @@ def fit(
     say=None,
 ) -> Table:
     """Fit ``names`` to every data file (× parameter set): ``fit:NAME``, ``sd:NAME`` (standard
-    error), ``rms_fit``, ``rms_validation``, ``simulations``, ``converged``."""
+    error), ``rms_fit``, ``rms_validation``, ``simulations``, ``converged``.
+
+    Parameters
+    ----------
+    model : str or path-like
+        The model file (built once here, so that its errors come before any job).
+    data : sequence of str or path-like
+        The measured CSV records, one job per file (× parameter set).
+    names : sequence of str
+        The parameters to fit (at least one).
+    sets : sequence of mapping, optional
+        Parameter sets, each ``{parameter: value}`` (SI units), one job per set and data file
+        (default: one empty set); see :func:`read_sets`.
+    params : mapping of str to float, optional
+        Values applied to every job, like ``--set``.
+    input : str, optional
+        The model input driven by the data (default: the model's first declared input).
+    output : str, optional
+        The model output compared with the data (default: the model's first declared output).
+    data_input : str, optional
+        The data's column for ``input`` when its name differs.
+    data_output : str, optional
+        The data's column for ``output`` when its name differs.
+    validation : float, optional
+        Share of the record held out for validation, between 0 and 1 (default 0.3).
+    split : {"blocks", "tail"}, optional
+        How the validation share is held out: time blocks spread over the record, or its end.
+    loss : str, optional
+        The least-squares loss of ``scipy.optimize.least_squares`` (``linear``, ``soft_l1``,
+        ``huber``, ...).
+    starts : int, optional
+        Number of start points of the fit (the best one is kept).
+    scheduler : str or distributed.Client, optional
+        Where the jobs run (see :func:`~bondgraph.batch.connect`; default: an embedded local
+        cluster).
+    workers : int, optional
+        Worker processes of the embedded cluster.
+    progress : callable, optional
+        ``progress(done, total)``, called as jobs finish.
+    say : callable, optional
+        ``say(line)`` receives status lines (where the jobs run).
+
+    Returns
+    -------
+    Table
+        One row per job, in job order: ``job``, ``data``, the set's parameters, the fitted
+        values (the parameters' units), the RMS errors (the output's unit), ``warnings``,
+        ``seconds`` and ``error``.
+
+    Raises
+    ------
+    UsageError
+        No parameter to fit, a bad option or model file, no data file, or no cluster (before any job runs; a job
+        that fails is reported in its row's ``error``).
+    ParameterError
+        A parameter set names a parameter the model does not have.
+    """
     names = list(names)
     if not names:
         raise UsageError("batch fit: give the parameters to fit, e.g. --params a,c,K")
@@ -134,7 +236,70 @@ def simulate(
     """Simulate every data file (its ``input`` column drives the model; ``rms`` of the model's
     ``output`` against the data's) or, without data, the model's experiment (``inputs``,
     ``t_end``, ``dt`` override it), for every parameter set; one column per metric
-    (:mod:`bondgraph.batch.metrics`)."""
+    (:mod:`bondgraph.batch.metrics`).
+
+    Parameters
+    ----------
+    model : str or path-like
+        The model file (built once here, so that its errors come before any job).
+    data : sequence of str or path-like, optional
+        Measured CSV records whose input column drives the model; without them the model's
+        experiment runs once per parameter set.
+    sets : sequence of mapping, optional
+        Parameter sets, each ``{parameter: value}`` (SI units), one job per set and data file
+        (default: one empty set); see :func:`read_sets`.
+    params : mapping of str to float, optional
+        Values applied to every job, like ``--set``.
+    metrics : sequence of str, optional
+        Scalar outputs of each run (:mod:`bondgraph.batch.metrics`), e.g. ``"peak(x)"``,
+        ``"resonance"``; one column each.
+    inputs : mapping of str to Signal or float, optional
+        Input name → signal, overriding the experiment's (without data).
+    t_end : float, optional
+        Simulated time, s (default: the experiment's).
+    dt : float, optional
+        Output sample interval, s (default: the experiment's).
+    method : str, optional
+        Integrator (see :meth:`bondgraph.Simulator.run`; default: the experiment's).
+    rtol : float, optional
+        Relative tolerance of the integrator (default: the experiment's).
+    input : str, optional
+        The model input driven by the data, and the input of the linear metrics (default:
+        the model's first declared input).
+    output : str, optional
+        The model output compared with the data (``rms``), and the output of the linear
+        metrics (default: the model's first declared output).
+    data_input : str, optional
+        The data's column for ``input`` when its name differs.
+    data_output : str, optional
+        The data's column for ``output`` when its name differs.
+    scheduler : str or distributed.Client, optional
+        Where the jobs run (see :func:`~bondgraph.batch.connect`; default: an embedded local
+        cluster).
+    workers : int, optional
+        Worker processes of the embedded cluster.
+    progress : callable, optional
+        ``progress(done, total)``, called as jobs finish.
+    say : callable, optional
+        ``say(line)`` receives status lines (where the jobs run).
+    per_task : int, optional
+        Jobs per Dask task (default: sized to the number of jobs and workers).
+
+    Returns
+    -------
+    Table
+        One row per job, in job order: ``job``, ``data`` (with data), the set's parameters,
+        ``rms`` (with data, the output's unit) and the metrics, ``warnings``, ``seconds`` and
+        ``error``.
+
+    Raises
+    ------
+    UsageError
+        An unknown metric, input or method, a bad option or model file, no data file, or no cluster (before any job runs; a job
+        that fails is reported in its row's ``error``).
+    ParameterError
+        A parameter set names a parameter the model does not have.
+    """
     lm = checked_model(model, params, sets)
     input, output = model_io(lm, input, output, required=bool(data))
     opts = simulation_options(
@@ -147,7 +312,31 @@ def simulate(
 # ---- shared by the batch kinds -------------------------------------------------------------------
 def checked_model(model, params: Mapping | None, sets: Sequence[Mapping] | None = None, names: Iterable[str] = ()):
     """The model file built with ``params`` (errors now, not in every job), after checking that
-    every parameter named by the sets (and ``names``) exists."""
+    every parameter named by the sets (and ``names``) exists.
+
+    Parameters
+    ----------
+    model : str or path-like
+        The model file.
+    params : mapping, optional
+        Values applied to every job.
+    sets : sequence of mapping, optional
+        The parameter sets.
+    names : iterable of str, optional
+        Further parameter names to check (e.g. those to fit).
+
+    Returns
+    -------
+    LoadedModel
+        The model file built with ``params``.
+
+    Raises
+    ------
+    ParameterError
+        A set or ``names`` names a parameter the model does not have.
+    BondGraphError
+        The model file cannot be loaded.
+    """
     from ..model.modelfile import load_model
 
     lm = load_model(model, dict(params or {}))
@@ -160,7 +349,29 @@ def checked_model(model, params: Mapping | None, sets: Sequence[Mapping] | None 
 
 def model_io(lm, input: str | None, output: str | None, required: bool = True) -> tuple:
     """(input, output) of the model: the names given (checked), else its first declared ones;
-    a model without inputs or outputs is an error when ``required``, else gives ``None``."""
+    a model without inputs or outputs is an error when ``required``, else gives ``None``.
+
+    Parameters
+    ----------
+    lm : LoadedModel
+        The loaded model file.
+    input : str or None
+        The input named, if any.
+    output : str or None
+        The output named, if any.
+    required : bool, optional
+        Both must exist (a run on measured data).
+
+    Returns
+    -------
+    tuple
+        (input, output), each a name or None.
+
+    Raises
+    ------
+    UsageError
+        A name the model does not declare, or none declared when ``required``.
+    """
     names = []
     for given, declared, what in ((input, lm.model.inputs, "input"), (output, lm.model.outputs, "output")):
         if given is not None and given not in declared:
@@ -176,7 +387,41 @@ def model_io(lm, input: str | None, output: str | None, required: bool = True) -
 def simulation_options(
     lm, params, metrics, inputs, t_end, dt, method, rtol, input=None, output=None, data_input=None, data_output=None
 ) -> Options:
-    """Options of simulation jobs: the model's experiment with the given overrides, checked."""
+    """Options of simulation jobs: the model's experiment with the given overrides, checked.
+
+    Parameters
+    ----------
+    lm : LoadedModel
+        The loaded model file.
+    params : mapping or None
+        Values applied to every job.
+    metrics : sequence of str
+        The metrics' texts.
+    inputs : mapping or None
+        Input signals overriding the experiment's.
+    t_end : float or None
+        Simulated time, s.
+    dt : float or None
+        Output sample interval, s.
+    method : str or None
+        The integrator.
+    rtol : float or None
+        Its relative tolerance.
+    input, output : str, optional
+        The model input and output of runs on data.
+    data_input, data_output : str, optional
+        The data's columns when their names differ.
+
+    Returns
+    -------
+    Options
+        The options of every simulation job.
+
+    Raises
+    ------
+    UsageError
+        A bad metric, input, time or method.
+    """
     from ..numerics.simulate import METHODS
 
     parsed = parse_metrics(metrics)
@@ -216,7 +461,25 @@ def simulation_options(
 
 
 def data_jobs(data: Sequence, sets: Sequence[Mapping] | None) -> list[Job]:
-    """One job per (data file, parameter set), data files outermost."""
+    """One job per (data file, parameter set), data files outermost.
+
+    Parameters
+    ----------
+    data : sequence of str or path-like
+        The data files.
+    sets : sequence of mapping or None
+        The parameter sets (default: one empty set).
+
+    Returns
+    -------
+    list of Job
+        The jobs, numbered from 0.
+
+    Raises
+    ------
+    UsageError
+        No data file.
+    """
     if not data:
         raise UsageError("give at least one data file")
     jobs = []
@@ -240,7 +503,30 @@ def execute(
     per_task: int | None = None,
 ) -> Table:
     """Run ``jobs`` on the cluster, ``per_task`` jobs per Dask task (default: sized to the
-    number of jobs and workers); the table in job order."""
+    number of jobs and workers); the table in job order.
+
+    Parameters
+    ----------
+    opts : Options
+        What every job shares.
+    jobs : sequence of Job
+        The jobs.
+    scheduler : str or distributed.Client, optional
+        Where they run (see :func:`~bondgraph.batch.connect`).
+    workers : int, optional
+        Worker processes of the embedded cluster.
+    progress : callable, optional
+        ``progress(done, total)`` as tasks finish.
+    say : callable, optional
+        ``say(line)`` receives status lines.
+    per_task : int, optional
+        Jobs per Dask task.
+
+    Returns
+    -------
+    Table
+        One row per job, in job order (a task whose worker died gives its jobs an ``error``).
+    """
     rows: list[dict] = []
     done = [0]
 
@@ -269,7 +555,26 @@ def execute(
 
 
 def read_sets(path: str | os.PathLike) -> list[dict]:
-    """Parameter sets from a CSV file: a header of parameter names, one set per row."""
+    """Parameter sets from a CSV file: a header of parameter names, one set per row.
+
+    Lines starting with ``#`` are comments.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file.
+
+    Returns
+    -------
+    list of dict
+        One ``{parameter: value}`` per row, values as the text written (the model file
+        converts them).
+
+    Raises
+    ------
+    UsageError
+        The file cannot be read, has no header and row, or a row has the wrong number of values.
+    """
     p = Path(path)
     try:
         with open(p, newline="", encoding="utf-8") as fh:

@@ -41,7 +41,17 @@ DESIGNS = ("random", "lhs", "grid", "oat")
 
 @dataclass(frozen=True)
 class Distribution:
-    """A continuous distribution (a frozen ``scipy.stats`` one) with its low/high for OAT runs."""
+    """A continuous distribution (a frozen ``scipy.stats`` one) with its low/high for OAT runs.
+
+    Parameters
+    ----------
+    text : str
+        How it is written, e.g. ``"normal(3000, 150)"``.
+    dist : scipy.stats.rv_continuous (frozen)
+        The distribution.
+    low, high : float
+        The values of one-at-a-time runs, in the parameter's unit.
+    """
 
     text: str
     dist: Any
@@ -49,7 +59,18 @@ class Distribution:
     high: float
 
     def ppf(self, u: np.ndarray) -> np.ndarray:
-        """Inverse CDF: the values at probabilities ``u`` (0 < u < 1)."""
+        """Inverse CDF: the values at probabilities ``u`` (0 < u < 1).
+
+        Parameters
+        ----------
+        u : numpy.ndarray
+            Probabilities.
+
+        Returns
+        -------
+        numpy.ndarray
+            The values, in the parameter's unit.
+        """
         return np.asarray(self.dist.ppf(u), float)
 
     def __str__(self):
@@ -58,17 +79,27 @@ class Distribution:
 
 @dataclass(frozen=True)
 class Grid:
-    """Grid levels of one parameter (numbers, or choices of a structural parameter)."""
+    """Grid levels of one parameter (numbers, or choices of a structural parameter).
+
+    Parameters
+    ----------
+    text : str
+        How it is written, e.g. ``"linspace(1, 2, 5)"``.
+    levels : tuple
+        The levels, in run order.
+    """
 
     text: str
     levels: tuple
 
     @property
     def low(self):
+        """The first level (the low value of one-at-a-time runs)."""
         return self.levels[0]
 
     @property
     def high(self):
+        """The last level (the high value of one-at-a-time runs)."""
         return self.levels[-1]
 
     def __str__(self):
@@ -76,11 +107,50 @@ class Grid:
 
 
 def uniform(lo: float, hi: float) -> Distribution:
+    """Uniform distribution between ``lo`` and ``hi`` (``uniform(lo, hi)``).
+
+    Parameters
+    ----------
+    lo, hi : float
+        Bounds, in the parameter's unit; lo < hi. They are also the OAT low and high.
+
+    Returns
+    -------
+    Distribution
+        The frozen distribution with its low/high values for one-at-a-time runs.
+
+    Raises
+    ------
+    UsageError
+        ``lo`` is not below ``hi``.
+    """
     _order(lo, hi, "uniform")
     return Distribution(f"uniform({lo:g}, {hi:g})", stats.uniform(lo, hi - lo), lo, hi)
 
 
 def normal(mean: float, sd: float, lo: float | None = None, hi: float | None = None) -> Distribution:
+    """Normal distribution, truncated to [lo, hi] when bounds are given (``normal(mean, sd)``).
+
+    Parameters
+    ----------
+    mean : float
+        Mean, in the parameter's unit.
+    sd : float
+        Standard deviation (> 0), same unit; the OAT low and high are mean ∓ 2 sd, clipped to
+        the bounds.
+    lo, hi : float, optional
+        Truncation bounds (one may be left open).
+
+    Returns
+    -------
+    Distribution
+        The frozen distribution with its low/high values for one-at-a-time runs.
+
+    Raises
+    ------
+    UsageError
+        ``sd`` is not positive, or ``lo`` is not below ``hi``.
+    """
     if not sd > 0:
         raise UsageError(f"normal({mean:g}, {sd:g}): the standard deviation must be positive")
     if lo is None and hi is None:
@@ -93,6 +163,23 @@ def normal(mean: float, sd: float, lo: float | None = None, hi: float | None = N
 
 
 def loguniform(lo: float, hi: float) -> Distribution:
+    """Log-uniform distribution between ``lo`` and ``hi`` (``loguniform(lo, hi)``).
+
+    Parameters
+    ----------
+    lo, hi : float
+        Bounds, in the parameter's unit; 0 < lo < hi. They are also the OAT low and high.
+
+    Returns
+    -------
+    Distribution
+        The frozen distribution with its low/high values for one-at-a-time runs.
+
+    Raises
+    ------
+    UsageError
+        The bounds are out of order or not positive.
+    """
     _order(lo, hi, "loguniform")
     if lo <= 0:
         raise UsageError(f"loguniform({lo:g}, {hi:g}): the bounds must be positive")
@@ -100,11 +187,51 @@ def loguniform(lo: float, hi: float) -> Distribution:
 
 
 def linspace(lo: float, hi: float, n: int) -> Grid:
+    """``n`` evenly spaced grid levels from ``lo`` to ``hi`` (``linspace(lo, hi, n)``).
+
+    Parameters
+    ----------
+    lo, hi : float
+        First and last level, in the parameter's unit.
+    n : int
+        Number of levels (at least 2).
+
+    Returns
+    -------
+    Grid
+        The levels, first and last being the OAT low and high.
+
+    Raises
+    ------
+    UsageError
+        ``n`` is not an integer of at least 2.
+    """
     _levels(n, "linspace")
     return Grid(f"linspace({lo:g}, {hi:g}, {n})", tuple(np.linspace(lo, hi, int(n)).tolist()))
 
 
 def logspace(lo: float, hi: float, n: int) -> Grid:
+    """``n`` geometrically spaced grid levels from ``lo`` to ``hi`` (``logspace(lo, hi, n)``).
+
+    Unlike ``numpy.logspace`` the bounds are the levels themselves, not their exponents.
+
+    Parameters
+    ----------
+    lo, hi : float
+        First and last level (> 0), in the parameter's unit.
+    n : int
+        Number of levels (at least 2).
+
+    Returns
+    -------
+    Grid
+        The levels, first and last being the OAT low and high.
+
+    Raises
+    ------
+    UsageError
+        ``n`` is not an integer of at least 2, or a bound is not positive.
+    """
     _levels(n, "logspace")
     if lo <= 0 or hi <= 0:
         raise UsageError(f"logspace({lo:g}, {hi:g}, {n}): the bounds must be positive")
@@ -112,6 +239,23 @@ def logspace(lo: float, hi: float, n: int) -> Grid:
 
 
 def values(*levels) -> Grid:
+    """Grid levels given one by one: numbers, integers or choices (``values(none, bouc-wen)``).
+
+    Parameters
+    ----------
+    *levels : float, int or str
+        The levels, in the order the runs take them.
+
+    Returns
+    -------
+    Grid
+        The levels, first and last being the OAT low and high.
+
+    Raises
+    ------
+    UsageError
+        No level is given.
+    """
     if not levels:
         raise UsageError("values(...): give at least one value")
     return Grid("values(" + ", ".join(str(v) for v in levels) + ")", tuple(levels))
@@ -138,7 +282,26 @@ _KINDS = {
 
 
 def parse_spec(text: str) -> Distribution | Grid:
-    """A distribution or grid from its text, e.g. ``normal(3000, 5%)`` (see the module docstring)."""
+    """A distribution or grid from its text, e.g. ``normal(3000, 5%)`` (see the module docstring).
+
+    Parameters
+    ----------
+    text : str
+        The specification: ``uniform(lo, hi)``, ``normal(mean, sd[, lo, hi])`` (``sd`` may be a
+        percentage of the mean), ``loguniform(lo, hi)``, ``linspace(lo, hi, n)``,
+        ``logspace(lo, hi, n)`` or ``values(a, b, ...)``.
+
+    Returns
+    -------
+    Distribution or Grid
+        What the text specifies.
+
+    Raises
+    ------
+    UsageError
+        Unknown kind, wrong number of arguments, a value that is not a finite number, or bad
+        bounds.
+    """
     m = _SPEC.match(text)
     kinds = ", ".join([*_KINDS, "values"])
     if not m:
@@ -181,7 +344,23 @@ def _number_or_text(a: str):
 
 
 def parse_space(items: Sequence[str]) -> dict[str, Distribution | Grid]:
-    """``NAME=SPEC`` strings (``--vary``) → space."""
+    """``NAME=SPEC`` strings (``--vary``) → space.
+
+    Parameters
+    ----------
+    items : sequence of str
+        ``NAME=SPEC`` strings, e.g. ``"K=uniform(9e6, 12e6)"`` (see :func:`parse_spec`).
+
+    Returns
+    -------
+    dict of str to Distribution or Grid
+        Parameter name → specification, in the order given.
+
+    Raises
+    ------
+    UsageError
+        An item without ``=`` or name, a name given twice, or a bad specification.
+    """
     space: dict[str, Distribution | Grid] = {}
     for item in items:
         name, sep, spec = item.partition("=")
@@ -194,7 +373,18 @@ def parse_space(items: Sequence[str]) -> dict[str, Distribution | Grid]:
 
 
 def default_design(space: Mapping[str, Distribution | Grid]) -> str:
-    """``grid`` when every parameter has grid levels, else ``random``."""
+    """``grid`` when every parameter has grid levels, else ``random``.
+
+    Parameters
+    ----------
+    space : mapping of str to Distribution or Grid
+        The parameter space.
+
+    Returns
+    -------
+    str
+        ``"grid"`` or ``"random"``.
+    """
     return "grid" if space and all(isinstance(s, Grid) for s in space.values()) else "random"
 
 
@@ -206,7 +396,32 @@ def design_points(
     nominal: Mapping[str, Any] | None = None,
 ) -> list[dict]:
     """The runs of ``design`` over ``space`` (see the module docstring); ``nominal`` holds the
-    model's values, needed by ``oat``."""
+    model's values, needed by ``oat``.
+
+    Parameters
+    ----------
+    space : mapping of str to Distribution or Grid
+        The parameter space.
+    design : {"random", "lhs", "grid", "oat"}
+        The design.
+    draws : int, optional
+        Number of runs of ``random`` and ``lhs`` (a positive integer).
+    seed : int, optional
+        Seed of ``numpy.random.default_rng``.
+    nominal : mapping, optional
+        The model's values of the parameters (``oat``).
+
+    Returns
+    -------
+    list of dict
+        One ``{parameter: value}`` per run, in a fixed order.
+
+    Raises
+    ------
+    UsageError
+        An empty space, an unknown design, a design that does not fit the space (a grid
+        without levels, sampling of grid levels), a missing nominal value, or bad ``draws``.
+    """
     if not space:
         raise UsageError("nothing to vary: give at least one parameter, e.g. --vary 'K=uniform(9e6, 12e6)'")
     if design not in DESIGNS:

@@ -27,7 +27,24 @@ from .table import Table
 @dataclass
 class SweepResult:
     """The runs of a sweep (``table``: one row per run, the varied parameters then the metrics)
-    and what produced them."""
+    and what produced them.
+
+    Parameters
+    ----------
+    table : Table
+        One row per run: ``job``, the varied parameters' values, the metrics, then
+        ``warnings``, ``seconds`` and ``error``.
+    space : dict of str to Distribution or Grid
+        The parameter space swept, name → specification.
+    design : {"random", "lhs", "grid", "oat"}
+        How the runs were drawn from ``space``.
+    metrics : list of str
+        The metrics' texts (column names of ``table``), e.g. ``"peak(x)"``.
+    seed : int, optional
+        The random seed of ``random`` and ``lhs`` designs.
+    nominal : dict, optional
+        The model's values of the varied parameters, name → value.
+    """
 
     table: Table
     space: dict
@@ -38,17 +55,42 @@ class SweepResult:
 
     @property
     def params(self) -> list[str]:
+        """The varied parameters' names, in the order of :attr:`space`."""
         return list(self.space)
 
     def summary(self) -> list[dict]:
+        """Statistics of each metric over the runs (:func:`bondgraph.batch.analysis.summary`).
+
+        Returns
+        -------
+        list of dict
+            Per metric: ``metric``, ``n`` (runs with a value), ``failed`` and, when ``n`` > 0,
+            ``mean``, ``std`` (sample), ``min``, ``p5``, ``median``, ``p95``, ``max`` in the
+            metric's unit.
+        """
         return analysis.summary(self.table, self.metrics)
 
     def sensitivity(self) -> list[dict]:
-        """One ranking per metric (see :func:`bondgraph.batch.analysis.sensitivity`)."""
+        """One ranking per metric (see :func:`bondgraph.batch.analysis.sensitivity`).
+
+        Returns
+        -------
+        list of dict
+            Per metric: ``metric``, ``baseline`` and ``ranking``, a list of
+            ``{"parameter", "low", "high", "swing", ...}`` (metric values at the parameter's
+            low and high end and their difference), largest swing first.
+        """
         return [analysis.sensitivity(self.table, self.params, m, self.design) for m in self.metrics]
 
     def as_json(self) -> dict:
-        """Statistics and sensitivities as strict JSON (a missing or non-finite number is null)."""
+        """Statistics and sensitivities as strict JSON (a missing or non-finite number is null).
+
+        Returns
+        -------
+        dict
+            ``design``, ``runs``, ``failed``, ``seed``, ``space`` (name → specification text),
+            ``nominal``, ``summary`` (:meth:`summary`) and ``sensitivity`` (:meth:`sensitivity`).
+        """
         return _finite(
             {
                 "design": self.design,
@@ -63,6 +105,13 @@ class SweepResult:
         )
 
     def text(self) -> str:
+        """The sweep as a plain-text report: the space, a statistics table, the rankings.
+
+        Returns
+        -------
+        str
+            Lines ending with a newline, as ``bondgraph sweep`` prints them.
+        """
         lines = [
             f"{self.design} sweep: {len(self.table)} runs, {len(self.table.failed)} failed"
             + (f", seed {self.seed}" if self.seed is not None and self.design in ("random", "lhs") else "")
@@ -97,7 +146,18 @@ class SweepResult:
         return "\n".join(lines) + "\n"
 
     def plot(self, path: str) -> None:
-        """Histograms of the metrics (top) and tornado plots of their sensitivities (bottom)."""
+        """Histograms of the metrics (top) and tornado plots of their sensitivities (bottom).
+
+        Parameters
+        ----------
+        path : str
+            The image to write (png, pdf or svg; written atomically).
+
+        Raises
+        ------
+        UsageError
+            matplotlib is not installed.
+        """
         from .plots import plot_sweep
 
         plot_sweep(self, path)
@@ -127,7 +187,62 @@ def sweep(
 ) -> SweepResult:
     """Simulate the model at every point of ``design`` over ``space`` (default: ``grid`` when
     every parameter has grid levels, else ``random`` with ``draws`` draws) and evaluate
-    ``metrics`` on each run."""
+    ``metrics`` on each run.
+
+    Parameters
+    ----------
+    model : str or path-like or Model
+        A model file (or a model) with a declared experiment, or give ``inputs`` and
+        ``t_end``.
+    space : mapping of str to str or Distribution or Grid
+        Parameter name → specification (text as for ``--vary``, see
+        :func:`~bondgraph.batch.parse_spec`, or built with :func:`~bondgraph.batch.uniform`
+        and the others).
+    metrics : sequence of str
+        Scalar outputs of each run (:mod:`bondgraph.batch.metrics`), e.g. ``"peak(x)"``,
+        ``"resonance"``; at least one.
+    design : {"random", "lhs", "grid", "oat"}, optional
+        How runs are drawn (see :mod:`bondgraph.batch.sampling`).
+    draws : int, optional
+        Number of runs of a ``random`` or ``lhs`` design.
+    seed : int, optional
+        Random seed: the same space, design, draws and seed give the same runs.
+    params : mapping of str to float, optional
+        Fixed parameter values, name → value, overriding the model's.
+    inputs : mapping of str to Signal or float, optional
+        Input name → signal, instead of the experiment's.
+    t_end : float, optional
+        Simulated time, s.
+    dt : float, optional
+        Output sample interval, s.
+    method : str, optional
+        Integrator (see :meth:`bondgraph.Simulator.run`).
+    rtol : float, optional
+        Relative tolerance of the integrator.
+    input, output : str, optional
+        The model input and output the linear metrics (``resonance``, ``damping``) are
+        linearised between (default: the model's first declared ones).
+    scheduler : str or distributed.Client, optional
+        Where the runs execute (see :func:`~bondgraph.batch.connect`).
+    workers : int, optional
+        Worker processes of the embedded cluster.
+    progress : callable, optional
+        Called as jobs finish (see :mod:`bondgraph.batch.runs`).
+    say : callable, optional
+        ``say(line)`` receives status lines.
+    per_task : int, optional
+        Runs per Dask task (default: chosen from the number of runs and workers).
+
+    Returns
+    -------
+    SweepResult
+        The table of runs, with statistics and sensitivities.
+
+    Raises
+    ------
+    UsageError
+        No metric, a bad specification or design, an unknown parameter, or no cluster.
+    """
     if not metrics:
         raise UsageError("give at least one metric, e.g. --metric 'peak(x)'")
     space = {k: parse_spec(v) if isinstance(v, str) else v for k, v in space.items()}

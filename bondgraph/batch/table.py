@@ -23,7 +23,16 @@ TRAILING = ("warnings", "seconds", "error")
 
 
 class Table:
-    """Rows (dicts) with an ordered column list; missing cells are ``None``."""
+    """Rows (dicts) with an ordered column list; missing cells are ``None``.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        One dict per job, column name → value (copied).
+    leading : iterable of str, optional
+        Columns placed right after ``job`` (the job's inputs); the others follow in the order
+        first met, then ``warnings``, ``seconds`` and ``error``.
+    """
 
     def __init__(self, rows: Sequence[dict], leading: Iterable[str] = ()):
         self.rows = [dict(r) for r in rows]
@@ -39,7 +48,23 @@ class Table:
         return iter(self.rows)
 
     def column(self, name: str) -> np.ndarray:
-        """A numeric column as floats (NaN where a row has no number, e.g. a failed job)."""
+        """A numeric column as floats (NaN where a row has no number, e.g. a failed job).
+
+        Parameters
+        ----------
+        name : str
+            The column's name.
+
+        Returns
+        -------
+        numpy.ndarray
+            One float per row.
+
+        Raises
+        ------
+        KeyError
+            The table has no such column.
+        """
         if name not in self.columns:
             raise KeyError(name)
         return np.array([_as_float(r.get(name)) for r in self.rows], float)
@@ -50,6 +75,13 @@ class Table:
         return [r for r in self.rows if r.get("error")]
 
     def csv_text(self) -> str:
+        """The table as CSV text: the header line, then one line per row.
+
+        Returns
+        -------
+        str
+            CSV with ``\\n`` line ends; floats written exactly (``repr``), missing cells empty.
+        """
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(self.columns)
@@ -58,12 +90,29 @@ class Table:
         return buf.getvalue()
 
     def to_csv(self, path: str | Path) -> None:
-        """CSV with the header line first; numbers written exactly (``repr``)."""
+        """CSV with the header line first; numbers written exactly (``repr``).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file to write (atomically: complete or not at all).
+        """
         with atomic_write(path, "w", newline="") as fh:
             fh.write(self.csv_text())
 
     def to_parquet(self, path: str | Path) -> None:
-        """Parquet (needs pyarrow)."""
+        """Parquet (needs pyarrow); integer, float, boolean or text columns as the values are.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file to write (atomically: complete or not at all).
+
+        Raises
+        ------
+        UsageError
+            pyarrow is not installed.
+        """
         try:
             import pyarrow as pa
             import pyarrow.parquet as pq
@@ -74,13 +123,30 @@ class Table:
             pq.write_table(table, fh)
 
     def to_pandas(self):
-        """A pandas DataFrame of the rows (needs pandas)."""
+        """A pandas DataFrame of the rows (needs pandas).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per job, the columns in the table's order.
+        """
         import pandas as pd
 
         return pd.DataFrame([[r.get(c) for c in self.columns] for r in self.rows], columns=self.columns)
 
     def write(self, path: str | Path) -> None:
-        """CSV or Parquet by the file suffix (``.csv``, ``.parquet``)."""
+        """CSV or Parquet by the file suffix (``.csv``, ``.parquet``).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file to write (atomically: complete or not at all).
+
+        Raises
+        ------
+        UsageError
+            Another suffix, or Parquet without pyarrow.
+        """
         suffix = Path(path).suffix.lower()
         if suffix == ".parquet":
             self.to_parquet(path)

@@ -29,7 +29,7 @@ from .context import residual_floor, welch_length
 class Account:
     """What the final model leaves unexplained (see the module docstring).
 
-    Attributes
+    Parameters
     ----------
     unexplained_share : float
         Validation RMS of the final residual over the output's validation RMS about its mean.
@@ -56,7 +56,18 @@ class Account:
         return self.residual_rms / self.noise_rms if self.noise_rms > 0 else math.inf
 
     def sentence(self, named: bool) -> str:
-        """One sentence for the report."""
+        """One sentence for the report.
+
+        Parameters
+        ----------
+        named : bool
+            Whether the diagnosis named a cause (the extended, else the calibrated model).
+
+        Returns
+        -------
+        str
+            The sentence, without a final full stop.
+        """
         head = (
             f"the {'extended' if named else 'calibrated'} model leaves {self.unexplained_share:.0%} of the "
             f"output unexplained, {self.over_noise:.2g}× the noise floor"
@@ -74,6 +85,13 @@ class Account:
         )
 
     def as_json(self) -> dict:
+        """The account as a JSON object (part of :meth:`Report.as_json`).
+
+        Returns
+        -------
+        dict
+            The five fields by name.
+        """
         return {
             "unexplained_share": self.unexplained_share,
             "unexplained_linear_share": self.unexplained_linear_share,

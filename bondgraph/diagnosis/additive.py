@@ -29,7 +29,18 @@ import sympy as sp
 class Term:
     """One column of the sum: its weight is the model parameter ``name``, within
     [``lower``, ``upper``]; ``column`` is the effect's response to the base drive per unit
-    weight, in drive units."""
+    weight, in drive units.
+
+    Parameters
+    ----------
+    name : str
+        The model parameter that weighs this column (dimensionless).
+    column : numpy.ndarray
+        The effect's response to the base drive per unit weight, sampled at the data's
+        times, in drive units.
+    lower, upper : float, optional
+        Bounds of the weight (default unbounded).
+    """
 
     name: str
     column: np.ndarray
@@ -40,7 +51,19 @@ class Term:
 @dataclass(frozen=True)
 class AdditiveDrive:
     """u_eff = identity·base + Σ values[term.name]·term.column (``identity``: the base drive
-    itself is one of the terms, with weight 1)."""
+    itself is one of the terms, with weight 1).
+
+    Parameters
+    ----------
+    base : numpy.ndarray
+        The base drive b sampled at the data's times, in drive units.
+    base_expr : sympy.Expr
+        The base drive as an expression of the model's inputs.
+    identity : bool, optional
+        The base drive itself enters the sum with weight 1.
+    terms : tuple of Term, optional
+        The weighted effect columns.
+    """
 
     base: np.ndarray
     base_expr: sp.Expr
@@ -48,6 +71,18 @@ class AdditiveDrive:
     terms: tuple[Term, ...] = ()
 
     def series(self, values: Mapping[str, float]) -> np.ndarray:
+        """The effective drive u_eff at the given weights.
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            Weight of each term, by its parameter name (every term's name must be there).
+
+        Returns
+        -------
+        numpy.ndarray
+            u_eff sampled at the data's times, in drive units.
+        """
         out = np.array(self.base, float) if self.identity else np.zeros(len(self.base))
         for t in self.terms:
             out += float(values[t.name]) * t.column

@@ -51,7 +51,50 @@ from .projection import Param, forward_differences, projected_fit
 
 @dataclass
 class Calibration:
-    """Outcome of the linear calibration."""
+    """Outcome of the linear calibration.
+
+    Parameters
+    ----------
+    values : dict of str to float
+        Every linear parameter's value after the calibration.
+    nominal : dict of str to float
+        The model file's values.
+    free : list of str
+        The parameters calibrated.
+    held : dict of str to str
+        Parameters held at the model's value, with why.
+    bounds : dict of str to tuple of float
+        Search bounds of the |value| of each free parameter.
+    at_bounds : list of str
+        Free parameters that ended on a search bound.
+    gain : float
+        The sensor gain.
+    offset : float
+        The output offset, output units.
+    rms_fit : float
+        RMS error on the fit part, output units.
+    rms_validation : float
+        RMS error on the validation part, output units.
+    success : bool
+        The optimiser's success flag.
+    message : str
+        The optimiser's message.
+    route : str
+        How the calibration ran: ``"time series"``, or ``"frequency response, then time
+        series"``.
+    plausible : dict of str to tuple of float, optional
+        |value| bounds of a plausible device.
+    outside : dict of str to float, optional
+        Calibrated parameters outside their tolerance, with value / model's value.
+    rms_plausible : float, optional
+        Validation RMS of the plausible device, when it differs.
+    delay : float, optional
+        Delay of the measured output behind the drive, s.
+    drift : float, optional
+        Linear sensor drift removed from the record, output units per second.
+    notes : list of str, optional
+        Notes for the report.
+    """
 
     values: dict[str, float]
     nominal: dict[str, float]
@@ -81,6 +124,15 @@ class Calibration:
     notes: list[str] = field(default_factory=list)
 
     def as_json(self) -> dict:
+        """The calibration as a JSON object (``calibration`` of :meth:`Report.as_json`).
+
+        Returns
+        -------
+        dict
+            ``params``, ``held``, ``nominal``, ``bounds``, ``at_bounds``, ``sensor_gain``,
+            ``offset``, RMS errors, the plausible device's numbers, ``delay``, ``drift`` and
+            the optimiser's verdict.
+        """
         return {
             "params": {k: self.values[k] for k in self.free},
             "held": self.held,
@@ -102,7 +154,20 @@ class Calibration:
 
 
 def patterns(names: Sequence[str], pats: Sequence[str] | None) -> list[str]:
-    """The names matching any of the glob patterns, in pattern order."""
+    """The names matching any of the glob patterns, in pattern order.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The names.
+    pats : sequence of str or None
+        Glob patterns.
+
+    Returns
+    -------
+    list of str
+        The matching names, each once.
+    """
     out: list[str] = []
     for pat in pats or ():
         out += [n for n in names if fnmatch.fnmatchcase(n, pat) and n not in out]
@@ -110,7 +175,18 @@ def patterns(names: Sequence[str], pats: Sequence[str] | None) -> list[str]:
 
 
 def linear_parameters(ctx: Context) -> list[str]:
-    """Parameters of the working model's linear dynamics (nonzero, not the sensor gain)."""
+    """Parameters of the working model's linear dynamics (nonzero, not the sensor gain).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+
+    Returns
+    -------
+    list of str
+        Their names.
+    """
     from ..linear.lti import LTI
 
     lti = ctx.lti or LTI(ctx.eqs, ctx.input, ctx.output)
@@ -119,7 +195,26 @@ def linear_parameters(ctx: Context) -> list[str]:
 
 def param_bounds(ctx: Context, name: str, value: float, factor: float | None = None) -> tuple[float, float]:
     """|value| bounds: ×/÷ ``factor`` (default the setting ``diagnosis.spread``), within the
-    declared bounds."""
+    declared bounds.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    name : str
+        The parameter.
+    value : float
+        Its value.
+    factor : float, optional
+        The spread.
+
+    Returns
+    -------
+    lower : float
+        Lower bound of |value|.
+    upper : float
+        Upper bound of |value|.
+    """
     spread = config.get("diagnosis.spread") if factor is None else factor
     lo, hi = abs(value) / spread, abs(value) * spread
     decl = ctx.model.all_parameters().get(name)
@@ -148,7 +243,28 @@ NO_EFFECT = "no visible effect on the output in these data"
 
 def select(S: np.ndarray, names: Sequence[str], priority: Sequence[str], tol: float, scale: float):
     """Greedy pivoted selection of identifiable columns (see the module docstring).
-    Returns (kept names, {held name: reason})."""
+    Returns (kept names, {held name: reason}).
+
+    Parameters
+    ----------
+    S : numpy.ndarray
+        Sensitivities, one column per name.
+    names : sequence of str
+        The parameters.
+    priority : sequence of str
+        Names tried first.
+    tol : float
+        Pivot tolerance relative to the largest column.
+    scale : float
+        Norm of the output's variation (columns below 1e-6 of it have no effect).
+
+    Returns
+    -------
+    kept : list of str
+        The identifiable parameters.
+    held : dict of str to str
+        The others, with why.
+    """
     norms = np.linalg.norm(S, axis=0)
     ref = float(norms.max()) if norms.size else 0.0
     order = sorted(range(len(names)), key=lambda j: (names[j] not in priority, -norms[j]))
@@ -185,7 +301,28 @@ def residual_asks(
     and hides a second mode's damping that the data plainly show (a missing parameter a
     structural cause would then stand in for).  A kept parameter that ended on its search
     bound is not projected out: it cannot move further, and a held parameter that duplicates it
-    (a stiffness beside a damping that sets only their ratio) can carry the fit past that bound."""
+    (a stiffness beside a damping that sets only their ratio) can carry the fit past that bound.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    names : sequence of str
+        Every linear parameter.
+    free : sequence of str
+        The calibrated ones.
+    held : mapping of str to str
+        The held ones, with why.
+    values : dict
+        The calibrated values.
+    sol : Projected
+        The calibration's solution.
+
+    Returns
+    -------
+    dict of str to float
+        Held name → the factor one step would move it by.
+    """
     share = config.get("diagnosis.residual_share")
     cands = [n for n in held if n in names and held[n] != NO_EFFECT]
     if not cands or not share < 1:
@@ -259,7 +396,22 @@ RESOLVED_COHERENCE = 0.5
 
 def cross_spectra(u: np.ndarray, y: np.ndarray, fs: float):
     """(f Hz, Puu, Pyy, Puy): the input's, the output's and their cross density (:func:`welch`,
-    segments of an eighth of the record up to 2**15 samples)."""
+    segments of an eighth of the record up to 2**15 samples).
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    y : numpy.ndarray
+        The measured output.
+    fs : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        f (Hz), Puu, Pyy and Puy (one-sided densities).
+    """
     nper = welch_length(len(u), 8, 15)
     f, Puu = welch(u, fs, nper)
     return f, Puu, welch(y, fs, nper)[1], welch(u, fs, nper, y)[1]
@@ -267,7 +419,24 @@ def cross_spectra(u: np.ndarray, y: np.ndarray, fs: float):
 
 def coherence_spectrum(u: np.ndarray, y: np.ndarray, fs: float):
     """(ω rad/s, magnitude-squared coherence of output and input) from :func:`cross_spectra`, at
-    every frequency above 0."""
+    every frequency above 0.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    y : numpy.ndarray
+        The measured output.
+    fs : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    omega : numpy.ndarray
+        Angular frequencies, rad/s.
+    coherence : numpy.ndarray
+        Between 0 and 1.
+    """
     f, Puu, Pyy, Puy = cross_spectra(u, y, fs)
     return 2 * np.pi * f[1:], _coherence(Puu, Pyy, Puy)[1:]
 
@@ -278,7 +447,26 @@ def _coherence(Puu, Pyy, Puy):
 
 def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
     """(ω rad/s, H, coherence) of output/input from :func:`cross_spectra`, at the frequencies the
-    record resolves (coherence above :data:`RESOLVED_COHERENCE`)."""
+    record resolves (coherence above :data:`RESOLVED_COHERENCE`).
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    y : numpy.ndarray
+        The measured output.
+    fs : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    omega : numpy.ndarray
+        Angular frequencies, rad/s.
+    H : numpy.ndarray
+        Complex H1 estimate, output units per input unit.
+    coherence : numpy.ndarray
+        Between 0 and 1.
+    """
     f, Puu, Pyy, Puy = cross_spectra(u, y, fs)
     coh = _coherence(Puu, Pyy, Puy)[1:]
     keep = (Puu[1:] > 1e-8 * Puu.max()) & (coh > RESOLVED_COHERENCE)
@@ -305,7 +493,38 @@ def fit_frf(
     (σ = 0.5 in z), fitted in ``workers`` processes (the same result as one).  ``derivatives(z)``,
     when given, returns ∂ log frf_of(z)/∂z (complex, one row per z) or None: the Jacobian then
     comes from it (from forward differences where it returns None).  Returns the best (z, cost)
-    or None."""
+    or None.
+
+    Parameters
+    ----------
+    frf_of : callable
+        ``frf_of(z)`` → complex response at ``w``.
+    z0 : numpy.ndarray
+        Start point.
+    lb, ub : numpy.ndarray
+        Bounds of z.
+    w : numpy.ndarray
+        Angular frequencies, rad/s.
+    H : numpy.ndarray
+        The measured response at ``w``.
+    coh : numpy.ndarray
+        Its coherence at ``w``.
+    starts : sequence of numpy.ndarray, optional
+        Further start points.
+    random : int, optional
+        Number of random perturbations of z0.
+    max_nfev : int, optional
+        Evaluation budget per start.
+    workers : int, optional
+        Processes.
+    derivatives : callable, optional
+        ``derivatives(z)`` → ∂ log frf_of(z)/∂z, or None.
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, float) or None
+        The best z and its cost, or None when every start failed.
+    """
     wt = np.sqrt(coh)
     share = coh / np.sum(coh)  # the weights of the mean log-magnitude
     log_mag, phase = np.log(np.abs(H) + 1e-300), np.angle(H)
@@ -360,7 +579,18 @@ MAX_DELAY = 0.5
 
 
 def max_delay(ctx: Context) -> float:
-    """:data:`MAX_DELAY` in samples of the (possibly decimated) record the diagnosis works on."""
+    """:data:`MAX_DELAY` in samples of the (possibly decimated) record the diagnosis works on.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+
+    Returns
+    -------
+    float
+        Samples.
+    """
     return MAX_DELAY * ctx.fs / ctx.source_rate
 
 
@@ -571,7 +801,20 @@ def _sampled_starts(
 
 def tolerances(names: Sequence[str], tolerance: Mapping[str, float] | None) -> dict[str, float]:
     """The plausible factor of each parameter: the first matching pattern of ``tolerance`` (the
-    model file's ``TOLERANCE``), else the setting ``diagnosis.tolerance``."""
+    model file's ``TOLERANCE``), else the setting ``diagnosis.tolerance``.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The parameters.
+    tolerance : mapping of str to float or None
+        {glob pattern: factor}.
+
+    Returns
+    -------
+    dict of str to float
+        Name → factor (×/÷).
+    """
     default = float(config.get("diagnosis.tolerance"))
     out = {}
     for n in names:
@@ -592,7 +835,37 @@ def calibrate(
     parameter's tolerance (:func:`tolerances`), which linear structural causes must beat.
     ``workers``: processes for the multi-start fits (the result is the same with one);
     ``drift``: solve a linear sensor drift with the parameters and remove it from the record.
-    Returns (null state, its calibration, plausible state)."""
+    Returns (null state, its calibration, plausible state).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    priority : sequence of str, optional
+        Names or glob patterns preferred when parameters cannot be told apart.
+    say : callable, optional
+        ``say(line)`` receives progress notes.
+    tolerance : mapping of str to float, optional
+        {glob pattern: factor} of plausible spread.
+    workers : int, optional
+        Processes for the multi-start fits.
+    drift : bool, optional
+        Solve and remove a linear sensor drift.
+
+    Returns
+    -------
+    null : State
+        The calibrated model's state.
+    calibration : Calibration
+        How it was calibrated.
+    plausible : State
+        The plausible device's state.
+
+    Raises
+    ------
+    UsageError
+        A ``CALIBRATE`` or ``TOLERANCE`` pattern matches no parameter.
+    """
     say = say or (lambda s: None)
     names = linear_parameters(ctx)
     known = list(ctx.model.all_parameters())
@@ -715,7 +988,25 @@ def calibrate(
 
 
 def score(ctx: Context, raw: np.ndarray) -> tuple[float, float, float, float]:
-    """(sensor gain, offset, RMS on the fit part, RMS on the validation part) of a raw prediction."""
+    """(sensor gain, offset, RMS on the fit part, RMS on the validation part) of a raw prediction.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    raw : numpy.ndarray
+        A raw prediction on every sample.
+
+    Returns
+    -------
+    tuple of float
+        The sensor gain and offset (output units) solved on the fit part, and the RMS errors.
+
+    Raises
+    ------
+    FloatingPointError
+        The prediction is not finite.
+    """
     idx = ctx.ident.fit_idx
     if not np.all(np.isfinite(raw)):
         raise FloatingPointError("the prediction is not finite")
@@ -726,4 +1017,16 @@ def score(ctx: Context, raw: np.ndarray) -> tuple[float, float, float, float]:
 
 
 def rms(r: np.ndarray) -> float:
+    """Root mean square.
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        The values.
+
+    Returns
+    -------
+    float
+        The RMS (NaN for no values).
+    """
     return float(np.sqrt(np.mean(r**2))) if r.size else float("nan")

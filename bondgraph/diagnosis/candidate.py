@@ -31,19 +31,38 @@ NOT_A_DRIVE = "acts on the drive, and the model is no longer a transform of its 
 class Extension:
     """What a candidate's fit returns.
 
-    ``model``: the current model extended with the candidate's element(s), a new object;
-    ``values``: every value the fit chose (the new parameters and the recalibrated linear
-    ones), by name; ``new``: the names of the new parameters; ``prediction``: the extended
-    model's output on every sample with sensor gain 1 and no offset, if the candidate
-    computed it (else the engine simulates ``model``); ``drive``/``drive_expr``: the signal
-    and expression the linear core now sees, for drive-side extensions (so that a further
-    cause can act on it); ``at_bounds``: parameters that ended on a search bound;
-    ``success``/``message``: from the optimiser; ``terms``: the nonlinear terms added to
-    elements' laws, one (element, partner or None, term, c, r2) each (see
-    :class:`~bondgraph.diagnosis.lure.Lure`), so that a later cause can be fitted on the exact
-    route with them held; ``additive``: the drive as a sum of effects after an additive
-    drive-side fit (:attr:`DriveFit.additive <bondgraph.diagnosis.view.DriveFit>`), so that a
-    later additive cause refits its weights."""
+    Parameters
+    ----------
+    model : Model
+        The current model extended with the candidate's element(s), a new object.
+    values : dict of str to float
+        Every value the fit chose (the new parameters and the recalibrated linear ones), by
+        name, in the parameters' units.
+    new : list of str
+        The names of the new parameters.
+    prediction : numpy.ndarray, optional
+        The extended model's output on every sample with sensor gain 1 and no offset, if the
+        candidate computed it (else the engine simulates ``model``).
+    drive : numpy.ndarray, optional
+        For drive-side extensions, the signal the linear core now sees (drive units), so that
+        a further cause can act on it.
+    drive_expr : sympy.Expr, optional
+        The expression of ``drive`` in the model's inputs.
+    at_bounds : list of str, optional
+        Parameters that ended on a search bound.
+    success : bool, optional
+        The optimiser's success flag.
+    message : str, optional
+        The optimiser's message.
+    terms : list, optional
+        The nonlinear terms added to elements' laws, one (element, partner or None, term, c,
+        r2) each (see :class:`~bondgraph.diagnosis.lure.Lure`), so that a later cause can be
+        fitted on the exact route with them held.
+    additive : AdditiveDrive, optional
+        The drive as a sum of effects after an additive drive-side fit
+        (:attr:`DriveFit.additive <bondgraph.diagnosis.view.DriveFit>`), so that a later
+        additive cause refits its weights.
+    """
 
     model: Model
     values: dict[str, float]
@@ -81,42 +100,124 @@ class Candidate(ABC):
     linear_share: float | None = None
 
     def applies(self, view) -> bool | str:
-        """True, or a short reason why the candidate does not apply to this model and data."""
+        """True, or a short reason why the candidate does not apply to this model and data.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        bool or str
+            True when the candidate applies; otherwise a short reason (shown in the report).
+        """
         return True
 
     def screen(self, view) -> float | None:
         """The share (0-1) of the current residual that the candidate explains to first order,
         computed quickly, or None when it cannot say (it is then fitted in full).  When more
         candidates can say than ``diagnosis.screen_keep``, the engine fits only those that
-        explain most."""
+        explain most.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        float or None
+            The share of the residual explained, between 0 and 1, or None.
+        """
         return None
 
     def evidence(self, view) -> dict[str, float]:
-        """Numbers from the current residual that speak for this cause (shown, not decisive)."""
+        """Numbers from the current residual that speak for this cause (shown, not decisive).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        dict of str to float
+            Name → number (empty by default).
+        """
         return {}
 
     @abstractmethod
     def fit(self, view) -> Extension:
-        """Fit the extension to the data seen through ``view``."""
+        """Fit the extension to the data seen through ``view``.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        Extension
+            The extended model, the values chosen and, when computed, its prediction.
+        """
 
     def without_memory(self, view) -> np.ndarray | None:
         """For a memory effect: the raw prediction (sensor gain 1) of the same freedom without
         memory (e.g. a static curve with the operator's thresholds), or None.  The engine
         names the memory effect only if it beats this as a nonlinear cause must beat the
         flexible linear reference, both with that reference's freedom: its loops must explain
-        something that no static curve, and no linear lag, does."""
+        something that no static curve, and no linear lag, does.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            The raw prediction on every sample (output units, sensor gain 1, no offset), or
+            None for an effect without memory.
+        """
         return None
 
     def implausible(self, view, ext: Extension) -> str:
         """Why the fitted extension is not physically plausible ('' if it is); checked for
-        linear structural causes, which could otherwise absorb any linear mismatch."""
+        linear structural causes, which could otherwise absorb any linear mismatch.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        ext : Extension
+            The fitted extension.
+
+        Returns
+        -------
+        str
+            The reason, or "" when the extension is plausible.
+        """
         return ""
 
     def mimics_recalibration(self, view, ext: Extension) -> str:
         """Why the fitted linear extension may be the model's own structure recalibrated ('' if
         not), e.g. a mode placed on one of the model's modes.  The engine then names it only if
         it also beats the flexible linear reference on the freely calibrated model, as a
-        nonlinear cause must: what it explains is then beyond any recalibration."""
+        nonlinear cause must: what it explains is then beyond any recalibration.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        ext : Extension
+            The fitted extension.
+
+        Returns
+        -------
+        str
+            The reason, or "" when it does not mimic a recalibration.
+        """
         return ""
 
     def __repr__(self) -> str:
@@ -124,5 +225,13 @@ class Candidate(ABC):
 
     def identity(self) -> tuple[str, str]:
         """(cause, site): once named, candidates of the same identity are not tried again on
-        the extended model unless :attr:`repeatable`."""
+        the extended model unless :attr:`repeatable`.
+
+        Returns
+        -------
+        cause : str
+            The cause it stands for.
+        site : str
+            Where it acts (:attr:`site_name`).
+        """
         return self.cause, self.site_name

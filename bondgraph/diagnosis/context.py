@@ -37,7 +37,39 @@ class State:
 
     ``raw`` is its output with sensor gain 1 and no offset; the prediction is
     ``gain·raw + offset``.  ``drive``/``drive_expr`` is what the linear core sees (None once a
-    structural extension made the model more than a drive transform of its linear core)."""
+    structural extension made the model more than a drive transform of its linear core).
+
+    Parameters
+    ----------
+    model : Model
+        The current model.
+    values : dict of str to float
+        Its parameter values.
+    raw : numpy.ndarray
+        Its output on every sample, sensor gain 1, no offset.
+    gain : float
+        The sensor gain (its sign is the sensor's orientation).
+    offset : float
+        The output offset, output units.
+    drive : numpy.ndarray or None
+        The series the linear core sees.
+    drive_expr : sympy.Expr or None
+        Its expression in the model's inputs.
+    causes : list of str, optional
+        The causes named so far.
+    linear : bool, optional
+        No structural extension was named (the model is its core plus drive transforms).
+    terms : tuple, optional
+        Nonlinear terms in elements' laws named so far.
+    core_drive : numpy.ndarray, optional
+        The series the linear core sees under those terms.
+    core_extra : numpy.ndarray, optional
+        The output part outside the core, sensor gain 1.
+    additive : AdditiveDrive, optional
+        The drive as a sum of effects.
+    core_model : Model, optional
+        The linear model the held terms extend, when it is not the calibrated nominal one.
+    """
 
     model: Model
     values: dict[str, float]
@@ -63,11 +95,41 @@ class State:
 
     @property
     def prediction(self) -> np.ndarray:
+        """gain·raw + offset, output units, on every sample."""
         return self.gain * self.raw + self.offset
 
 
 class Context:
-    """Data, split, working model and linear route of one diagnosis (see the module doc)."""
+    """Data, split, working model and linear route of one diagnosis (see the module doc).
+
+    Parameters
+    ----------
+    model : Model
+        The nominal model.
+    data : Dataset
+        The measured record (resampled here when not uniformly sampled).
+    input : str, optional
+        The model input the data drive (default: its first declared one).
+    output : str, optional
+        The compared output (default: its first declared one).
+    data_input : str, optional
+        The drive's data column (default: the input's name).
+    data_output : str, optional
+        The output's data column (default: the output's name).
+    validation : float, optional
+        Share held out as validation blocks.
+    say : callable, optional
+        ``say(line)`` receives notes on the preparation.
+    reading : str, optional
+        How the drive is read between its samples (one of ``READINGS``).
+
+    Raises
+    ------
+    ValueError
+        An unknown reading.
+    DataError
+        The output does not follow the drive (:func:`check_follows`).
+    """
 
     def __init__(
         self,
@@ -184,7 +246,20 @@ class Context:
     def drive_with_delay(self, delay: float, reading: str | None = None) -> np.ndarray:
         """The recorded drive as the exact route must see it, read as ``reading`` (default the
         context's; band-limited: compensated for the route's linear interpolation) and delayed
-        by ``delay`` samples (the measurement chain's delay of the output behind the drive)."""
+        by ``delay`` samples (the measurement chain's delay of the output behind the drive).
+
+        Parameters
+        ----------
+        delay : float
+            Delay in samples (fractional).
+        reading : str, optional
+            The reading (default: the context's).
+
+        Returns
+        -------
+        numpy.ndarray
+            The drive's samples, drive units.
+        """
         reading = reading or self.reading
         if reading == "band-limited":
             return interpolation_compensated(self.u_recorded, delay)
@@ -192,7 +267,18 @@ class Context:
 
     def reading_factor(self, omega: np.ndarray) -> np.ndarray | float:
         """What the drive's reading multiplies a continuous frequency response by at ``omega``
-        (rad/s): 1 band-limited, sinc²(f/fs) linear between samples."""
+        (rad/s): 1 band-limited, sinc²(f/fs) linear between samples.
+
+        Parameters
+        ----------
+        omega : numpy.ndarray
+            Angular frequencies, rad/s.
+
+        Returns
+        -------
+        numpy.ndarray or float
+            The factor (1.0 for the band-limited reading).
+        """
         if self.reading == "band-limited":
             return 1.0
         return np.sinc(np.asarray(omega, float) * self.dt / (2 * math.pi)) ** 2
@@ -200,7 +286,20 @@ class Context:
     def reading_gap(self, values: dict, gain: float) -> float:
         """RMS difference on the validation part between the outputs of the model at ``values``
         (sensor gain ``gain``) under the two readings of the drive: what the choice of reading
-        can change (0 off the exact linear route)."""
+        can change (0 off the exact linear route).
+
+        Parameters
+        ----------
+        values : dict
+            Parameter values.
+        gain : float
+            The sensor gain.
+
+        Returns
+        -------
+        float
+            The RMS difference, output units.
+        """
         if self.lti is None:
             return 0.0
         other = next(r for r in READINGS if r != self.reading)
@@ -210,7 +309,13 @@ class Context:
         return float(np.sqrt(np.mean(d**2)))
 
     def set_delay(self, delay: float) -> None:
-        """Use the drive delayed by ``delay`` samples from now on (data, identification, u)."""
+        """Use the drive delayed by ``delay`` samples from now on (data, identification, u).
+
+        Parameters
+        ----------
+        delay : float
+            Delay in samples (fractional).
+        """
         self.delay = float(delay)
         cols = {k: self._data.column(k) for k in self._data.names if k != "t"}
         cols[self.data_input] = self.drive_with_delay(delay)
@@ -243,7 +348,13 @@ class Context:
 
     def remove_drift(self, rate: float) -> None:
         """Subtract a linear sensor drift of ``rate`` (output units per second, zero at the
-        record's middle) from the measured output, from now on."""
+        record's middle) from the measured output, from now on.
+
+        Parameters
+        ----------
+        rate : float
+            The drift, output units per second.
+        """
         t = self._data.t
         cols = {k: self._data.column(k) for k in self._data.names if k != "t"}
         cols[self.data_output] = cols[self.data_output] - rate * 0.5 * (t[-1] - t[0]) * self.trend
@@ -253,7 +364,18 @@ class Context:
 
     def refold(self, shift: int) -> "Context":
         """The same context with the validation blocks ``shift`` blocks later (another fold:
-        disjoint from this one's for a shift of 2 with the default split)."""
+        disjoint from this one's for a shift of 2 with the default split).
+
+        Parameters
+        ----------
+        shift : int
+            Blocks to move the validation blocks by.
+
+        Returns
+        -------
+        Context
+            A shallow copy with its own split.
+        """
         other = copy.copy(self)
         other.shift = int(shift)
         other.set_delay(self.delay)
@@ -285,6 +407,7 @@ class Context:
 
     @property
     def span(self) -> float:
+        """The record's duration, s."""
         return float(self.t[-1] - self.t[0])
 
 
@@ -296,7 +419,20 @@ def _theta(eqs) -> np.ndarray:
 
 def with_sensor_gain(model: Model, output: str) -> Model:
     """A copy of ``model`` whose output ``output`` is multiplied by a parameter ``sensor.gain``
-    (1 by default): the sensor's scale, solved exactly by the diagnosis."""
+    (1 by default): the sensor's scale, solved exactly by the diagnosis.
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    output : str
+        The output the sensor measures.
+
+    Returns
+    -------
+    Model
+        The copy.
+    """
     m = model.copy()
     g = m.parameter(SENSOR_GAIN, 1.0, "", "sensor gain (solved exactly by the diagnosis)")
     out = m.outputs[output]
@@ -306,7 +442,22 @@ def with_sensor_gain(model: Model, output: str) -> Model:
 
 def welch_length(n: int, parts: float, top: int) -> int:
     """Welch segment length for ``n`` samples: the largest power of two not above n/parts, within
-    2**8..2**top samples, and never longer than the record."""
+    2**8..2**top samples, and never longer than the record.
+
+    Parameters
+    ----------
+    n : int
+        Samples in the record.
+    parts : float
+        About how many segments the record should hold.
+    top : int
+        Exponent of the longest segment.
+
+    Returns
+    -------
+    int
+        The segment length, samples.
+    """
     return int(min(n, 2 ** max(8, min(top, int(math.log2(max(n, 256) / parts))))))
 
 
@@ -314,7 +465,26 @@ def welch(x: np.ndarray, fs: float, nper: int, y: np.ndarray | None = None) -> t
     """(f Hz, density) of ``x``, or the cross density of ``x`` and ``y``: Welch, half-overlapping
     Hann segments of ``nper`` samples, each detrended, averaged over two segmentations of the
     record, one from its first sample and one ending at its last.  One segmentation alone stops
-    up to half a segment short of the end, which for a sweep drops its last frequencies."""
+    up to half a segment short of the end, which for a sweep drops its last frequencies.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The signal.
+    fs : float
+        Sample rate, Hz.
+    nper : int
+        Segment length, samples.
+    y : numpy.ndarray, optional
+        A second signal for the cross density.
+
+    Returns
+    -------
+    f : numpy.ndarray
+        Frequencies, Hz.
+    density : numpy.ndarray
+        One-sided (cross) power spectral density, units² per Hz.
+    """
     n = len(x)
     nper = int(min(nper, n))
     step = nper - nper // 2
@@ -332,7 +502,22 @@ def welch(x: np.ndarray, fs: float, nper: int, y: np.ndarray | None = None) -> t
 
 
 def drive_band(u: np.ndarray, fs: float, share: float = 1e-4) -> float:
-    """Frequency (Hz) below which all but ``share`` of the drive's (detrended) power lies."""
+    """Frequency (Hz) below which all but ``share`` of the drive's (detrended) power lies.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    fs : float
+        Sample rate, Hz.
+    share : float, optional
+        The power left above the band.
+
+    Returns
+    -------
+    float
+        The band's upper edge, Hz (Nyquist for a drive without power).
+    """
     n = len(u)
     nper = welch_length(n, 4, 16)
     f, P = welch(u, fs, nper)
@@ -344,7 +529,20 @@ def drive_band(u: np.ndarray, fs: float, share: float = 1e-4) -> float:
 
 
 def drive_peak(u: np.ndarray, fs: float) -> float:
-    """Frequency (Hz) where the drive's (detrended) power spectrum peaks."""
+    """Frequency (Hz) where the drive's (detrended) power spectrum peaks.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    fs : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    float
+        The peak's frequency, Hz (0 for a record too short).
+    """
     n = len(u)
     nper = welch_length(n, 4, 16)
     f, P = welch(u, fs, nper)
@@ -354,7 +552,24 @@ def drive_peak(u: np.ndarray, fs: float) -> float:
 def drive_held_share(u: np.ndarray, fs: float, length: float, band: float = 0.01) -> float:
     """Share of the record (0-1) lying in holds of the drive: stretches of ``length`` s or
     longer over which it stays within ``band`` of its range (steps, holds, rests between
-    bursts; about 0 for sines, triangles, chirps and noise)."""
+    bursts; about 0 for sines, triangles, chirps and noise).
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    fs : float
+        Sample rate, Hz.
+    length : float
+        Shortest hold counted, s.
+    band : float, optional
+        Tolerance as a share of the drive's range.
+
+    Returns
+    -------
+    float
+        The share, between 0 and 1.
+    """
     w = 2 * int(round(length * fs / 2)) + 1  # odd: windows centred on a sample
     if w >= len(u):
         return 0.0
@@ -371,7 +586,22 @@ def drive_sweep(u: np.ndarray, fs: float, blocks: int) -> tuple[float, float] | 
     its mean at least a tenth of the largest block's) has a power-weighted mean frequency.  The
     drive sweeps when these frequencies are ordered in time (Spearman |ρ| ≥ 0.8) and span a
     factor ``diagnosis.sweep_ratio``: a chirp, never a periodic drive, steps or noise, whose
-    blocks look alike.  A record of fewer than eight samples per block never sweeps."""
+    blocks look alike.  A record of fewer than eight samples per block never sweeps.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    fs : float
+        Sample rate, Hz.
+    blocks : int
+        Number of equal blocks.
+
+    Returns
+    -------
+    tuple of float or None
+        (first, last) frequency, Hz, or None.
+    """
     if len(u) < 8 * blocks:
         return None
     edges = np.linspace(0, len(u), blocks + 1).astype(int)
@@ -395,7 +625,24 @@ def drive_sweep(u: np.ndarray, fs: float, blocks: int) -> tuple[float, float] | 
 
 def noise_psd(y: np.ndarray, u: np.ndarray, fs: float, band: float) -> float | None:
     """One-sided noise density of ``y`` (units²/Hz) in the frequencies the drive does not
-    reach (above 5× its band, where only noise is left), or None if there is no such band."""
+    reach (above 5× its band, where only noise is left), or None if there is no such band.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The measured output.
+    u : numpy.ndarray
+        The drive's samples.
+    fs : float
+        Sample rate, Hz.
+    band : float
+        The drive's band, Hz.
+
+    Returns
+    -------
+    float or None
+        The median density in the quiet band, output units² per Hz.
+    """
     n = len(y)
     nper = welch_length(n, 8, 14)
     f, Pyy = welch(y, fs, nper)
@@ -410,7 +657,22 @@ def residual_floor(e: np.ndarray, fs: float, share: float = 0.05) -> float:
     """RMS of the white noise whose density is the ``share`` quantile of the residual ``e``'s
     Welch spectrum below 0.9× Nyquist: the floor under what a model misses in a few bands (an
     upper estimate of the measurement noise when the drive leaves no quiet band for
-    :func:`noise_psd`)."""
+    :func:`noise_psd`).
+
+    Parameters
+    ----------
+    e : numpy.ndarray
+        The residual.
+    fs : float
+        Sample rate, Hz.
+    share : float, optional
+        The quantile.
+
+    Returns
+    -------
+    float
+        The RMS, output units.
+    """
     nper = welch_length(len(e), 8, 14)
     f, P = welch(e, fs, nper)
     keep = (f > 0) & (f < 0.9 * fs / 2)
@@ -419,7 +681,24 @@ def residual_floor(e: np.ndarray, fs: float, share: float = 0.05) -> float:
 
 def output_band(y: np.ndarray, fs: float, noise_density: float | None, above: float = 10.0) -> float | None:
     """Highest frequency (Hz) where the output's power density exceeds ``above`` times the
-    noise density (Welch, at least 8 segments), or None without a noise estimate."""
+    noise density (Welch, at least 8 segments), or None without a noise estimate.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The measured output.
+    fs : float
+        Sample rate, Hz.
+    noise_density : float or None
+        The noise density, output units² per Hz.
+    above : float, optional
+        The factor over the noise density.
+
+    Returns
+    -------
+    float or None
+        The frequency, Hz.
+    """
     if noise_density is None or noise_density <= 0:
         return None
     n = len(y)
@@ -444,6 +723,21 @@ def check_follows(u: np.ndarray, y: np.ndarray, fs: float, drive: str, output: s
     The coherence is Welch's magnitude-squared coherence, less its bias for the averaged
     segments, averaged over the frequencies that hold the drive's power (weighted by it); the
     record is refused below ``diagnosis.min_coherence``.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    y : numpy.ndarray
+        The measured output.
+    fs : float
+        Sample rate, Hz.
+    drive : str
+        The drive's column name (for the message).
+    output : str
+        The output's column name (for the message).
+    path : str, optional
+        The data file (for the message).
 
     Raises
     ------

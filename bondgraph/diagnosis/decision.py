@@ -61,7 +61,17 @@ from .filters import lowpass
 
 @dataclass
 class Comparison:
-    """b against a on the validation part: RMS ratio a/b, significance z, effective samples."""
+    """b against a on the validation part: RMS ratio a/b, significance z, effective samples.
+
+    Parameters
+    ----------
+    gain : float
+        RMS of a over RMS of b (> 1: b is better).
+    z : float
+        Significance of log(A/B) over its standard error.
+    n_eff : float
+        Effective number of independent batches.
+    """
 
     gain: float
     z: float
@@ -69,7 +79,22 @@ class Comparison:
 
 
 def batch_length(d: np.ndarray, blocks: list[slice], offsets: list[int]) -> int:
-    """Four times the first zero crossing of d's autocorrelation (about each block's mean)."""
+    """Four times the first zero crossing of d's autocorrelation (about each block's mean).
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        The series on the validation samples, blocks concatenated.
+    blocks : list of slice
+        The validation blocks (their lengths are used).
+    offsets : list of int
+        Where each block starts in ``d``.
+
+    Returns
+    -------
+    int
+        The batch length in samples, between 1 and the longest block.
+    """
     longest = max(s.stop - s.start for s in blocks)
     acf = np.zeros(longest)
     for s, o in zip(blocks, offsets):
@@ -86,7 +111,22 @@ def batch_length(d: np.ndarray, blocks: list[slice], offsets: list[int]) -> int:
 
 
 def compare(ea: np.ndarray, eb: np.ndarray, blocks: list[slice]) -> Comparison:
-    """Compare residual series ``eb`` with ``ea`` (both over every sample) on ``blocks``."""
+    """Compare residual series ``eb`` with ``ea`` (both over every sample) on ``blocks``.
+
+    Parameters
+    ----------
+    ea : numpy.ndarray
+        Residuals of the model compared against, on every sample.
+    eb : numpy.ndarray
+        Residuals of the model compared, on every sample.
+    blocks : list of slice
+        The validation blocks.
+
+    Returns
+    -------
+    Comparison
+        The gain RMS(ea)/RMS(eb), its significance and effective samples (module docstring).
+    """
     idx = np.concatenate([np.arange(s.start, s.stop) for s in blocks])
     offsets = list(np.cumsum([0] + [s.stop - s.start for s in blocks])[:-1])
     with np.errstate(over="ignore", invalid="ignore"):
@@ -133,6 +173,21 @@ def _z(stat: float, se: float) -> float:
 
 
 def reference_taus(dt: float, span: float) -> np.ndarray:
+    """Time constants of the flexible linear reference's lags (module docstring).
+
+    Parameters
+    ----------
+    dt : float
+        Sample interval, s.
+    span : float
+        The record's duration, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``diagnosis.reference_poles`` time constants, s, spread geometrically from two
+        samples to a third of the record.
+    """
     n = int(config.get("diagnosis.reference_poles"))
     return np.geomspace(2 * dt, max(span / 3, 4 * dt), n)
 
@@ -142,7 +197,22 @@ RCOND = 1e-5
 
 
 def regress(columns: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """Least-squares fit of ``columns`` (and a constant) to ``y`` on ``idx``; the fitted series."""
+    """Least-squares fit of ``columns`` (and a constant) to ``y`` on ``idx``; the fitted series.
+
+    Parameters
+    ----------
+    columns : numpy.ndarray
+        Regressors on every sample, one per column.
+    y : numpy.ndarray
+        The measured output on every sample.
+    idx : numpy.ndarray
+        Sample indices of the fit part.
+
+    Returns
+    -------
+    numpy.ndarray
+        The fitted series on every sample (directions below :data:`RCOND` left out).
+    """
     A = np.column_stack([columns, np.ones(len(y))])
     norms = np.maximum(np.linalg.norm(A[idx], axis=0), 1e-300)
     coef, *_ = np.linalg.lstsq(A[idx] / norms, y[idx], rcond=RCOND)
@@ -152,7 +222,17 @@ def regress(columns: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
 @dataclass
 class Verdict:
     """Why a candidate passed or not: ``rule`` is the name of the rule that refused it ('' when
-    it passed)."""
+    it passed).
+
+    Parameters
+    ----------
+    passed : bool
+        Whether it passed every rule.
+    reason : str
+        The verdict in words.
+    rule : str, optional
+        The refusing rule's name.
+    """
 
     passed: bool
     reason: str
@@ -161,7 +241,31 @@ class Verdict:
 
 @dataclass(frozen=True)
 class Evidence:
-    """What the rules see of one candidate (see :data:`RULES`)."""
+    """What the rules see of one candidate (see :data:`RULES`).
+
+    Parameters
+    ----------
+    kind : {"nonlinear", "linear"}
+        The kind of cause.
+    base : Comparison
+        The candidate against the model it extends.
+    versus_reference : Comparison or None
+        The candidate with the reference's freedom against the flexible linear reference.
+    share : float or None
+        The share of what the reference explains that the candidate explains.
+    at_bounds : list of str
+        New parameters that ended on a search bound.
+    implausible : str
+        For a linear cause, why its values are implausible ("" if they are not).
+    later : bool, optional
+        A chain step after the first (``diagnosis.min_gain_chain`` replaces ``min_gain``).
+    recalibration : str, optional
+        Why a linear cause may be the model's own structure recalibrated.
+    need_share : float, optional
+        The candidate's own ``linear_share`` (None: the setting).
+    versus_static : Comparison, optional
+        A memory effect against its twin without memory.
+    """
 
     kind: str
     base: Comparison
@@ -179,7 +283,19 @@ class Evidence:
 class Rule:
     """A named decision rule: it applies to candidates of ``kinds`` and ``check`` returns why
     it refuses one ('' when it does not).  ``why`` is the rule's reason, as docs/diagnosis.md
-    gives it."""
+    gives it.
+
+    Parameters
+    ----------
+    name : str
+        The rule's name (a verdict's ``rule``).
+    kinds : tuple of str
+        The kinds of cause it applies to.
+    why : str
+        The rule's reason.
+    check : callable
+        ``check(evidence)`` → why it refuses the candidate, or "".
+    """
 
     name: str
     kinds: tuple[str, ...]
@@ -315,7 +431,38 @@ def judge(
     decides (``later``: a chain step after the first, where ``diagnosis.min_gain_chain``
     replaces ``diagnosis.min_gain``; ``recalibration``: why a linear cause may be the model's
     own structure recalibrated; ``need_share``: the candidate's own ``linear_share``;
-    ``versus_static``: a memory effect against its twin without memory)."""
+    ``versus_static``: a memory effect against its twin without memory).
+
+    Parameters
+    ----------
+    kind : {"nonlinear", "linear"}
+        The kind of cause.
+    base : Comparison
+        The candidate against the model it extends.
+    versus_reference : Comparison or None
+        The candidate with the reference's freedom against the flexible linear reference.
+    share : float or None
+        The share of what the reference explains that the candidate explains.
+    at_bounds : list of str
+        New parameters that ended on a search bound.
+    implausible : str
+        For a linear cause, why its values are implausible ("" if they are not).
+    later : bool, optional
+        A chain step after the first (``diagnosis.min_gain_chain`` replaces ``min_gain``).
+    recalibration : str, optional
+        Why a linear cause may be the model's own structure recalibrated.
+    need_share : float, optional
+        The candidate's own ``linear_share`` (None: the setting).
+    versus_static : Comparison, optional
+        A memory effect against its twin without memory.
+    rules : tuple of Rule, optional
+        The rules, in order.
+
+    Returns
+    -------
+    Verdict
+        Passed, or the first refusing rule and its reason.
+    """
     e = Evidence(
         kind,
         base,
@@ -344,7 +491,32 @@ def reference_prediction(
     view_respond, drive: np.ndarray, raw: np.ndarray, y: np.ndarray, idx: np.ndarray, dt: float, span: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """(reference columns, the reference's prediction): ``raw`` plus the linear core driven by
-    lags of ``drive``, fitted on ``idx``."""
+    lags of ``drive``, fitted on ``idx``.
+
+    Parameters
+    ----------
+    view_respond : callable
+        ``view_respond(columns)`` → the linear core's response to each drive column.
+    drive : numpy.ndarray
+        The drive into the linear core.
+    raw : numpy.ndarray
+        The current model's raw prediction.
+    y : numpy.ndarray
+        The measured output.
+    idx : numpy.ndarray
+        Sample indices of the fit part.
+    dt : float
+        Sample interval, s.
+    span : float
+        The record's duration, s.
+
+    Returns
+    -------
+    columns : numpy.ndarray
+        The core's response to each lag.
+    prediction : numpy.ndarray
+        The reference's fitted prediction on every sample.
+    """
     lags = [lowpass(drive, tau, dt) for tau in reference_taus(dt, span)]
     cols = view_respond(lags)
     return cols, regress(np.column_stack([raw, cols]), y, idx)

@@ -42,7 +42,20 @@ STEP_EXTRAS = (
 
 
 def num(v, digits: int = 4) -> str:
-    """A number for a table: ``digits`` significant digits, "–" for none, ∞ and NaN spelled."""
+    """A number for a table: ``digits`` significant digits, "–" for none, ∞ and NaN spelled.
+
+    Parameters
+    ----------
+    v : float or None
+        The number.
+    digits : int, optional
+        Significant digits.
+
+    Returns
+    -------
+    str
+        The text.
+    """
     if v is None:
         return "–"
     if isinstance(v, bool) or not isinstance(v, (int, float)):
@@ -55,7 +68,18 @@ def num(v, digits: int = 4) -> str:
 
 
 def share(v) -> str:
-    """A share (0–1) as a percentage, "–" for none."""
+    """A share (0–1) as a percentage, "–" for none.
+
+    Parameters
+    ----------
+    v : float or None
+        The share.
+
+    Returns
+    -------
+    str
+        E.g. ``12%``.
+    """
     return "–" if v is None else f"{100 * v:.3g} %"
 
 
@@ -68,13 +92,35 @@ def _cell(v, kind: str) -> str:
 
 
 def chain_text(j: dict) -> str:
-    """The chain in one line: ``hysteresis ×8.82 → creep ×1.35`` (``none`` when nothing was named)."""
+    """The chain in one line: ``hysteresis ×8.82 → creep ×1.35`` (``none`` when nothing was named).
+
+    Parameters
+    ----------
+    j : dict
+        The report's JSON object (:meth:`~bondgraph.diagnosis.Report.as_json`).
+
+    Returns
+    -------
+    str
+        The line (plain text).
+    """
     steps = j.get("steps") or []
     return " → ".join(f"{s['cause']} ×{num(s.get('gain'), 3)}" for s in steps) or "none"
 
 
 def headline(j: dict) -> str:
-    """What was diagnosed against what, the chain, its total gain and what is left unexplained."""
+    """What was diagnosed against what, the chain, its total gain and what is left unexplained.
+
+    Parameters
+    ----------
+    j : dict
+        The report's JSON object (:meth:`~bondgraph.diagnosis.Report.as_json`).
+
+    Returns
+    -------
+    str
+        An HTML fragment.
+    """
     d = j.get("data", {})
     noise = j.get("noise_rms")
     base = "calibrated model" if j.get("baseline", "calibrated") == "calibrated" else "plausible device"
@@ -107,7 +153,18 @@ def headline(j: dict) -> str:
 
 def chain_table(j: dict) -> str:
     """One row per named step (and the step where the chain stopped): its gain, the RMS before
-    and after, the flexible linear reference, the fields a report may add, and why."""
+    and after, the flexible linear reference, the fields a report may add, and why.
+
+    Parameters
+    ----------
+    j : dict
+        The report's JSON object (:meth:`~bondgraph.diagnosis.Report.as_json`).
+
+    Returns
+    -------
+    str
+        An HTML table.
+    """
     steps = list(j.get("steps") or [])
     if j.get("stop"):
         steps.append(j["stop"])
@@ -139,7 +196,20 @@ def chain_table(j: dict) -> str:
 def parameters_table(j: dict, units: dict | None = None) -> str:
     """The calibrated parameters (value, model's value, ratio, unit, bound and tolerance
     flags), those held at the model's value, the sensor's gain, offset, delay and drift, and
-    the parameters each named cause added."""
+    the parameters each named cause added.
+
+    Parameters
+    ----------
+    j : dict
+        The report's JSON object (:meth:`~bondgraph.diagnosis.Report.as_json`).
+    units : dict, optional
+        Parameter name → unit (:func:`units_of`).
+
+    Returns
+    -------
+    str
+        HTML tables.
+    """
     units = units or {}
     cal = j.get("calibration") or {}
     outside = cal.get("outside_tolerance") or {}
@@ -185,7 +255,18 @@ def parameters_table(j: dict, units: dict | None = None) -> str:
 
 def candidates_tables(j: dict) -> str:
     """Every candidate of every step (the step where the chain stopped too): gain, validation
-    RMS, z, gain over the flexible linear reference, share, verdict; collapsed."""
+    RMS, z, gain over the flexible linear reference, share, verdict; collapsed.
+
+    Parameters
+    ----------
+    j : dict
+        The report's JSON object (:meth:`~bondgraph.diagnosis.Report.as_json`).
+
+    Returns
+    -------
+    str
+        HTML tables, one per step.
+    """
     steps = list(j.get("steps") or [])
     if j.get("stop"):
         steps.append(j["stop"])
@@ -228,7 +309,18 @@ def candidates_tables(j: dict) -> str:
 
 def record_table(j: dict) -> str:
     """The record and how it was treated: samples, rate, validation split, drive band and
-    reading, the notes, and the decision's thresholds."""
+    reading, the notes, and the decision's thresholds.
+
+    Parameters
+    ----------
+    j : dict
+        The report's JSON object (:meth:`~bondgraph.diagnosis.Report.as_json`).
+
+    Returns
+    -------
+    str
+        An HTML table (and a list of the notes, if any).
+    """
     d = j.get("data", {})
     rows = [
         ("samples", f"{d.get('samples')} at {num(d.get('rate_hz'), 6)} Hz"),
@@ -247,7 +339,18 @@ def record_table(j: dict) -> str:
 
 
 def equations_block(j: dict) -> str:
-    """The extended model's state equations (text), collapsed; '' when there are none."""
+    """The extended model's state equations (text), collapsed; '' when there are none.
+
+    Parameters
+    ----------
+    j : dict
+        The report's JSON object (:meth:`~bondgraph.diagnosis.Report.as_json`).
+
+    Returns
+    -------
+    str
+        An HTML ``<details>`` block, or ''.
+    """
     if not j.get("equations"):
         return ""
     return (
@@ -258,7 +361,18 @@ def equations_block(j: dict) -> str:
 
 def units_of(model) -> dict[str, str]:
     """Parameter name → unit of a model (its declared parameters and its elements'), plus its
-    inputs' and outputs' units; ``{}`` for no model."""
+    inputs' and outputs' units; ``{}`` for no model.
+
+    Parameters
+    ----------
+    model : Model or None
+        The model.
+
+    Returns
+    -------
+    dict of str to str
+        Name → unit text.
+    """
     if model is None:
         return {}
     out = {n: d.unit for n, d in model.all_parameters().items() if d.unit}

@@ -34,7 +34,22 @@ from .view import View
 
 @dataclass
 class Outcome:
-    """A candidate's result with what the parent needs to decide and to extend."""
+    """A candidate's result with what the parent needs to decide and to extend.
+
+    Parameters
+    ----------
+    result : CandidateResult
+        The candidate's result (scores filled in later by :func:`assess`).
+    extension : Extension, optional
+        What its fit returned (None when it was skipped or failed).
+    raw : numpy.ndarray, optional
+        The extended model's raw prediction.
+    linear_refit : numpy.ndarray, optional
+        The current model with its linear parameters refitted from where the candidate left
+        them, raw.
+    static : numpy.ndarray, optional
+        The same freedom without memory (for a memory effect), raw.
+    """
 
     result: CandidateResult
     extension: Extension | None = None
@@ -56,7 +71,28 @@ def run_candidate(
     """Fit one candidate on the chain state (in a worker or in the calling process).  A linear
     structural candidate starts from the plausible device instead, when one is given
     (``(state, bounds)``: the calibration within tolerance), and refits within its bounds.
-    ``effort``: a factor on its optimisers' evaluation budgets (see :func:`polish_race`)."""
+    ``effort``: a factor on its optimisers' evaluation budgets (see :func:`polish_race`).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    calibrated : sequence of str
+        The calibrated linear parameters.
+    cand : Candidate
+        The candidate.
+    plausible : tuple of (State, dict) or None, optional
+        The plausible device's state and bounds.
+    effort : float, optional
+        Factor on its optimisers' evaluation budgets.
+
+    Returns
+    -------
+    Outcome
+        The outcome; a candidate that raises gets its error in ``result.error``.
+    """
     started = time.time()
     res = CandidateResult(cand.cause, cand.label, cand.kind, effort=float(effort), site=cand.site_name)
     if cand.kind == LINEAR and plausible is not None:
@@ -104,7 +140,26 @@ def effect_errors(
     """(errors before, errors after) of an outcome on every sample: after, its prediction with
     sensor gain and offset solved on ``ctx``'s fit part; before, the state's (or the plausible
     device's, for a candidate fitted on it), or the current model refitted from where the
-    candidate left its linear parameters when that is better (only the effect is credited)."""
+    candidate left its linear parameters when that is better (only the effect is credited).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    oc : Outcome
+        The candidate's outcome.
+    e_state : numpy.ndarray
+        Errors of the current state on every sample.
+    e_plaus : numpy.ndarray or None
+        Errors of the plausible device on every sample (for candidates fitted on it).
+
+    Returns
+    -------
+    before : numpy.ndarray
+        The errors before, output units.
+    after : numpy.ndarray
+        The errors after, output units.
+    """
     y, val = ctx.y, ctx.ident.val_mask
     g, b, _, _ = score(ctx, oc.raw)
     before = e_plaus if oc.result.against == "plausible" and e_plaus is not None else e_state
@@ -125,14 +180,54 @@ def second_fold(
     effort: float = 1.0,
 ) -> Comparison | None:
     """The candidate fitted again with other validation blocks (``ctx`` refolded) and compared
-    there as on the first fold; None when it fails."""
+    there as on the first fold; None when it fails.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    calibrated : sequence of str
+        The calibrated linear parameters.
+    cand : Candidate
+        The candidate.
+    plausible : tuple of (State, dict) or None
+        The plausible device's state and bounds.
+    e_plaus : numpy.ndarray or None
+        Errors of the plausible device on every sample (for candidates fitted on it).
+    effort : float, optional
+        Factor on its optimisers' evaluation budgets.
+
+    Returns
+    -------
+    Comparison or None
+        The comparison on the second fold.
+    """
     oc = run_candidate(ctx, state, calibrated, cand, plausible, effort)
     return None if oc.raw is None else effect_comparison(ctx, state, oc, e_plaus)
 
 
 def effect_comparison(ctx: Context, state: State, oc: Outcome, e_plaus: np.ndarray | None = None) -> Comparison:
     """The outcome's errors after against before (:func:`effect_errors`), compared on ``ctx``'s
-    validation blocks."""
+    validation blocks.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    oc : Outcome
+        The candidate's outcome.
+    e_plaus : numpy.ndarray or None, optional
+        Errors of the plausible device on every sample (for candidates fitted on it).
+
+    Returns
+    -------
+    Comparison
+        After against before.
+    """
     return compare(*effect_errors(ctx, oc, ctx.y - state.prediction, e_plaus), ctx.blocks)
 
 
@@ -145,7 +240,30 @@ def assess(
     reference, whichever is better) explains over it.  ``confirm(outcome, e_plaus)``: the
     comparison on a second fold (:func:`second_fold`), asked for candidates whose gain passes
     but whose significance falls short by less than ``diagnosis.confirm_margin`` standard
-    errors (a record whose evidence sits in a few blocks); the two folds' z are combined."""
+    errors (a record whose evidence sits in a few blocks); the two folds' z are combined.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    view : View
+        The current state's view.
+    outcomes : list of Outcome
+        The candidates' outcomes (their results are filled in).
+    plausible : State, optional
+        The plausible device's state.
+    confirm : callable, optional
+        ``confirm(outcome, e_plaus)`` → the second fold's comparison.
+
+    Returns
+    -------
+    step : Step
+        The chain step.
+    winner : Outcome or None
+        The outcome named, or None.
+    """
     idx, y = ctx.ident.fit_idx, ctx.y
     drive = state.drive if state.drive is not None else ctx.u
     ref_cols, ref_pred = reference_prediction(view.respond, drive, state.raw, y, idx, ctx.dt, ctx.span)
@@ -249,7 +367,22 @@ def near_the_bar(ctx: Context, state: State, oc: Outcome) -> bool:
     """Whether an outcome fitted with ``diagnosis.screen_effort`` of the budget is fitted again
     with the full budget before its chain step is judged: its validation gain reaches
     ``diagnosis.screen_gain``, a margin below the bar (a fit stopped early explains less than it
-    can: the ones far below the bar stay below it)."""
+    can: the ones far below the bar stay below it).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    oc : Outcome
+        The candidate's outcome.
+
+    Returns
+    -------
+    bool
+        Whether to fit it again.
+    """
     return oc.raw is not None and effect_comparison(ctx, state, oc).gain >= config.get("diagnosis.screen_gain")
 
 
@@ -257,7 +390,18 @@ def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
     """The outcomes to fit again with more effort before one is named: when two or more passing
     candidates are within ``diagnosis.polish_margin`` of the best gain over the flexible linear
     reference and one of them stopped before its optimiser converged, those of them that did
-    not converge (the ranking must not reward the optimiser that got further in its budget)."""
+    not converge (the ranking must not reward the optimiser that got further in its budget).
+
+    Parameters
+    ----------
+    outcomes : list of Outcome
+        The assessed outcomes.
+
+    Returns
+    -------
+    list of Outcome
+        Those to fit again (empty when there is no close race).
+    """
     passing = [oc for oc in outcomes if oc.result.passed]
     if len(passing) < 2:
         return []
@@ -325,7 +469,24 @@ def _why(winner, outcomes, rms_state, rms_ref, noise) -> str:
 
 
 def advance(ctx: Context, state: State, oc: Outcome, view: View) -> State:
-    """The chain state after naming ``oc``'s cause (``view``: the current state's)."""
+    """The chain state after naming ``oc``'s cause (``view``: the current state's).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    oc : Outcome
+        The candidate's outcome.
+    view : View
+        The current state's view.
+
+    Returns
+    -------
+    State
+        The extended model's state.
+    """
     ext = oc.extension
     g, b, _, _ = score(ctx, oc.raw)
     before = state.drive if state.drive is not None else state.core_drive
@@ -361,7 +522,19 @@ def load_candidates(model: Model | None = None) -> list[Candidate]:
     kinds at every site of the model (law terms of its springs and dampers, :mod:`.laws`;
     missing modes, :mod:`.modes`) and the candidates of the ``bondgraph.diagnosis`` entry
     points (each a callable returning a list; a domain library's).  Without a model, the
-    entry points' only."""
+    entry points' only.
+
+    Parameters
+    ----------
+    model : Model, optional
+        The model whose sites give the framework's candidates.
+
+    Returns
+    -------
+    list of Candidate
+        The framework's candidates for ``model``, then the entry points' (each entry point is
+        loaded and called here).
+    """
     from importlib.metadata import entry_points
 
     out: list[Candidate] = [] if model is None else law_kinds(model) + restoring_kinds(model) + mode_kinds(model)
@@ -372,7 +545,19 @@ def load_candidates(model: Model | None = None) -> list[Candidate]:
 
 def model_file_options(module) -> dict:
     """The diagnosis options a model file declares: ``CALIBRATE`` (calibrate_first) and
-    ``TOLERANCE`` (tolerance)."""
+    ``TOLERANCE`` (tolerance).
+
+    Parameters
+    ----------
+    module : module
+        The loaded model file.
+
+    Returns
+    -------
+    dict
+        ``calibrate_first`` and ``tolerance``, keyword arguments of :func:`diagnose` (None
+        where the file declares nothing).
+    """
     return {"calibrate_first": getattr(module, "CALIBRATE", None), "tolerance": getattr(module, "TOLERANCE", None)}
 
 
@@ -407,7 +592,60 @@ def diagnose(
     causes on the extended model until none passes; ``progress``: a
     :class:`bondgraph.support.progress.Progress` (one count per candidate fitted, notes for the
     stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
-    the calibration and remove it first (default: the setting ``diagnosis.drift``)."""
+    the calibration and remove it first (default: the setting ``diagnosis.drift``).
+
+    Parameters
+    ----------
+    model : Model
+        The linear model of the device (its parameters at their nominal values).
+    data : Dataset
+        The measured record: the drive and the output against time (s).
+    candidates : sequence of Candidate, optional
+        The causes to try (default: :func:`load_candidates` of the model).
+    calibrate_first : sequence of str, optional
+        Parameter names or glob patterns preferred when linear parameters cannot be told
+        apart (the model file's ``CALIBRATE``).
+    input : str, optional
+        The model input the data drive (default: the model's first declared input).
+    output : str, optional
+        The model output compared with the data (default: its first declared output).
+    data_input : str, optional
+        The data column of the drive (default: the same name as ``input``).
+    data_output : str, optional
+        The data column of the output (default: the same name as ``output``).
+    validation : float, optional
+        Share of the record held out as validation blocks, between 0 and 1.
+    workers : int, optional
+        Parallel processes fitting candidates.
+    chain : bool, optional
+        Keep naming causes on the extended model until none passes (False: one step).
+    progress : Progress or callable, optional
+        A :class:`bondgraph.support.progress.Progress` (one count per candidate fitted, notes
+        for the stages) or any callable taking a line of text.
+    source : str, optional
+        What the model is called in the report (e.g. the model file's path).
+    equations : bool, optional
+        Render the extended model's equations into the report (:attr:`Report.equations`).
+    tolerance : mapping of str to float, optional
+        {pattern: factor} of plausible device-to-device spread of the parameters (the model
+        file's ``TOLERANCE``; others ``diagnosis.tolerance``).
+    drift : bool, optional
+        Solve a linear sensor drift with the calibration and remove it first (default: the
+        setting ``diagnosis.drift``).
+
+    Returns
+    -------
+    Report
+        Every step of the chain, every candidate's verdict, the causes named and the gain.
+
+    Raises
+    ------
+    DataError
+        The output does not follow the drive (constant, or no coherence with it), or the
+        record cannot be used (the message names the column and what to check).
+    BondGraphError
+        A bad input or output name, or a model that cannot be derived or simulated.
+    """
     drift = bool(config.get("diagnosis.drift")) if drift is None else bool(drift)
 
     def run(reading: str, drift: bool, chain: bool = chain, decide=None):
@@ -693,6 +931,15 @@ def drift_step(ctx: Context, state: State, solved: float | None) -> tuple[Step, 
     cause must (``on-bound``, ``useful-gain``, ``significant``) and its RMS is at least
     ``diagnosis.drift_share`` of the output's: a drift that large is a finding about the
     measurement, where a smaller one is removed as a nuisance (and said in a note).
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    solved : float or None
+        The linear sensor drift the calibration removed, output units per second.
 
     Returns
     -------

@@ -13,7 +13,22 @@ from ..linear.lti import StateSpace
 
 def lowpass(u: np.ndarray, tau: float, dt: float) -> np.ndarray:
     """First-order lag 1/(τs + 1) of ``u`` (sampled every ``dt`` s, linear in between),
-    starting in equilibrium with u[0]."""
+    starting in equilibrium with u[0].
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The samples, any unit.
+    tau : float
+        Time constant τ, s (> 0).
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        The lag's output at the samples, units of ``u`` (unit static gain).
+    """
     a = math.exp(-dt / tau)
     b1 = 1.0 - tau / dt * (1.0 - a)
     b0 = tau / dt * (1.0 - a) - a
@@ -22,7 +37,26 @@ def lowpass(u: np.ndarray, tau: float, dt: float) -> np.ndarray:
 
 
 def resonator(u: np.ndarray, dt: float, omega: float, zeta: float) -> np.ndarray:
-    """Displacement q of q̈ + 2ζω·q̇ + ω²·q = u, from rest (units of u·s²)."""
+    """Displacement q of q̈ + 2ζω·q̇ + ω²·q = u, from rest (units of u·s²).
+
+    ``u`` is taken as linear between samples (exact first-order-hold discretisation).
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The forcing samples.
+    dt : float
+        Sample interval, s.
+    omega : float
+        Natural angular frequency ω, rad/s.
+    zeta : float
+        Damping ratio ζ (dimensionless).
+
+    Returns
+    -------
+    numpy.ndarray
+        q at the samples, units of u·s² (static gain 1/ω²).
+    """
     ss = StateSpace(
         np.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]]),
         np.array([[0.0], [1.0]]),

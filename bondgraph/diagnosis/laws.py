@@ -44,7 +44,20 @@ from .sites import Site, generic_sites
 def field(view) -> tuple:
     """(expression, series) of the drive the structure sees: the drive into the linear core,
     or the model's input once the model is no drive transform of a linear core (a structural
-    cause named before)."""
+    cause named before).
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+
+    Returns
+    -------
+    expression : sympy.Expr
+        The drive as an expression of the model's inputs.
+    series : numpy.ndarray
+        Its samples, drive units.
+    """
     if view.drive_expr is not None and view.drive is not None:
         return view.drive_expr, np.asarray(view.drive)
     return view.input_symbol, np.asarray(view.u)
@@ -93,12 +106,37 @@ class LawTerm(Candidate):
         return f"{type(self).__name__}({self.cause} at {self.site_name})"
 
     def elements(self, model) -> list[str]:
-        """The elements it acts on in ``model``."""
+        """The elements it acts on in ``model``.
+
+        Parameters
+        ----------
+        model : Model
+            The model to look in.
+
+        Returns
+        -------
+        list of str
+            The site's elements when the site is in ``model``, else none; without a site, the
+            elements tagged :attr:`role`.
+        """
         if self.site is not None:
             return list(self.site.elements) if self.site.present(model) else []
         return list(model.with_role(self.role))
 
     def applies(self, view):
+        """True, or why the term cannot act here: no element at the site (or with the role), or
+        the site's modes are faster than the data resolve.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        bool or str
+            True when the candidate applies; otherwise a short reason.
+        """
         if not self.elements(view.model):
             return (
                 f"no element is tagged '{self.role}'"
@@ -116,19 +154,85 @@ class LawTerm(Candidate):
     @abstractmethod
     def term(c, r2, x, a):
         """The term added to the law (sympy arithmetic: it is compiled; ``a`` is None without a
-        partner)."""
+        partner).
+
+        Parameters
+        ----------
+        c : sympy.Expr or float
+            The coefficient (the new parameter; 0 leaves the law as it was).
+        r2 : sympy.Expr or float
+            The centring amplitude², in the square of the variable's unit.
+        x : sympy.Expr or numpy.ndarray
+            The element's own variable: displacement q of a C, flow f of an R.
+        a : sympy.Expr or numpy.ndarray or None
+            The partner's displacement or the drive, or None without a partner.
+
+        Returns
+        -------
+        sympy.Expr or numpy.ndarray
+            The term, in the unit of the law's output (effort of a C or an R); evaluated on
+            arrays as well for the exact linear route.
+        """
 
     def partner(self, model, el) -> str | None:
-        """The element whose displacement the term of ``el`` uses, :data:`DRIVE`, or None."""
+        """The element whose displacement the term of ``el`` uses, :data:`DRIVE`, or None.
+
+        Parameters
+        ----------
+        model : Model
+            The current model.
+        el : str
+            The element the term acts on.
+
+        Returns
+        -------
+        str or None
+            The partner element's name, :data:`DRIVE`, or None (the default: no partner).
+        """
         return None
 
     @abstractmethod
     def refs(self, view, el, x, a) -> tuple[float, float]:
         """(scale of the coefficient, r²) of element ``el`` from its variable's series ``x``
-        (and the partner's ``a``) in the current model."""
+        (and the partner's ``a``) in the current model.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        el : str
+            The element.
+        x : numpy.ndarray
+            Its variable's series in the current model (q of a C, f of an R).
+        a : numpy.ndarray or None
+            The partner's series, or None without a partner.
+
+        Returns
+        -------
+        scale : float
+            The coefficient's scale: the coefficient at which the term is comparable to the law.
+        r2 : float
+            The centring amplitude², in the square of the variable's unit.
+        """
 
     def build(self, view, coefs: dict, r2s: dict):
-        """The current model with the term on each element of ``coefs``."""
+        """The current model with the term on each element of ``coefs``.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        coefs : dict of str to float
+            Element → coefficient (the new parameter's value).
+        r2s : dict of str to float
+            Element → centring amplitude².
+
+        Returns
+        -------
+        Model
+            A new model: the current one rewritten, with parameters ``PREFIX_EL`` and
+            ``PREFIX_r2_EL`` and the term added to each element's law.
+        """
         model = view.rewrite()
         for el in coefs:
             c = model.parameter(f"{self.prefix}_{el}", coefs[el], "", f"{self.label}: {el}", bounds=(0, 1e40))
@@ -157,7 +261,19 @@ class LawTerm(Candidate):
     def screen(self, view) -> float | None:
         """The share (0-1) of the current residual's energy on the fit part that the term
         explains to first order (module docstring), or None when the model is no Lur'e system
-        (the kind is then fitted in full)."""
+        (the kind is then fitted in full).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        float or None
+            The squared correlation of the residual with the filtered regressor on the fit
+            part, between 0 and 1, or None.
+        """
         els = self.elements(view.model)
         partners = {el: self.partner(view.model, el) for el in els}
         try:
@@ -181,6 +297,24 @@ class LawTerm(Candidate):
         return float((q @ r) ** 2 / ((q @ q) * (r @ r)))
 
     def fit(self, view):
+        """Fit the coefficients with the calibration (the scan of the class notes).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        Extension
+            The model with the term on the site's elements, the values fitted and the
+            prediction.
+
+        Raises
+        ------
+        SimulationError
+            The extended model cannot be simulated at any point of the scan.
+        """
         els = self.elements(view.model)
         partners = {el: self.partner(view.model, el) for el in els}
         names = [f"{self.prefix}_{el}" for el in els]
@@ -294,7 +428,13 @@ def _peak(x) -> float:
 class Softening(LawTerm):
     """A stiffness that falls with amplitude: e = law(q) − k3·q·(q² − r²), r² = 1.5·⟨q²⟩ of the
     current model, k3 ≥ 0 (a cubic whose describing-function stiffness at the data's amplitude
-    stays the calibrated one)."""
+    stays the calibrated one).
+
+    Parameters
+    ----------
+    site : Site, optional
+        The C site it acts at (without one, the elements of :attr:`role`).
+    """
 
     cause = "softening"
     label = "cubic softening of the spring law"
@@ -303,16 +443,60 @@ class Softening(LawTerm):
 
     @staticmethod
     def term(c, r2, x, a):
+        """−k3·q·(q² − r²), the softening term.
+
+        Parameters
+        ----------
+        c : sympy.Expr or float
+            k3 ≥ 0, effort per displacement³ (N/m³ for a spring).
+        r2 : sympy.Expr or float
+            The centring amplitude r², displacement² (m²).
+        x : sympy.Expr or numpy.ndarray
+            The displacement q.
+        a : sympy.Expr or numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        sympy.Expr or numpy.ndarray
+            The term, in effort units (N for a spring).
+        """
         return -c * x * (x**2 - r2)
 
     def refs(self, view, el, x, a):
+        """The coefficient's scale k/q_peak² and r² = 1.5·⟨q²⟩ of the current model.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data and the current model.
+        el : str
+            The element.
+        x : numpy.ndarray
+            The displacement q in the current model.
+        a : numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        scale : float
+            |slope of the law| / q_peak², effort per displacement³.
+        r2 : float
+            1.5·⟨q²⟩, displacement².
+        """
         return abs(slope(view.model, el, view.values)) / _peak(x) ** 2, 1.5 * float(np.mean(x**2))
 
 
 class Hardening(Softening):
     """A stiffness that rises with amplitude (a Duffing spring): e = law(q) + k3·q·(q² − r²),
     centred as :class:`Softening`, k3 ≥ 0; up to many times the linear stiffness at the peak
-    (a hardening spring has no turning point to stop at)."""
+    (a hardening spring has no turning point to stop at).
+
+    Parameters
+    ----------
+    site : Site, optional
+        The C site it acts at (without one, the elements of :attr:`role`).
+    """
 
     cause = "hardening"
     label = "cubic hardening of the spring law"
@@ -321,6 +505,24 @@ class Hardening(Softening):
 
     @staticmethod
     def term(c, r2, x, a):
+        """+k3·q·(q² − r²), the hardening (Duffing) term.
+
+        Parameters
+        ----------
+        c : sympy.Expr or float
+            k3 ≥ 0, effort per displacement³ (N/m³ for a spring).
+        r2 : sympy.Expr or float
+            The centring amplitude r², displacement² (m²).
+        x : sympy.Expr or numpy.ndarray
+            The displacement q.
+        a : sympy.Expr or numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        sympy.Expr or numpy.ndarray
+            The term, in effort units (N for a spring).
+        """
         return c * x * (x**2 - r2)
 
 
@@ -328,7 +530,15 @@ class Clearance(LawTerm):
     """A gap or backlash in a spring: little stiffness within ±d of the rest position, the
     full stiffness beyond: e = law(q) − k_g·d·tanh(q/d), 0 ≤ k_g ≤ 1.2·k (k_g = k: no
     stiffness at rest), the half-width d a share of the data's peak displacement (10 %, or
-    3 % or 30 % if these fit better).  Runs on the exact Lur'e route."""
+    3 % or 30 % if these fit better).  Runs on the exact Lur'e route.
+
+    Parameters
+    ----------
+    site : Site, optional
+        The C site it acts at (without one, the elements of :attr:`role`).
+    width : float, optional
+        The half-width d as a share of the peak displacement (None: try :attr:`widths`).
+    """
 
     cause = "clearance"
     label = "clearance (gap, backlash) in the spring law"
@@ -345,12 +555,62 @@ class Clearance(LawTerm):
 
     @staticmethod
     def term(c, r2, x, a):
+        """−k_g·d·tanh(q/d): the stiffness removed within the gap.
+
+        Parameters
+        ----------
+        c : sympy.Expr or float
+            k_g ≥ 0, effort per displacement (N/m for a spring).
+        r2 : sympy.Expr or float
+            Here the gap's half-width d, displacement (m), not a square.
+        x : sympy.Expr or numpy.ndarray
+            The displacement q.
+        a : sympy.Expr or numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        sympy.Expr or numpy.ndarray
+            The term, in effort units (N for a spring).
+        """
         return -c * r2 * sp.tanh(x / r2)
 
     def refs(self, view, el, x, a):
+        """The coefficient's scale k (the law's slope) and the half-width d.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data and the current model.
+        el : str
+            The element.
+        x : numpy.ndarray
+            The displacement q in the current model.
+        a : numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        scale : float
+            |slope of the law|, effort per displacement.
+        r2 : float
+            The half-width d = width · q_peak, displacement.
+        """
         return abs(slope(view.model, el, view.values)), (self.width or self.widths[0]) * _peak(x)
 
     def fit(self, view):
+        """Fit at this half-width, or, without one, at each of :attr:`widths`, keeping the best.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        Extension
+            The best fit's extension.
+        """
         if self.width is not None:
             return super().fit(view)
         return _best_of(view, [type(self)(self.site, w) if self.site else type(self)(None, w) for w in self.widths])
@@ -360,7 +620,15 @@ class NonlinearDamping(LawTerm):
     """Amplitude-dependent damping: e = (c + μ·(a² − r²))·f with a the displacement of the
     stiffness element on its junction (Stanton type) or, with ``velocity`` or when there is
     none, a = f (velocity-cubic); r² = ⟨a²⟩/2 (1.5·⟨f²⟩ for the velocity form) centres it on
-    the data's amplitude; μ ≥ 0."""
+    the data's amplitude; μ ≥ 0.
+
+    Parameters
+    ----------
+    site : Site, optional
+        The R site it acts at (without one, the elements of :attr:`role`).
+    velocity : bool, optional
+        The velocity-cubic form (a = f) instead of the Stanton form.
+    """
 
     element_kind = "R"
     cause = "nonlinear-damping"
@@ -375,6 +643,18 @@ class NonlinearDamping(LawTerm):
         super().__init__(site)
 
     def applies(self, view):
+        """As :meth:`LawTerm.applies`; the Stanton form also needs a stiffness partner.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        bool or str
+            True, or why it does not apply.
+        """
         ok = super().applies(view)
         if ok is not True or self.velocity:
             return ok
@@ -383,15 +663,67 @@ class NonlinearDamping(LawTerm):
         return True
 
     def partner(self, model, el):
+        """The spring bonded to the damper's junction (Stanton form), or None.
+
+        Parameters
+        ----------
+        model : Model
+            The current model.
+        el : str
+            The damper.
+
+        Returns
+        -------
+        str or None
+            The first neighbouring C element acting as a stiffness; None for the velocity form.
+        """
         if self.velocity:
             return None
         return next((o for o in neighbours(model, el) if _is_spring(model, o)), None)
 
     @staticmethod
     def term(c, r2, x, a):
+        """μ·(a² − r²)·f (a = f for the velocity-cubic form).
+
+        Parameters
+        ----------
+        c : sympy.Expr or float
+            μ ≥ 0, damping per amplitude² (N·s/m³ for a mechanical damper).
+        r2 : sympy.Expr or float
+            The centring amplitude r², in a's units squared.
+        x : sympy.Expr or numpy.ndarray
+            The flow f (velocity, m/s).
+        a : sympy.Expr or numpy.ndarray or None
+            The partner's displacement, or None (then a = f).
+
+        Returns
+        -------
+        sympy.Expr or numpy.ndarray
+            The term, in effort units (N).
+        """
         return c * ((x if a is None else a) ** 2 - r2) * x
 
     def refs(self, view, el, x, a):
+        """The coefficient's scale c/a_peak² and r² = ⟨a²⟩/2 (1.5·⟨f²⟩ for the velocity form).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data and the current model.
+        el : str
+            The element.
+        x : numpy.ndarray
+            The flow f in the current model.
+        a : numpy.ndarray or None
+            The partner's displacement, or None.
+
+        Returns
+        -------
+        scale : float
+            |damping| / a_peak².
+        r2 : float
+            The centring amplitude², in a's units squared.
+        """
         amp = x if a is None else a
         return (
             abs(slope(view.model, el, view.values)) / _peak(amp) ** 2,
@@ -410,7 +742,15 @@ class Friction(LawTerm):
     units of the element's damping; s keeps the law smooth: 3 % of the data's peak velocity,
     or 10 or 30 % if these fit better (tried only when the first improves the fit part by 2 %
     or more).  Its equivalent viscous damping 4F/(πV) falls with the velocity amplitude V,
-    where the cubic forms' rises.  Runs on the exact Lur'e route."""
+    where the cubic forms' rises.  Runs on the exact Lur'e route.
+
+    Parameters
+    ----------
+    site : Site, optional
+        The R site it acts at (without one, the elements of :attr:`role`).
+    velocity_share : float, optional
+        The smoothing velocity s as a share of the peak velocity (None: try :attr:`smoothing`).
+    """
 
     element_kind = "R"
     cause = "friction"
@@ -429,12 +769,62 @@ class Friction(LawTerm):
 
     @staticmethod
     def term(c, r2, x, a):
+        """μ·s·tanh(f/s): Coulomb friction F = μ·s, smoothed over ±s.
+
+        Parameters
+        ----------
+        c : sympy.Expr or float
+            μ ≥ 0, in units of the element's damping (N·s/m).
+        r2 : sympy.Expr or float
+            Here the smoothing velocity s (m/s), not a square.
+        x : sympy.Expr or numpy.ndarray
+            The flow f (velocity).
+        a : sympy.Expr or numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        sympy.Expr or numpy.ndarray
+            The friction effort (N), of the sign of f.
+        """
         return c * r2 * sp.tanh(x / r2)
 
     def refs(self, view, el, x, a):
+        """The coefficient's scale (the damping) and the smoothing velocity s.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data and the current model.
+        el : str
+            The element.
+        x : numpy.ndarray
+            The flow f in the current model.
+        a : numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        scale : float
+            |slope of the law| (the damping).
+        r2 : float
+            s = share · f_peak, velocity.
+        """
         return abs(slope(view.model, el, view.values)), (self.velocity_share or self.smoothing[0]) * _peak(x)
 
     def fit(self, view):
+        """Fit at this smoothing, or, without one, at each of :attr:`smoothing` while it helps.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        Extension
+            The best fit's extension.
+        """
         if self.velocity_share is not None:
             return super().fit(view)
         make = [type(self)(self.site, s) for s in self.smoothing]
@@ -458,7 +848,19 @@ def _best_of(view, candidates, stop_unless: float | None = None):
 
 
 def law_kinds(model) -> list[Candidate]:
-    """The law-term kinds at every generic site of ``model`` (:func:`~.sites.generic_sites`)."""
+    """The law-term kinds at every generic site of ``model`` (:func:`~.sites.generic_sites`).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+
+    Returns
+    -------
+    list of Candidate
+        Softening, hardening and clearance at each C site; velocity-cubic and Stanton damping
+        and friction at each R site.
+    """
     out: list[Candidate] = []
     for site in generic_sites(model, "C"):
         out += [Softening(site), Hardening(site), Clearance(site)]

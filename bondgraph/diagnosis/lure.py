@@ -52,7 +52,30 @@ class Lure:
     ``partners[el]``: an element whose displacement the term of ``el`` uses, :data:`DRIVE`
     for the drive, or None.
     ``fixed``: terms already part of the model being extended, one (element, partner, term,
-    c, r2) each, held as they are while the new elements' terms are fitted."""
+    c, r2) each, held as they are while the new elements' terms are fitted.
+
+    Parameters
+    ----------
+    model : Model
+        The linear model the terms extend.
+    input : str
+        The drive input.
+    output : str
+        The compared output.
+    elements : sequence of str
+        The elements that get new terms.
+    partners : mapping of str to str or None
+        Element → its partner, :data:`DRIVE` or None.
+    dt : float
+        The record's sample interval, s.
+    fixed : sequence of tuple, optional
+        Terms held as they are: (element, partner, term, c, r2) each.
+
+    Raises
+    ------
+    BondGraphError
+        An element already carries a term, or the model is not linear in its states.
+    """
 
     def __init__(
         self,
@@ -97,6 +120,18 @@ class Lure:
         self.eqs, self.dt = eqs, dt
 
     def theta(self, values: Mapping[str, float]) -> np.ndarray:
+        """θ of the augmented model with ``values`` over the model's.
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            Parameter values by name (others at the model's).
+
+        Returns
+        -------
+        numpy.ndarray
+            θ in the order of the augmented equations' parameters.
+        """
         from ..numerics.codegen import parameter_vector
 
         th = parameter_vector(self.eqs)
@@ -109,7 +144,27 @@ class Lure:
     def linear_responses(self, values: Mapping[str, float], u: np.ndarray, term: Callable) -> dict[str, np.ndarray]:
         """The element variables (``diag.x:<element>``, ``diag.a:<element>``: the partner's
         displacement) and the output, with the fixed terms but none of the new ones (``term``:
-        the one :meth:`simulate` will use)."""
+        the one :meth:`simulate` will use).
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            Parameter values by name (others at the model's).
+        u : numpy.ndarray
+            The drive's samples (drive units).
+        term : callable
+            The new terms' function ``term(c, r2, x, a)``.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            Output name → series on every sample.
+
+        Raises
+        ------
+        NotConverged
+            The fixed terms make the model diverge.
+        """
         new = self.n - len(self.fixed)
         Y, ok = self._run(values, u, term, np.zeros((new, 2)), len(self.fixed) > 0, active_new=False)
         if not ok:
@@ -122,7 +177,29 @@ class Lure:
         """Raw output for the drive samples ``u`` with w_k = term(c_k, r2_k, x_k, a_k),
         ``coefs[k] = (c_k, r2_k)``; ``term`` is written in arithmetic that works on sympy
         symbols and is a polynomial in x and a, plus at most one h·tanh(g·x) (see
-        :func:`polynomial_term`)."""
+        :func:`polynomial_term`).
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            Parameter values by name (others at the model's).
+        u : numpy.ndarray
+            The drive's samples (drive units).
+        term : callable
+            ``term(c, r2, x, a)``.
+        coefs : sequence of tuple of float
+            (c_k, r2_k) per new element.
+
+        Returns
+        -------
+        numpy.ndarray
+            The raw output on every sample (sensor gain 1, no offset).
+
+        Raises
+        ------
+        NotConverged
+            The terms make the model diverge, or ``term`` is not of the supported form.
+        """
         Y, ok = self._run(values, u, term, np.asarray(coefs, float).reshape(self.n - len(self.fixed), 2), True)
         if not ok:
             raise NotConverged("the nonlinear term makes the model diverge (an implicit step did not converge)")
@@ -165,6 +242,24 @@ class Lure:
         :mod:`bondgraph.diagnosis.restoring`), exact per increment of that variable between
         samples; the implicit sample equation (x depends on w through the hold's direct term)
         solved by fixed-point iteration.  Only for a Lur'e system without other terms.
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            Parameter values by name (others at the model's).
+        u : numpy.ndarray
+            The drive's samples (drive units).
+        element : str
+            The element whose law gets the term.
+        kh : float
+            k_h, force per unit z (N/m for a spring).
+        zmax : float
+            z_max, the saturation level of z (displacement, m).
+
+        Returns
+        -------
+        numpy.ndarray
+            The raw output on every sample.
 
         Raises
         ------
@@ -246,7 +341,25 @@ def polynomial_term(term: Callable, partner: bool):
     functions of (c, r2): a function (c, r2) → (P, (h, g)) with
     term = Σ P[i, j]·x^i·a^j + h·tanh(g·x), made once per process and formula (and looked up
     by the function itself after its first call).  Any other
-    term raises :class:`NotConverged` (the caller then integrates)."""
+    term raises :class:`NotConverged` (the caller then integrates).
+
+    Parameters
+    ----------
+    term : callable
+        ``term(c, r2, x, a)``.
+    partner : bool
+        Whether the term has a partner variable a.
+
+    Returns
+    -------
+    callable
+        (c, r2) → (P, (h, g)).
+
+    Raises
+    ------
+    NotConverged
+        The term is not of that form.
+    """
     try:
         return _TERMS[(term, partner)]  # the same function again: no sympy
     except (KeyError, TypeError):

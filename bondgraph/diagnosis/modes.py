@@ -25,7 +25,20 @@ from .sites import Site, generic_sites
 
 
 def frf_mismatch(view):
-    """(ω rad/s, mismatch): |H_measured − H_model| relative to the model, weighted by coherence."""
+    """(ω rad/s, mismatch): |H_measured − H_model| relative to the model, weighted by coherence.
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+
+    Returns
+    -------
+    omega : numpy.ndarray
+        Angular frequencies of the Welch bins, rad/s.
+    mismatch : numpy.ndarray
+        The relative mismatch (dimensionless) at each.
+    """
     w, H, coh = view.empirical_frf()
     Hm = view.gain * view.frequency_response(w)
     return w, np.abs(H - Hm) * coh / np.maximum(np.abs(Hm), 1e-300 + 1e-3 * np.abs(Hm).max(initial=0.0))
@@ -33,7 +46,18 @@ def frf_mismatch(view):
 
 def unresolved(view) -> str:
     """Why no mode can be placed from the record's frequency response ('' if one can): the
-    record resolves the response at no frequency (output and drive coherent nowhere)."""
+    record resolves the response at no frequency (output and drive coherent nowhere).
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+
+    Returns
+    -------
+    str
+        The reason, or "".
+    """
     if view.empirical_frf()[0].size:
         return ""
     return (
@@ -43,7 +67,20 @@ def unresolved(view) -> str:
 
 
 def mismatch_peaks(view, n: int = 3) -> list[float]:
-    """Frequencies (rad/s) of the ``n`` largest peaks of the frequency-response mismatch."""
+    """Frequencies (rad/s) of the ``n`` largest peaks of the frequency-response mismatch.
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+    n : int, optional
+        Most peaks returned.
+
+    Returns
+    -------
+    list of float
+        Angular frequencies, rad/s, largest peak first (the maximum when there is no peak).
+    """
     w, mis = frf_mismatch(view)
     if w.size == 0:
         return []
@@ -54,7 +91,20 @@ def mismatch_peaks(view, n: int = 3) -> list[float]:
 
 def mode_on_own(view, omega: float) -> str:
     """Why an added mode at ``omega`` (rad/s) may be a recalibration of one of the model's own
-    modes ('' if it is not within 15 % of any)."""
+    modes ('' if it is not within 15 % of any).
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+    omega : float
+        The added mode's natural angular frequency, rad/s.
+
+    Returns
+    -------
+    str
+        The reason, or "".
+    """
     f = omega / (2 * math.pi)
     for fm in view.resonances_hz:
         if fm > 0 and abs(f / fm - 1) < 0.15:
@@ -66,7 +116,25 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
     """Why an added mode at ``omega`` (rad/s) with damping ratio ``zeta`` is not plausible.  A
     mode where the record does not resolve the response is refused unless what it explains
     (``raw``, the extended model's prediction) lies mostly where the record does resolve it
-    (its skirt below the drive's band, not noise near its own frequency)."""
+    (its skirt below the drive's band, not noise near its own frequency).
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+    omega : float
+        The mode's natural angular frequency, rad/s.
+    zeta : float
+        Its damping ratio.
+    raw : numpy.ndarray, optional
+        The extended model's raw prediction.
+
+    Returns
+    -------
+    str
+        The reason (beyond Nyquist, below half the lowest mode, not excited, not resolved,
+        not a resonance), or "" when plausible.
+    """
     f = omega / (2 * math.pi)
     if f > 0.45 * view.fs:
         return f"its frequency ({f:.4g} Hz) is beyond the data's Nyquist frequency"
@@ -97,7 +165,23 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
 def resonance_trials(view) -> list[tuple[float, float, float]]:
     """(residual sum of squares, ω rad/s, ζ) of a resonator driven by the drive and fitted by
     its gain alone to the current residual, scanned around each frequency-response mismatch
-    peak, best first (each trial is one small recursion)."""
+    peak, best first (each trial is one small recursion).
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+
+    Returns
+    -------
+    list of tuple of float
+        (residual sum of squares on the fit part, ω rad/s, ζ), ascending.
+
+    Raises
+    ------
+    ValueError
+        No frequency-response mismatch to place a mode at.
+    """
     d = np.asarray(view.drive)
     idx = view.fit_idx
     r = view.residual[idx] - view.residual[idx].mean()
@@ -116,7 +200,20 @@ def resonance_trials(view) -> list[tuple[float, float, float]]:
 
 def free_prefix(model, base: str) -> str:
     """``base``, or ``base2``, ``base3``, ... : the first whose parameters are not in ``model``
-    yet (a mode named before keeps its names)."""
+    yet (a mode named before keeps its names).
+
+    Parameters
+    ----------
+    model : Model
+        The current model.
+    base : str
+        The prefix wanted.
+
+    Returns
+    -------
+    str
+        The first free prefix.
+    """
     known = set(model.all_parameters())
     k = 1
     while f"{base if k == 1 else base + str(k)}.omega" in known:
@@ -126,7 +223,13 @@ def free_prefix(model, base: str) -> str:
 
 class ParallelMode(Candidate):
     """A mode the model lacks: a resonator q̈ + 2ζω·q̇ + ω²·q = g·d driven by the drive d, whose
-    displacement adds to the output (modal superposition).  Its site is the sensor."""
+    displacement adds to the output (modal superposition).  Its site is the sensor.
+
+    Parameters
+    ----------
+    site : Site, optional
+        The sensor site (default: named "output").
+    """
 
     cause = "higher-mode"
     label = "extra resonator (mode) in parallel on the output"
@@ -137,14 +240,51 @@ class ParallelMode(Candidate):
         self.site_name = site.name if site is not None else "output"
 
     def applies(self, view):
+        """True, unless the model is no drive transform or the record resolves no frequency.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        bool or str
+            True, or why it does not apply.
+        """
         return NOT_A_DRIVE if view.drive is None else unresolved(view) or True
 
     def evidence(self, view):
+        """The largest frequency-response mismatch and where it is.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        dict of str to float
+            ``frf_mismatch`` (relative) and ``omega_peak`` (rad/s).
+        """
         w, mis = frf_mismatch(view)
         k = int(np.argmax(mis)) if mis.size else 0
         return {"frf_mismatch": float(mis[k]) if mis.size else 0.0, "omega_peak": float(w[k]) if w.size else 0.0}
 
     def fit(self, view):
+        """Fit ω, ζ and the gain g of the resonator by variable projection, from the best
+        trials of :func:`resonance_trials`.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        Extension
+            The model with the mode (parameters ``hm.omega`` rad/s, ``hm.zeta``, ``hm.g``).
+        """
         p = free_prefix(view.model, "hm")
         d = np.asarray(view.drive)
         trials = resonance_trials(view)
@@ -187,10 +327,38 @@ class ParallelMode(Candidate):
         )
 
     def implausible(self, view, ext):
+        """Why the fitted mode is not plausible (:func:`mode_implausible`).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        ext : Extension
+            The fitted extension (its first new parameter is the mode's ω).
+
+        Returns
+        -------
+        str
+            The reason, or "".
+        """
         p = ext.new[0].rsplit(".", 1)[0]
         return mode_implausible(view, ext.values[f"{p}.omega"], ext.values[f"{p}.zeta"], ext.prediction)
 
     def mimics_recalibration(self, view, ext):
+        """Why the mode may be one of the model's own (:func:`mode_on_own`).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        ext : Extension
+            The fitted extension (its first new parameter is the mode's ω).
+
+        Returns
+        -------
+        str
+            The reason, or "".
+        """
         return mode_on_own(view, ext.values[ext.new[0]])
 
 
@@ -199,7 +367,13 @@ class OutputMode(Candidate):
     ``inertia``: an amplified actuator's shell and output plate) split into m1 = μ·M, driven
     as before, and m2 = (1 − μ)·M, carrying the sensor, joined by a spring k2 and damper c2
     tuned to the two-mass mode ω, ζ: k2 = ω²·m1·m2/M, c2 = 2ζω·m1·m2/M (the total mass is
-    unchanged)."""
+    unchanged).
+
+    Parameters
+    ----------
+    site : Site, optional
+        The I site whose mass is split (without one, the element tagged ``inertia``).
+    """
 
     cause = "higher-mode"
     label = "compliant mass (a share of it on a spring)"
@@ -212,12 +386,35 @@ class OutputMode(Candidate):
         self.site_name = site.name if site is not None else self.role
 
     def element(self, model) -> str | None:
-        """The mass it splits in ``model``."""
+        """The mass it splits in ``model``.
+
+        Parameters
+        ----------
+        model : Model
+            The model to look in.
+
+        Returns
+        -------
+        str or None
+            The I element's name, or None when it is not there.
+        """
         if self.site is not None:
             return self.site.elements[0] if self.site.present(model) else None
         return next(iter(model.with_role(self.role)), None)
 
     def applies(self, view):
+        """True, or why not: no mass, fast dynamics, no drive transform, or a nonlinear model.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        bool or str
+            True, or why it does not apply.
+        """
         if self.element(view.model) is None:
             return (
                 f"no element is tagged '{self.role}'"
@@ -231,7 +428,28 @@ class OutputMode(Candidate):
         return unresolved(view) or True if view.exact else "needs a model linear in its states"
 
     def build(self, view, model, omega, zeta, mu, p: str = "om"):
-        """``model`` (the current model or its linear core) with the mass split."""
+        """``model`` (the current model or its linear core) with the mass split.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        model : Model
+            The model to change (a copy), changed in place.
+        omega : float
+            The two-mass mode's natural angular frequency, rad/s.
+        zeta : float
+            Its damping ratio.
+        mu : float
+            The share μ of the mass on the driven side, between 0 and 1.
+        p : str, optional
+            The new parameters' prefix.
+
+        Returns
+        -------
+        Model
+            ``model`` itself.
+        """
         el = self.element(view.model)
         x = sp.Dummy("p")
         M = 1 / sp.diff(law(model, el)(x), x)
@@ -256,6 +474,19 @@ class OutputMode(Candidate):
         return model
 
     def fit(self, view):
+        """Fit ω, ζ and μ from the two largest mismatch peaks, keeping the better.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        Extension
+            The model with the mass split (parameters ``om.omega`` rad/s, ``om.zeta``,
+            ``om.mu``).
+        """
         p = free_prefix(view.model, "om")
         best = None
         on_core = view.on_core  # fitted on the linear core, driven by what it sees (exact route)
@@ -291,13 +522,52 @@ class OutputMode(Candidate):
         return Extension(model, values, new, raw, None, None, at, ok, msg)
 
     def implausible(self, view, ext):
+        """Why the fitted mode is not plausible (:func:`mode_implausible`).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        ext : Extension
+            The fitted extension (its first new parameter is the mode's ω).
+
+        Returns
+        -------
+        str
+            The reason, or "".
+        """
         p = ext.new[0].rsplit(".", 1)[0]
         return mode_implausible(view, ext.values[f"{p}.omega"], ext.values[f"{p}.zeta"], ext.prediction)
 
     def mimics_recalibration(self, view, ext):
+        """Why the mode may be one of the model's own (:func:`mode_on_own`).
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        ext : Extension
+            The fitted extension (its first new parameter is the mode's ω).
+
+        Returns
+        -------
+        str
+            The reason, or "".
+        """
         return mode_on_own(view, ext.values[ext.new[0]])
 
 
 def mode_kinds(model) -> list[Candidate]:
-    """A resonator on the output, and a split of every mass at a generic site."""
+    """A resonator on the output, and a split of every mass at a generic site.
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+
+    Returns
+    -------
+    list of Candidate
+        A :class:`ParallelMode`, then an :class:`OutputMode` per generic I site.
+    """
     return [ParallelMode()] + [OutputMode(site) for site in generic_sites(model, "I")]

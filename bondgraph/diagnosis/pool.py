@@ -42,14 +42,37 @@ UNPICKLABLE = "unpicklable"
 
 def single_threaded_blas():
     """One BLAS thread in this process (the diagnosis' matrices are small and its workers share
-    the cores: threaded BLAS only oversubscribes them, several times slower)."""
+    the cores: threaded BLAS only oversubscribes them, several times slower).
+
+    Returns
+    -------
+    threadpoolctl.threadpool_limits
+        A context manager that restores the former limits when it exits.
+    """
     from threadpoolctl import threadpool_limits
 
     return threadpool_limits(limits=1, user_api="blas")
 
 
 class Pool:
-    """Runs candidates on a chain state, in ``workers`` processes when that helps."""
+    """Runs candidates on a chain state, in ``workers`` processes when that helps.
+
+    Worker processes are forked once, here, and serve every chain step; use the pool as a
+    context manager (or call :meth:`close`).
+
+    Parameters
+    ----------
+    run_candidate : callable
+        ``run_candidate(ctx, state, calibrated, candidate, plausible, effort)`` → outcome.
+    ctx : Context
+        The prepared record.
+    calibrated : sequence of str
+        The calibrated linear parameters.
+    candidates : sequence of Candidate
+        Every candidate of the diagnosis (tasks refer to them by index).
+    workers : int
+        Processes (1: run in this process).
+    """
 
     def __init__(self, run_candidate: Callable, ctx, calibrated: Sequence[str], candidates: Sequence, workers: int):
         self.run_candidate = run_candidate
@@ -71,7 +94,29 @@ class Pool:
     def run(self, state, indices: Sequence[int], plausible=None, effort: float = 1.0) -> Iterator[tuple[int, object]]:
         """(index, outcome) for every candidate index, as they finish (costly ones start first);
         ``plausible``: (state, bounds) of the plausible device for linear structural candidates;
-        ``effort``: a factor on the candidates' optimiser budgets."""
+        ``effort``: a factor on the candidates' optimiser budgets.
+
+        Parameters
+        ----------
+        state : State
+            The chain's current state.
+        indices : sequence of int
+            The candidates to run.
+        plausible : tuple, optional
+            (state, bounds) of the plausible device.
+        effort : float, optional
+            Factor on the optimisers' budgets.
+
+        Yields
+        ------
+        tuple of (int, object)
+            The candidate's index and its outcome.
+
+        Raises
+        ------
+        RuntimeError
+            A worker process died.
+        """
         run_candidate = self.run_candidate
         order = sorted(indices, key=lambda i: -getattr(self.candidates[i], "cost", 1))
         if not self._procs or not _picklable((state, plausible)):
@@ -95,6 +140,13 @@ class Pool:
                 break
 
     def close(self, kill: bool = False) -> None:
+        """Stop the worker processes (idempotent).
+
+        Parameters
+        ----------
+        kill : bool, optional
+            Kill them instead of letting them finish their task (after an error or Ctrl-C).
+        """
         procs, self._procs = self._procs, []
         if not procs:
             return
@@ -142,7 +194,22 @@ def fork_map(fn: Callable, items: Sequence, workers: int) -> list:
     result is the one the serial loop gives (the calls are independent), in the items' order.
     Serial with one worker, one item, without ``fork``, or inside a worker process (which may
     not have children).  A child's exception is raised here; on any error (Ctrl-C included)
-    the children are killed and waited for."""
+    the children are killed and waited for.
+
+    Parameters
+    ----------
+    fn : callable
+        The function, called with one item.
+    items : sequence
+        The items.
+    workers : int
+        Processes, this one included.
+
+    Returns
+    -------
+    list
+        ``fn(item)`` per item, in order.
+    """
     items = list(items)
     workers = min(int(workers), len(items))
     if workers < 2 or "fork" not in mp.get_all_start_methods() or mp.current_process().daemon:

@@ -34,7 +34,20 @@ def time_budget(seconds: float | None, limit: float | None = None) -> Iterator[N
     ``seconds`` have passed (reported as not converged), and every simulation that asks
     :func:`simulation_deadline` stops once ``limit`` seconds have passed (a
     :class:`~bondgraph.numerics.simulate.SimulationTimeout`: the first evaluation of a fit, which has no
-    point to fall back on, and the final prediction included)."""
+    point to fall back on, and the final prediction included).
+
+    Parameters
+    ----------
+    seconds : float or None
+        The fits' budget, s (None: unbounded).
+    limit : float, optional
+        The simulations' hard limit, s (None: unbounded).
+
+    Yields
+    ------
+    None
+        Within the block, the budget holds (in this context and the copies it hands on).
+    """
     now = time.monotonic()
     token = _DEADLINE.set(None if seconds is None else now + seconds)
     hard = _LIMIT.set(None if limit is None else now + limit)
@@ -55,7 +68,13 @@ def simulation_deadline() -> float | None:
     optimiser's evaluation with a point to stop at, the fit's budget (the fit then stops at its
     best point so far: a single slow simulation must not outlast the budget); else the
     context's limit (see :func:`time_budget`).  :meth:`~bondgraph.numerics.simulate.Simulator.run`
-    stops there."""
+    stops there.
+
+    Returns
+    -------
+    float or None
+        A ``time.monotonic()`` value, or None.
+    """
     stop = _STOP_AT.get()
     return stop if stop is not None else _LIMIT.get()
 
@@ -66,7 +85,17 @@ class _OutOfTime(Exception):
 
 @dataclass(frozen=True)
 class Param:
-    """A parameter fitted in log space: value = sign·exp(z), lower ≤ |value| ≤ upper."""
+    """A parameter fitted in log space: value = sign·exp(z), lower ≤ |value| ≤ upper.
+
+    Parameters
+    ----------
+    name : str
+        The model parameter.
+    start : float
+        Its start value (its sign is kept), in its unit.
+    lower, upper : float
+        Bounds of its magnitude (0 < lower < upper).
+    """
 
     name: str
     start: float
@@ -75,21 +104,75 @@ class Param:
 
     @property
     def sign(self) -> float:
+        """−1 for a negative start value, else +1."""
         return -1.0 if self.start < 0 else 1.0
 
     def to_z(self, v: float) -> float:
+        """z of a value, its magnitude clipped to the bounds.
+
+        Parameters
+        ----------
+        v : float
+            The value.
+
+        Returns
+        -------
+        float
+            log |v|.
+        """
         return math.log(min(max(abs(v), self.lower), self.upper))
 
     def from_z(self, z: float) -> float:
+        """The value at z.
+
+        Parameters
+        ----------
+        z : float
+            The optimiser's coordinate.
+
+        Returns
+        -------
+        float
+            sign·exp(z).
+        """
         return self.sign * math.exp(z)
 
     def z_bounds(self) -> tuple[float, float]:
+        """(log lower, log upper).
+
+        Returns
+        -------
+        lower : float
+            log lower.
+        upper : float
+            log upper.
+        """
         return math.log(self.lower), math.log(self.upper)
 
 
 @dataclass
 class Projected:
-    """Result of :func:`projected_fit`."""
+    """Result of :func:`projected_fit`.
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        The nonlinear parameters found.
+    coef : numpy.ndarray
+        The coefficients c solved at z.
+    columns : numpy.ndarray
+        A(z) on every sample.
+    cost : float
+        Half the sum of squared residuals on the fit rows, scaled by the data's spread.
+    nfev : int
+        Evaluations the optimiser made.
+    success : bool
+        The optimiser's success flag (False when the time budget stopped it).
+    message : str
+        The optimiser's message.
+    at_bounds : list of int
+        Indices of the z within 1e-3 of the bounds' width from a bound.
+    """
 
     z: np.ndarray
     coef: np.ndarray
@@ -107,7 +190,18 @@ def jacobian_map(threads: int) -> Iterator[Callable | None]:
     ``threads`` threads (each call in a copy of the caller's context, so its time budget holds
     there too), or None (serial) for one.  It gains where the evaluations spend their time in
     compiled kernels that release the GIL (the exact linear recursion, the Lur'e stepping);
-    the columns, and so the fit, are the serial ones."""
+    the columns, and so the fit, are the serial ones.
+
+    Parameters
+    ----------
+    threads : int
+        Threads (1 or fewer: serial).
+
+    Yields
+    ------
+    callable or None
+        The map, or None.
+    """
     if threads < 2:
         yield None
         return
@@ -141,7 +235,43 @@ def projected_fit(
     (len(z), len(rows), columns)), or None where it has none: the optimiser then gets the
     exact Jacobian of the projected residual from them (:func:`projection_jacobian`) instead
     of finite differences of ``columns`` (forward differences of the residual, as
-    ``least_squares`` takes them, where ``derivatives`` returns None)."""
+    ``least_squares`` takes them, where ``derivatives`` returns None).
+
+    Parameters
+    ----------
+    columns : callable
+        ``columns(z, rows)`` → A(z) on ``rows``.
+    y : numpy.ndarray
+        The data on every sample.
+    idx : numpy.ndarray
+        Sample indices of the fit part.
+    z0 : sequence of float
+        Start point (empty: linear least squares only).
+    lb, ub : array_like
+        Bounds of z.
+    lower, upper : sequence of float
+        Bounds of the coefficients c.
+    max_nfev : int, optional
+        The optimiser's evaluation budget per start.
+    starts : sequence of sequence of float, optional
+        Further start points.
+    threads : int, optional
+        Threads for the finite-difference Jacobian.
+    derivatives : callable, optional
+        ``derivatives(z, rows)`` → ∂A/∂z on ``rows``, or None.
+
+    Returns
+    -------
+    Projected
+        The best solution over the starts (or the best point when the time budget ran out).
+
+    Raises
+    ------
+    FloatingPointError
+        The columns at the solution are not finite.
+    SimulationTimeout
+        A simulation passed the context's limit (:func:`time_budget`).
+    """
     scale = max(float(np.std(y[idx])), 1e-300)
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
 
@@ -238,7 +368,22 @@ def projected_fit(
 
 def forward_step(z: np.ndarray, i: int, lb: np.ndarray, ub: np.ndarray) -> np.ndarray:
     """z moved along its coordinate i by ``least_squares``' forward-difference step (relative
-    step 1e-4, at least 1e-4), away from the bound it would cross."""
+    step 1e-4, at least 1e-4), away from the bound it would cross.
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        The point.
+    i : int
+        The coordinate.
+    lb, ub : numpy.ndarray
+        Bounds of z.
+
+    Returns
+    -------
+    numpy.ndarray
+        A copy of z with coordinate i moved.
+    """
     h = 1e-4 * (1.0 if z[i] >= 0 else -1.0) * max(1.0, abs(z[i]))
     out = np.array(z, float)
     out[i] += -h if not lb[i] <= z[i] + h <= ub[i] else h
@@ -248,7 +393,24 @@ def forward_step(z: np.ndarray, i: int, lb: np.ndarray, ub: np.ndarray) -> np.nd
 def forward_differences(fun: Callable, z: np.ndarray, f0: np.ndarray, lb, ub) -> np.ndarray:
     """The forward-difference Jacobian of ``fun`` at ``z`` (where it is ``f0``) that
     ``least_squares(diff_step=1e-4)`` takes (steps of :func:`forward_step`): the fallback of
-    an analytic Jacobian that is not available at some point."""
+    an analytic Jacobian that is not available at some point.
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(z)`` → residual vector.
+    z : numpy.ndarray
+        The point.
+    f0 : numpy.ndarray
+        ``fun(z)``.
+    lb, ub : array_like
+        Bounds of z.
+
+    Returns
+    -------
+    numpy.ndarray
+        (len(f0), len(z)) Jacobian.
+    """
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
     J = np.empty((np.size(f0), z.size))
     for i in range(z.size):
@@ -268,7 +430,26 @@ def projection_jacobian(A: np.ndarray, c: np.ndarray, free: np.ndarray, r: np.nd
     P⊥ projecting out the free columns A_F: the full Jacobian of Golub and Pereyra (G. H. Golub, V. Pereyra, 1973, "The differentiation
     of pseudo-inverses and nonlinear least squares problems whose variables separate", SIAM
     Journal on Numerical Analysis 10(2), 413-432), from one QR of the free columns (scaled to
-    unit norm).  Returns an array (rows, len(z))."""
+    unit norm).  Returns an array (rows, len(z)).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        (rows, columns) matrix at the point.
+    c : numpy.ndarray
+        The solution there.
+    free : numpy.ndarray
+        Boolean mask of the free columns.
+    r : numpy.ndarray
+        The residual there.
+    dA : numpy.ndarray
+        (len(z), rows, columns) derivatives of A.
+
+    Returns
+    -------
+    numpy.ndarray
+        ∂r/∂z, (rows, len(z)).
+    """
     dAc = dA @ c  # (nz, rows)
     F = np.nonzero(free)[0]
     if F.size == 0:

@@ -12,7 +12,78 @@ from .candidate import LINEAR
 
 @dataclass
 class CandidateResult:
-    """One candidate's outcome in one chain step (RMS in output units, on the validation part)."""
+    """One candidate's outcome in one chain step (RMS in output units, on the validation part).
+
+    A gain is an RMS ratio, before over after (> 1: the candidate explains something); a z is
+    the significance of a paired comparison of validation errors
+    (:func:`bondgraph.diagnosis.decision.compare`).
+
+    Parameters
+    ----------
+    cause : str
+        The cause it stands for (e.g. "hysteresis").
+    label : str
+        A short description of the extension.
+    kind : {"nonlinear", "linear"}, optional
+        The kind of cause (:data:`NONLINEAR`, :data:`LINEAR`).
+    site : str, optional
+        Where it acts: an element site, "output", or "" for the drive.
+    gain : float, optional
+        Validation RMS before over after the candidate.
+    rms_fit : float, optional
+        RMS error on the fit part, output units.
+    rms_validation : float, optional
+        RMS error on the validation part, output units.
+    z : float, optional
+        Significance of the gain.
+    n_eff : float, optional
+        Effective number of independent batches of the comparison.
+    gain_reference : float, optional
+        Gain over the flexible linear reference.
+    z_reference : float, optional
+        Significance of ``gain_reference``.
+    share : float, optional
+        Share of what the flexible linear reference explains that the candidate explains.
+    n_params : int, optional
+        Number of new parameters.
+    params : dict, optional
+        The new parameters' fitted values, by name.
+    evidence : dict, optional
+        Numbers that speak for the cause (:meth:`Candidate.evidence`).
+    at_bounds : list, optional
+        Parameters that ended on a search bound.
+    success : bool, optional
+        The optimiser's success flag.
+    message : str, optional
+        The optimiser's message.
+    skipped : str, optional
+        Why it was not fitted ("" when it was).
+    error : str, optional
+        Why its fit failed ("" when it did not).
+    verdict : str, optional
+        The decision in words.
+    rule : str, optional
+        The name of the rule that refused it ("" when it passed or was not judged).
+    passed : bool, optional
+        Whether it passed every rule.
+    seconds : float, optional
+        Wall time of its fit, s.
+    against : str, optional
+        "plausible" when fitted from, and compared with, the plausible device.
+    implausible : str, optional
+        For a linear cause, why its values are physically implausible ("" if not).
+    recalibration : str, optional
+        For a linear cause, why it may be a recalibration of the model's own structure.
+    need_share : float, optional
+        For a linear cause, the share of the reference's gain it must explain (None: the
+        setting ``diagnosis.linear_share``).
+    gain_static : float, optional
+        For a memory effect, its gain over the same freedom without memory.
+    z_second : float, optional
+        z on a second fold, when the first was borderline.
+    effort : float, optional
+        The factor on its optimisers' evaluation budgets.
+    """
 
     cause: str
     label: str
@@ -61,6 +132,14 @@ class CandidateResult:
     effort: float = 1.0
 
     def as_json(self) -> dict:
+        """The result as a JSON object (the ``candidates`` entries of :meth:`Report.as_json`).
+
+        Returns
+        -------
+        dict
+            The fields by name (``site`` "drive" for the drive; optional fields only when set,
+            ``seconds`` rounded to 0.01 s).
+        """
         out = {
             "cause": self.cause,
             "site": self.site or "drive",
@@ -102,7 +181,31 @@ class CandidateResult:
 
 @dataclass
 class Step:
-    """One link of the chain: what was tried on the model so far and what (if anything) won."""
+    """One link of the chain: what was tried on the model so far and what (if anything) won.
+
+    Parameters
+    ----------
+    cause : str
+        The cause named at this step, or "none".
+    gain : float
+        The winner's validation RMS ratio before over after (1 for none).
+    rms_before : float
+        Validation RMS of the model the step starts from, output units.
+    rms : float
+        Validation RMS after the step, output units.
+    reference_rms : float
+        Validation RMS of the flexible linear reference, output units.
+    candidates : list of CandidateResult
+        Every candidate tried, with its verdict.
+    why : str
+        Why this cause was named, or why none was.
+    site : str, optional
+        Where the named cause acts ("" for none or the drive).
+    label : str, optional
+        The named candidate's label.
+    rule : str, optional
+        The rule that decided the step.
+    """
 
     cause: str
     gain: float
@@ -120,6 +223,14 @@ class Step:
     rule: str = ""
 
     def as_json(self) -> dict:
+        """The step as a JSON object (the ``steps`` entries of :meth:`Report.as_json`).
+
+        Returns
+        -------
+        dict
+            ``cause``, ``site``, ``rule``, ``gain``, ``rms``, ``rms_before``,
+            ``reference_rms``, ``why`` and ``candidates`` (:meth:`CandidateResult.as_json`).
+        """
         return {
             "cause": self.cause,
             "site": (self.site or "drive") if self.cause != "none" else "",
@@ -135,6 +246,53 @@ class Step:
 
 @dataclass
 class Report:
+    """What a diagnosis found: the causes named in order, every step, the calibration and how
+    the data were treated (:meth:`text`, :meth:`as_json`; RMS in output units).
+
+    Parameters
+    ----------
+    causes : list of str
+        The causes named, in the order of the chain (empty: none).
+    gain : float
+        ``baseline_rms`` over ``extended_rms`` (1 without a cause).
+    baseline_rms : float
+        Validation RMS of the calibrated model (or of the plausible device, see
+        ``baseline``).
+    extended_rms : float
+        Validation RMS of the model extended with every named cause.
+    steps : list of Step
+        Every step of the chain, the last one naming none unless the chain was cut.
+    calibration : dict
+        The calibration as JSON: ``params``, ``route``, ``sensor_gain``, ``offset``,
+        ``delay`` (s), ``at_bounds``, ``held``, ``success``, ``message``, ``rms_validation``,
+        ``outside_tolerance`` and, where solved, ``drift`` (output units per s).
+    data : dict
+        How the data were treated: ``file``, ``model``, ``samples``, ``rate_hz``,
+        ``source_samples``, ``source_rate_hz``, ``validation_share``, ``blocks``, ``input``,
+        ``output``, ``drive_band_hz``, ``drive_reading`` and the readings' gap.
+    notes : list of str, optional
+        Notes on the data and the decisions.
+    equations : str, optional
+        The extended model's state equations as text.
+    extended_model : Model, optional
+        The model extended with the named causes.
+    extended_values : dict, optional
+        Its parameter values, by name.
+    extended_rms_integrated : float, optional
+        The extended model's validation RMS from the compiled integrator (a second route).
+    predictions : dict, optional
+        Series on the (resampled) time grid: ``t`` (s), ``u`` (the drive), ``y`` (measured),
+        ``baseline``, ``steps`` and ``extended`` (predictions), for the plots.
+    noise : float, optional
+        The noise floor's RMS, output units.
+    seconds : float, optional
+        Wall time of the diagnosis, s.
+    baseline : {"calibrated", "plausible"}, optional
+        What ``baseline_rms`` and ``gain`` start from.
+    account : Account, optional
+        What the final model leaves unexplained.
+    """
+
     causes: list[str]
     gain: float
     baseline_rms: float
@@ -160,10 +318,12 @@ class Report:
 
     @property
     def cause(self) -> str:
+        """The first cause named, or "none"."""
         return self.causes[0] if self.causes else "none"
 
     @property
     def candidates(self) -> list[CandidateResult]:
+        """The candidates of the first step (empty without steps)."""
         return self.steps[0].candidates if self.steps else []
 
     @property
@@ -193,6 +353,18 @@ class Report:
         return report_html(self)
 
     def as_json(self) -> dict:
+        """The report as a JSON object (``bondgraph diagnose --json``).
+
+        Returns
+        -------
+        dict
+            ``cause``, ``causes``, ``gain``, ``baseline_rms``, ``baseline``, ``extended_rms``,
+            ``candidates`` (first step), ``steps`` (those naming a cause), ``why``, ``stop``
+            (the last step naming none), ``site``, the unexplained account (or
+            ``noise_rms``), ``extended_rms_integrated``, ``calibration``, ``unexplained``,
+            ``data``, ``notes``, ``criterion`` (the decision thresholds), ``seconds`` and
+            ``equations``.
+        """
         steps = [s for s in self.steps if s.cause != "none"]
         return {
             "cause": self.cause,
@@ -229,14 +401,26 @@ class Report:
         }
 
     def chain_text(self) -> str:
-        """The named causes with their sites and step gains (``none`` without one)."""
+        """The named causes with their sites and step gains (``none`` without one).
+
+        Returns
+        -------
+        str
+            E.g. ``hysteresis at the drive (×2.1) → creep at the drive (×1.3)``.
+        """
         named = [s for s in self.steps if s.cause != "none"]
         if not named:
             return "none"
         return " → ".join(f"{s.cause} at {s.site or 'the drive'} (×{s.gain:.3g})" for s in named)
 
     def summary_lines(self) -> list[str]:
-        """The answer: causes, gain, what stays unexplained, why the chain stopped (a screen)."""
+        """The answer: causes, gain, what stays unexplained, why the chain stopped (a screen).
+
+        Returns
+        -------
+        list of str
+            The lines, without line ends.
+        """
         d = self.data
         lines = [f"Diagnosis of {d.get('model', '')} against {d.get('file', '')}", f"  Causes: {self.chain_text()}"]
         base = "" if self.baseline == "calibrated" else " of the plausible device"
@@ -259,7 +443,18 @@ class Report:
     def text(self, equations: bool = False) -> str:
         """The readable report: the answer first (:meth:`summary_lines`), then how the data were
         treated, every chain step's candidates and verdicts, and with ``equations`` the extended
-        model's state equations."""
+        model's state equations.
+
+        Parameters
+        ----------
+        equations : bool, optional
+            Append the extended model's state equations.
+
+        Returns
+        -------
+        str
+            The report, lines joined by newlines.
+        """
         d, cal = self.data, self.calibration
         lines = self.summary_lines() + [
             "",

@@ -79,6 +79,18 @@ class RestoringHysteresis(Candidate):
         return self.site.elements[0] if self.site.present(model) else None
 
     def applies(self, view):
+        """True, unless the site is gone or acts in modes faster than the data resolve.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        bool or str
+            True, or why it does not apply.
+        """
         if self._element(view.model) is None:
             return f"'{self.site_name}' is not in the model"
         if view.reduced:
@@ -101,6 +113,19 @@ class RestoringHysteresis(Candidate):
         return lure, x, cols
 
     def screen(self, view):
+        """The largest share of the residual that k_h·z explains to first order, over the
+        saturation :attr:`levels`, or None off the exact linear route.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        float or None
+            The squared correlation on the fit part, between 0 and 1, or None.
+        """
         try:
             out = self._columns(view)
         except (NotConverged, SimulationError):
@@ -117,7 +142,22 @@ class RestoringHysteresis(Candidate):
         return best
 
     def build(self, view, kh: float, zmax: float):
-        """The current model with the hysteretic term on the site's element."""
+        """The current model with the hysteretic term on the site's element.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+        kh : float
+            k_h, the loop's force per unit z (effort per displacement, N/m for a spring).
+        zmax : float
+            z_max, the level at which z saturates (displacement, m).
+
+        Returns
+        -------
+        Model
+            A new model with parameters ``hy.k_EL``, ``hy.zmax_EL`` and the state ``hy.z_EL``.
+        """
         el = self._element(view.model)
         model = view.rewrite()
         k = model.parameter(f"hy.k_{el}", kh, "", f"{self.label}: height of the loop's force per unit z at {el}")
@@ -130,6 +170,24 @@ class RestoringHysteresis(Candidate):
         return model
 
     def fit(self, view):
+        """Fit k_h and z_max from the two best first-order trials, from the calibration and
+        from the model file's values, keeping the best.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        Extension
+            The model with the hysteretic restoring force.
+
+        Raises
+        ------
+        SimulationError
+            The extended model cannot be simulated from any start.
+        """
         el = self._element(view.model)
         stiffness = abs(slope(view.model, el, view.values))
         out = self._columns(view)
@@ -186,7 +244,18 @@ class RestoringHysteresis(Candidate):
         return Extension(final, values, [s.name for s in specs], raw, None, None, at, ok, msg)
 
     def without_memory(self, view):
-        """The loop's backbone at the same site, fitted (its raw prediction), or None."""
+        """The loop's backbone at the same site, fitted (its raw prediction), or None.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            The backbone's raw prediction on every sample, or None when it cannot be fitted.
+        """
         try:
             ext = Backbone(self.site).fit(view)
         except (NotConverged, SimulationError):
@@ -197,7 +266,13 @@ class RestoringHysteresis(Candidate):
 class Backbone(LawTerm):
     """The curve a restoring-force loop is drawn around: a saturating term
     e = law(q) + c·r·tanh(q/r) (c ≥ 0, r a share of the peak displacement): the same freedom
-    as :class:`RestoringHysteresis` without its memory."""
+    as :class:`RestoringHysteresis` without its memory.
+
+    Parameters
+    ----------
+    site : Site, optional
+        The C site it acts at.
+    """
 
     cause = "hysteresis"
     label = "backbone of a restoring-force loop (no memory)"
@@ -206,12 +281,61 @@ class Backbone(LawTerm):
 
     @staticmethod
     def term(c, r2, x, a):
+        """c·r·tanh(q/r), the saturating backbone.
+
+        Parameters
+        ----------
+        c : sympy.Expr or float
+            c ≥ 0, effort per displacement (N/m for a spring).
+        r2 : sympy.Expr or float
+            Here the saturation level r, displacement (m), not a square.
+        x : sympy.Expr or numpy.ndarray
+            The displacement q.
+        a : sympy.Expr or numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        sympy.Expr or numpy.ndarray
+            The term, in effort units (N for a spring).
+        """
         return c * r2 * sp.tanh(x / r2)
 
     def refs(self, view, el, x, a):
+        """The coefficient's scale k (the law's slope) and r at the middle saturation level.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data and the current model.
+        el : str
+            The element.
+        x : numpy.ndarray
+            The displacement q in the current model.
+        a : numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        scale : float
+            |slope of the law|, effort per displacement.
+        r2 : float
+            r = 0.15 · q_peak, displacement.
+        """
         return abs(slope(view.model, el, view.values)), RestoringHysteresis.levels[1] * _peak(x)
 
 
 def restoring_kinds(model) -> list[Candidate]:
-    """A hysteretic restoring force at every generic C site of ``model``."""
+    """A hysteretic restoring force at every generic C site of ``model``.
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+
+    Returns
+    -------
+    list of Candidate
+        One :class:`RestoringHysteresis` per generic C site.
+    """
     return [RestoringHysteresis(site) for site in generic_sites(model, "C")]

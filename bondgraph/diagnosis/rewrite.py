@@ -28,14 +28,52 @@ def _variable(model: Model, element: str):
 
 def law(model: Model, element: str) -> Callable[[sp.Expr], sp.Expr]:
     """The element's law as a function of its own variable: C e(q), I f(p), R e(f) (or f(e)
-    for a conductance law)."""
+    for a conductance law).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    element : str
+        The element's name.
+
+    Returns
+    -------
+    callable
+        ``law(x)`` → the law's output (sympy expression) at the variable ``x``.
+
+    Raises
+    ------
+    ModelError
+        The element is not a C, I or R element with a law.
+    """
     el, var = _variable(model, element)
     expr = el.law
     return lambda x: expr.xreplace({var: x})
 
 
 def slope(model: Model, element: str, values: Mapping[str, float] | None = None) -> float:
-    """d law / d variable at 0, with the model's parameter values (``values`` overriding)."""
+    """d law / d variable at 0, with the model's parameter values (``values`` overriding).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    element : str
+        The element's name.
+    values : mapping of str to float, optional
+        Parameter values overriding the model's.
+
+    Returns
+    -------
+    float
+        The small-signal slope (e.g. the stiffness 1/C of a C element, N/m for a spring).
+
+    Raises
+    ------
+    ModelError
+        The element is not a C, I or R element with a law.
+    """
     el, var = _variable(model, element)
     table = {s: v for s, v in model.parameter_table().items()}
     by_name = {str(s): s for s in table}
@@ -46,7 +84,22 @@ def slope(model: Model, element: str, values: Mapping[str, float] | None = None)
 
 
 def modify_law(model: Model, element: str, new: Callable[[sp.Expr, sp.Expr], sp.Expr]) -> None:
-    """Replace the element's law by ``new(x, old(x))`` (same kind, name, ports and role)."""
+    """Replace the element's law by ``new(x, old(x))`` (same kind, name, ports and role).
+
+    Parameters
+    ----------
+    model : Model
+        The model, changed in place (use a copy).
+    element : str
+        The element's name.
+    new : callable
+        ``new(x, old)`` → the new law at the variable ``x``, given the old law's value there.
+
+    Raises
+    ------
+    ModelError
+        The element is not a C, I or R element with a law.
+    """
     el, var = _variable(model, element)
     old = law(model, element)
     if isinstance(el, C):
@@ -60,7 +113,20 @@ def modify_law(model: Model, element: str, new: Callable[[sp.Expr, sp.Expr], sp.
 
 
 def neighbours(model: Model, element: str) -> list[str]:
-    """Elements bonded to the junction(s) the element is bonded to (the element excluded)."""
+    """Elements bonded to the junction(s) the element is bonded to (the element excluded).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    element : str
+        The element's name.
+
+    Returns
+    -------
+    list of str
+        Their names, in bond order, each once.
+    """
     out = []
     for b in model.bonds_of(element):
         j = b.tail[0] if b.head[0] == element else b.head[0]
@@ -72,7 +138,25 @@ def neighbours(model: Model, element: str) -> list[str]:
 
 
 def junction_of(model: Model, element: str) -> str:
-    """The element (usually a junction) at the other end of a one-port element's bond."""
+    """The element (usually a junction) at the other end of a one-port element's bond.
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    element : str
+        A one-port element's name.
+
+    Returns
+    -------
+    str
+        The name of the element at the other end.
+
+    Raises
+    ------
+    ModelError
+        The element does not have exactly one bond.
+    """
     bonds = model.bonds_of(element)
     if len(bonds) != 1:
         raise ModelError(f"{model.name}: '{element}' is not a one-port element with one bond")
@@ -81,7 +165,20 @@ def junction_of(model: Model, element: str) -> str:
 
 
 def parameters_of(model: Model, element: str) -> list[str]:
-    """Names of the model parameters in the element's law, sorted."""
+    """Names of the model parameters in the element's law, sorted.
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    element : str
+        The element's name.
+
+    Returns
+    -------
+    list of str
+        The names (empty for an element without a law).
+    """
     law = getattr(model.elements[element], "law", None)
     known = set(model.all_parameters())
     return sorted(str(s) for s in sp.sympify(law).free_symbols if str(s) in known) if law is not None else []
@@ -91,7 +188,20 @@ def drive_loop(model: Model, input: str) -> tuple[str, list[str]] | None:
     """(1-junction, resistances on it) of the loop driven by the effort source whose effort is
     ``input`` itself (e.g. a voltage source): the junction where the source, its series
     resistances and the load share one flow (the drive current of an electrical port); None
-    when the model has no such source (an input that enters scaled, e.g. as modal forces)."""
+    when the model has no such source (an input that enters scaled, e.g. as modal forces).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    input : str
+        The model input's name.
+
+    Returns
+    -------
+    tuple of (str, list of str) or None
+        The 1-junction's name and those of the resistances on it, or None.
+    """
     symbol = model.inputs[input].symbol
     for name, el in model.elements.items():
         if isinstance(el, Se) and sp.sympify(el.effort) == symbol:
@@ -107,6 +217,16 @@ def drive_loop(model: Model, input: str) -> tuple[str, list[str]] | None:
 
 
 def add_to_output(model: Model, output: str, term) -> None:
-    """output ← output + term (e.g. the displacement of an added mode)."""
+    """output ← output + term (e.g. the displacement of an added mode).
+
+    Parameters
+    ----------
+    model : Model
+        The model, changed in place (use a copy).
+    output : str
+        The output's name.
+    term : sympy.Expr or float
+        The term, in the output's units.
+    """
     out = model.outputs[output]
     out.expr = out.expr + sp.sympify(term)

@@ -50,7 +50,19 @@ class Site:
     role: str | None = None
 
     def present(self, model: Model) -> bool:
-        """Whether every element of the site is still in ``model`` with its kind."""
+        """Whether every element of the site is still in ``model`` with its kind.
+
+        Parameters
+        ----------
+        model : Model
+            The model to look in (e.g. one extended by an earlier cause).
+
+        Returns
+        -------
+        bool
+            True when every element is there with its kind (always for the drive and the
+            sensor).
+        """
         cls = KINDS.get(self.kind)
         return cls is None or all(isinstance(model.elements.get(e), cls) for e in self.elements)
 
@@ -101,5 +113,18 @@ def element_sites(model: Model, kinds: tuple[str, ...] = ("C", "I", "R")) -> lis
 
 def generic_sites(model: Model, kind: str) -> list[Site]:
     """The element sites of one kind at which the generic effect kinds act (roles in
-    :data:`GENERIC_ROLES`)."""
+    :data:`GENERIC_ROLES`).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    kind : {"C", "I", "R"}
+        The element kind.
+
+    Returns
+    -------
+    list of Site
+        The sites, in the order their first element was added.
+    """
     return [s for s in element_sites(model, (kind,)) if s.role in GENERIC_ROLES]

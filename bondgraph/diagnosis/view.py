@@ -36,7 +36,31 @@ def _frozen(a: np.ndarray | None) -> np.ndarray | None:
 class DriveFit:
     """Result of :meth:`View.fit_drive`: coefficients of the basis (in drive units) and of the
     direct columns (in output units at sensor gain 1), the nonlinear parameters z, the
-    recalibrated linear values, the raw prediction, and the optimiser's verdict."""
+    recalibrated linear values, the raw prediction, and the optimiser's verdict.
+
+    Parameters
+    ----------
+    coef : numpy.ndarray
+        The basis coefficients θ_k, in drive units per basis unit.
+    direct : numpy.ndarray
+        The direct columns' coefficients, in output units at sensor gain 1.
+    z : numpy.ndarray
+        The nonlinear parameters fitted.
+    values : dict of str to float
+        Every parameter value after the fit (the recalibrated linear ones included).
+    prediction : numpy.ndarray
+        The raw prediction on every sample (sensor gain 1, no offset), output units.
+    drive : numpy.ndarray
+        u_eff, the drive the linear core now sees, on every sample (drive units).
+    success : bool
+        The optimiser's success flag.
+    message : str
+        The optimiser's message.
+    at_bounds : list of str
+        Parameters (z names, or linear ones) that ended on a search bound.
+    additive : AdditiveDrive, optional
+        The drive as a sum of effects after an additive fit (``names`` given), else None.
+    """
 
     coef: np.ndarray
     direct: np.ndarray
@@ -54,7 +78,27 @@ class DriveFit:
 class View:
     """What a candidate sees.  Arrays are read-only; ``model`` must not be changed (use
     :meth:`rewrite` for a copy carrying the current values).  ``effort``: a factor on every
-    optimiser's evaluation budget (:meth:`fit_drive`, :meth:`fit_model`)."""
+    optimiser's evaluation budget (:meth:`fit_drive`, :meth:`fit_model`).
+
+    The engine builds views; a candidate only reads them.  Times are in s, frequencies in Hz
+    unless named omega (rad/s); a *raw* prediction is the model's output at sensor gain 1
+    without offset, in output units.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record: resampled data, fit and validation split, noise floor, the
+        nominal model and its linear core.
+    state : State
+        The chain's current model, its values, prediction and drive.
+    calibrated : sequence of str
+        The calibrated linear parameters (refitted with a candidate).
+    bounds : mapping of str to tuple of float, optional
+        Name → (lower, upper) bounds on a calibrated parameter's magnitude (the plausible
+        device's for a linear structural candidate; default ×/÷ ``diagnosis.spread``).
+    effort : float, optional
+        Factor on every optimiser's evaluation budget.
+    """
 
     def __init__(
         self,
@@ -121,7 +165,18 @@ class View:
 
     def held_share(self, length: float) -> float:
         """Share of the record (0-1) in which the measured drive holds still (within 1 % of
-        its range) for ``length`` s or longer: steps, holds, rests between bursts."""
+        its range) for ``length`` s or longer: steps, holds, rests between bursts.
+
+        Parameters
+        ----------
+        length : float
+            Shortest hold counted, s.
+
+        Returns
+        -------
+        float
+            The share of the record, between 0 and 1.
+        """
         return drive_held_share(self.u, self.fs, length)
 
     def _budget(self, max_nfev: int) -> int:
@@ -130,7 +185,13 @@ class View:
 
     # ---- the current model ----------------------------------------------------------------
     def rewrite(self) -> Model:
-        """A copy of the current model carrying the current values (to extend)."""
+        """A copy of the current model carrying the current values (to extend).
+
+        Returns
+        -------
+        Model
+            A new model; changing it leaves the view's model alone.
+        """
         m = self.model.copy()
         known = m.all_parameters()
         m.values.update({k: v for k, v in self.values.items() if k in known})
@@ -145,7 +206,13 @@ class View:
     def core(self) -> Model:
         """A copy of the linear core carrying the current values: the calibrated nominal model,
         or the linear model the held nonlinear terms extend (one with a linear structural
-        extension named before them)."""
+        extension named before them).
+
+        Returns
+        -------
+        Model
+            A new model.
+        """
         m = (self._core_model or self._ctx.model).copy()
         known = m.all_parameters()
         m.values.update({k: v for k, v in self.values.items() if k in known})
@@ -153,7 +220,20 @@ class View:
 
     def with_drive(self, model: Model, expr: sp.Expr) -> Model:
         """Make the linear core of ``model`` (the nominal model's elements, states and outputs)
-        see ``expr`` where it saw the drive input; the extension's own elements are untouched."""
+        see ``expr`` where it saw the drive input; the extension's own elements are untouched.
+
+        Parameters
+        ----------
+        model : Model
+            The model to change (a copy from :meth:`rewrite` or :meth:`core`); changed in place.
+        expr : sympy.Expr
+            The drive the core sees instead of the input symbol (drive units).
+
+        Returns
+        -------
+        Model
+            ``model`` itself.
+        """
         nominal = self._ctx.model
         V = self.input_symbol
         new = {name: el.xreplace({V: expr}) for name, el in nominal.elements.items() if V in el.free_symbols()}
@@ -169,16 +249,47 @@ class View:
         return model
 
     def add_to_output(self, model: Model, term) -> None:
-        """Add ``term`` to the compared output of ``model``, inside the sensor gain."""
+        """Add ``term`` to the compared output of ``model``, inside the sensor gain.
+
+        Parameters
+        ----------
+        model : Model
+            The model to change (a copy); changed in place.
+        term : sympy.Expr or float
+            The term, in output units at sensor gain 1.
+        """
         g = next(d.symbol for n, (d, _) in model.parameters.items() if n == SENSOR_GAIN)
         out = model.outputs[self.output]
         out.expr = out.expr + g * sp.sympify(term)
 
     def nominal_value(self, name: str) -> float:
+        """A parameter's value in the model file (before calibration).
+
+        Parameters
+        ----------
+        name : str
+            The parameter.
+
+        Returns
+        -------
+        float
+            Its value, in its unit.
+        """
         return self._ctx.ident.current(name)
 
     def theta_values(self, values: Mapping[str, float] | None = None) -> np.ndarray:
-        """θ of the linear core for the current values (``values`` overriding; others ignored)."""
+        """θ of the linear core for the current values (``values`` overriding; others ignored).
+
+        Parameters
+        ----------
+        values : mapping of str to float, optional
+            Parameter values overriding the current ones (others ignored).
+
+        Returns
+        -------
+        numpy.ndarray
+            The core's parameter vector (see :meth:`bondgraph.Simulator.theta`).
+        """
         known = self._ctx.core_parameters
         vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
         return self._ctx.ident.sim.theta(vals)
@@ -192,7 +303,22 @@ class View:
     ) -> np.ndarray:
         """Output of the linear core (the calibrated nominal dynamics, fast modes residualised,
         sensor gain 1) driven by each column (a sequence of series, or a 2-D array with one
-        per column), from rest; at the sample indices ``rows`` only, if given."""
+        per column), from rest; at the sample indices ``rows`` only, if given.
+
+        Parameters
+        ----------
+        columns : sequence of numpy.ndarray or numpy.ndarray
+            Drive series on every sample (drive units).
+        values : mapping of str to float, optional
+            Parameter values overriding the current ones (others ignored).
+        rows : numpy.ndarray, optional
+            Sample indices to return.
+
+        Returns
+        -------
+        numpy.ndarray
+            (rows, columns) output, output units at sensor gain 1.
+        """
         ctx = self._ctx
         th = self.theta_values(values)
         U = columns if isinstance(columns, np.ndarray) and columns.ndim == 2 else np.column_stack(columns)
@@ -208,7 +334,24 @@ class View:
         """:meth:`respond` to the columns of the 2-D array ``columns`` and its derivatives with
         respect to the linear core's parameters ``names``: (Y (rows, columns), dY (names, rows,
         columns)) from the output sensitivities (:mod:`bondgraph.linear.sensitivity`), or None
-        when the core has no well-conditioned modal form."""
+        when the core has no well-conditioned modal form.
+
+        Parameters
+        ----------
+        columns : numpy.ndarray
+            2-D array, one drive series per column (drive units).
+        names : sequence of str
+            Parameters of the linear core.
+        values : mapping of str to float, optional
+            Parameter values overriding the current ones (others ignored).
+        rows : numpy.ndarray, optional
+            Sample indices to return.
+
+        Returns
+        -------
+        tuple of numpy.ndarray or None
+            (Y, dY), dY per unit of each parameter; or None.
+        """
         ctx = self._ctx
         modal = sensitivity(ctx.lti, self.theta_values(values), names, ctx.cut)
         return None if modal is None else modal.time(ctx.dt, columns, rows)
@@ -216,7 +359,20 @@ class View:
     def frequency_response(self, omega: np.ndarray, values: Mapping[str, float] | None = None) -> np.ndarray:
         """The linear core's frequency response at ``omega`` (rad/s), sensor gain 1, with the
         drive's reading and the measurement chain's delay of the output behind the drive (as
-        :meth:`respond` sees it)."""
+        :meth:`respond` sees it).
+
+        Parameters
+        ----------
+        omega : numpy.ndarray
+            Angular frequencies, rad/s.
+        values : mapping of str to float, optional
+            Parameter values overriding the current ones (others ignored).
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex H(jω), output units per drive unit.
+        """
         ctx = self._ctx
         th = self.theta_values(values)
         omega = np.asarray(omega, float)
@@ -227,7 +383,17 @@ class View:
         )
 
     def empirical_frf(self):
-        """(ω rad/s, H, coherence) of the measured output over the input (Welch)."""
+        """(ω rad/s, H, coherence) of the measured output over the input (Welch).
+
+        Returns
+        -------
+        omega : numpy.ndarray
+            Angular frequencies of the Welch bins, rad/s.
+        H : numpy.ndarray
+            Complex H1 estimate, output units per input unit.
+        coherence : numpy.ndarray
+            Magnitude-squared coherence, between 0 and 1.
+        """
         return empirical_frf(self._ctx.u_recorded, self._ctx.y, self._ctx.fs)
 
     #: coherence above which the record resolves the response (the empirical FRF's bins)
@@ -237,7 +403,20 @@ class View:
         """Median magnitude-squared coherence of the measured output with the input within
         ±``width`` (relative) of ``omega`` (rad/s; the nearest Welch bin if none is that
         close): above :attr:`resolved_coherence` the record resolves the response there,
-        below it the noise is as large as the response."""
+        below it the noise is as large as the response.
+
+        Parameters
+        ----------
+        omega : float
+            Angular frequency, rad/s.
+        width : float, optional
+            Relative half-width of the band.
+
+        Returns
+        -------
+        float
+            The coherence, between 0 and 1.
+        """
         w, coh = coherence_spectrum(self._ctx.u_recorded, self._ctx.y, self._ctx.fs)
         near = np.abs(w - omega) <= width * omega
         return float(np.median(coh[near])) if near.any() else float(coh[int(np.argmin(np.abs(w - omega)))])
@@ -245,7 +424,18 @@ class View:
     def resolved_share(self, raw: np.ndarray) -> float:
         """The share (0-1) of the residual power a raw prediction removes (its sensor gain and
         offset solved) that lies where the record resolves the response (coherence of output
-        and drive at least :attr:`resolved_coherence`); 0 when it removes none."""
+        and drive at least :attr:`resolved_coherence`); 0 when it removes none.
+
+        Parameters
+        ----------
+        raw : numpy.ndarray
+            A raw prediction on every sample.
+
+        Returns
+        -------
+        float
+            The share, between 0 and 1.
+        """
         g, b = self.score(raw)[:2]
         u, y, fs = self._ctx.u_recorded, self._ctx.y, self._ctx.fs
         _, coh = coherence_spectrum(u, y, fs)
@@ -255,7 +445,19 @@ class View:
         return float(drop[coh >= self.resolved_coherence].sum() / drop.sum()) if drop.sum() > 0 else 0.0
 
     def score(self, raw: np.ndarray) -> tuple[float, float, float, float]:
-        """(sensor gain, offset, RMS fit part, RMS validation part) of a raw prediction."""
+        """(sensor gain, offset, RMS fit part, RMS validation part) of a raw prediction.
+
+        Parameters
+        ----------
+        raw : numpy.ndarray
+            A raw prediction on every sample.
+
+        Returns
+        -------
+        tuple of float
+            The sensor gain and offset solved on the fit part (output units for the offset),
+            and the RMS errors on the fit and validation parts (output units).
+        """
         return score(self._ctx, raw)
 
     # ---- fitting services ---------------------------------------------------------------------
@@ -274,7 +476,13 @@ class View:
         """The calibrated linear parameters whose current value sits on its search bound: the
         linear calibration went as far as it may to absorb what no linear device explains (a
         resonance that moves with amplitude read as heavy damping), so a fit inside the
-        dynamics should not start only from there."""
+        dynamics should not start only from there.
+
+        Returns
+        -------
+        list of str
+            The parameters' names.
+        """
         return [
             p.name
             for p in self._linear_params()
@@ -284,7 +492,13 @@ class View:
     def implausible(self) -> list[str]:
         """The calibrated linear parameters whose current value lies outside the plausible
         device's tolerance: the calibration may have bent the device to mimic an effect, so a
-        fit of that effect should start from the model file's values too."""
+        fit of that effect should start from the model file's values too.
+
+        Returns
+        -------
+        list of str
+            The parameters' names.
+        """
         plausible = self._ctx.plausible
         return [
             n
@@ -294,7 +508,13 @@ class View:
         ]
 
     def model_file_values(self) -> dict[str, float]:
-        """The model file's values of the calibrated linear parameters."""
+        """The model file's values of the calibrated linear parameters.
+
+        Returns
+        -------
+        dict of str to float
+            Name → value, in the parameters' units.
+        """
         return {n: self.nominal_value(n) for n in self.linear}
 
     def fit_drive(
@@ -325,7 +545,46 @@ class View:
         *additive* (:mod:`bondgraph.diagnosis.additive`): the basis is of :attr:`additive`'s
         base drive, d is that sum with the weights named before refitted too (within their
         bounds), and ``identity=False`` replaces only the base drive's own term; the result's
-        ``additive`` is the new sum."""
+        ``additive`` is the new sum.
+
+        Parameters
+        ----------
+        basis : sequence of numpy.ndarray or callable, optional
+            Basis series on every sample (drive units per unit coefficient), or a function of
+            the nonlinear parameters z returning them.
+        lower, upper : sequence of float, optional
+            Bounds of the basis coefficients, one per basis column.
+        direct : sequence of numpy.ndarray or callable, optional
+            Columns added to the output (output units at sensor gain 1), or a function of z.
+        identity : bool, optional
+            Keep the current drive with weight 1 (False: it is replaced).
+        z0 : sequence of float, optional
+            Start values of the nonlinear parameters z.
+        z_bounds : sequence of tuple of float, optional
+            (lower, upper) of each z.
+        z_names : sequence of str, optional
+            Names of the z, for ``at_bounds``.
+        refit : bool, optional
+            Refit the calibrated linear parameters too.
+        max_nfev : int, optional
+            The optimiser's evaluation budget (times the view's effort).
+        starts : sequence of sequence of float, optional
+            Further start points of z.
+        start : mapping of str to float, optional
+            Start values of the calibrated linear parameters (default: the current ones).
+        names : sequence of str, optional
+            The parameters that will hold the basis weights: an additive fit.
+
+        Returns
+        -------
+        DriveFit
+            The coefficients, values, drive and raw prediction.
+
+        Raises
+        ------
+        ValueError
+            The current model is not a drive transform of its linear core.
+        """
         if self.drive is None:
             raise ValueError("the current model is not a drive transform of its linear core")
         held = self.additive if names is not None else None
@@ -472,7 +731,20 @@ class View:
     def additive_expr(self, part: sp.Expr, identity: bool = True) -> sp.Expr:
         """The drive expression after an additive extension (fitted with ``names``) adds
         ``part``, an expression of :attr:`additive`'s ``base_expr``; with ``identity=False``
-        ``part`` replaces the base drive's own term."""
+        ``part`` replaces the base drive's own term.
+
+        Parameters
+        ----------
+        part : sympy.Expr
+            The added part, an expression of the base drive.
+        identity : bool, optional
+            Keep the base drive's own term (False: ``part`` replaces it).
+
+        Returns
+        -------
+        sympy.Expr
+            The new drive expression.
+        """
         a = self.additive
         expr = self.drive_expr + part
         return expr - a.base_expr if a.identity and not identity else expr
@@ -482,7 +754,20 @@ class View:
         (and, with ``additive``, the weights of the additive drive's terms) refitted, from
         ``start`` (where a candidate's joint fit left them): what that refit alone explains,
         so that a candidate is credited only with what its effect adds.  None when the current
-        model is not a drive transform of its linear core or has nothing to refit."""
+        model is not a drive transform of its linear core or has nothing to refit.
+
+        Parameters
+        ----------
+        start : mapping of str to float
+            Start values of the parameters refitted.
+        additive : bool, optional
+            Refit the additive drive's weights too.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            The raw prediction on every sample, or None.
+        """
         additive = additive and bool(self.additive and self.additive.terms)
         if self.drive is None or not self.exact or not (self.linear or additive):
             return None
@@ -490,7 +775,20 @@ class View:
 
     def identification(self, model: Model, integrate: bool = False) -> Identification:
         """An :class:`Identification` of ``model`` on the same data and split (exact linear
-        route when the model is linear, unless ``integrate``)."""
+        route when the model is linear, unless ``integrate``).
+
+        Parameters
+        ----------
+        model : Model
+            The model (e.g. an extension of the current one).
+        integrate : bool, optional
+            Always simulate with the compiled integrator.
+
+        Returns
+        -------
+        Identification
+            Ready to predict and fit ``model`` on this record.
+        """
         ident = self._ctx.ident.like(model, rtol=1e-6)
         if integrate:
             ident.lti = None
@@ -499,7 +797,27 @@ class View:
     def simulate(self, model: Model, values: Mapping[str, float], max_steps: int | None = None) -> np.ndarray:
         """Raw output (sensor gain 1, no offset) of ``model`` with ``values`` on every sample;
         with ``max_steps``, by the compiled explicit integrator within that many steps (a
-        :class:`~bondgraph.numerics.simulate.SimulationError` beyond: a bounded cost for a fallback)."""
+        :class:`~bondgraph.numerics.simulate.SimulationError` beyond: a bounded cost for a fallback).
+
+        Parameters
+        ----------
+        model : Model
+            The model to simulate.
+        values : mapping of str to float
+            Parameter values (names the model does not know are ignored).
+        max_steps : int, optional
+            Step limit of the explicit integrator.
+
+        Returns
+        -------
+        numpy.ndarray
+            The raw prediction on every sample, output units.
+
+        Raises
+        ------
+        SimulationError
+            The integration failed, passed ``max_steps`` or the context's time limit.
+        """
         if max_steps is None:
             predict, known = self.predictor(model)
             return predict({k: v for k, v in values.items() if k in known})
@@ -514,7 +832,22 @@ class View:
         knows): by the exact linear route, driven by ``drive`` when given (for an extension
         of :meth:`core`: the drive it sees, ``self.drive``; the output part outside the core,
         ``extra``, is added), else by the compiled integrator within the context's time
-        limits (:func:`~bondgraph.diagnosis.projection.simulation_deadline`)."""
+        limits (:func:`~bondgraph.diagnosis.projection.simulation_deadline`).
+
+        Parameters
+        ----------
+        model : Model
+            The model to predict with.
+        drive : numpy.ndarray, optional
+            The drive series an extension of :meth:`core` sees.
+
+        Returns
+        -------
+        predict : callable
+            ``predict(values)`` → raw prediction on every sample.
+        known : set of str
+            The parameter names ``model`` knows.
+        """
         return self._routes(model, drive)[:2]
 
     def _routes(self, model: Model, drive: np.ndarray | None = None):
@@ -551,7 +884,38 @@ class View:
         else the compiled integrator, or ``predict(values)`` if given (e.g. :meth:`lure`).  A spec
         with lower = upper is held.  Returns (values, raw prediction, success, message, names at
         a bound).  ``drive``: for an extension of :meth:`core`, the drive it sees (``self.drive``);
-        the output part outside the core (``extra``) is added."""
+        the output part outside the core (``extra``) is added.
+
+        Parameters
+        ----------
+        model : Model
+            The extended model.
+        new : sequence of Spec
+            How each new parameter is fitted.
+        max_nfev : int, optional
+            The optimiser's evaluation budget (times the view's effort).
+        refit : bool, optional
+            Refit the calibrated linear parameters too.
+        start : mapping of str to float, optional
+            Start values of parameters (default: the current values).
+        predict : callable, optional
+            ``predict(values)`` → raw prediction on every sample, instead of simulating.
+        drive : numpy.ndarray, optional
+            The drive an extension of :meth:`core` sees.
+
+        Returns
+        -------
+        values : dict of str to float
+            Every parameter value after the fit.
+        raw : numpy.ndarray
+            The raw prediction on every sample.
+        success : bool
+            The optimiser's success flag.
+        message : str
+            The optimiser's message.
+        at_bounds : list of str
+            Parameters that ended on a search bound.
+        """
         sens = None
         if predict is None:
             predict, known, sens = self._routes(model, drive)
@@ -613,7 +977,22 @@ class View:
         it (:attr:`on_core`: e.g. after hysteresis on the drive) or the core with the terms named
         so far (held), else of ``model`` (e.g. after a linear structural cause: a compliant output
         stage).  Its ``drive`` is the series to feed it and ``extra`` the output part outside it
-        (or None); None when that model is not linear."""
+        (or None); None when that model is not linear.
+
+        Parameters
+        ----------
+        model : Model
+            The extended model (used when the current model is no drive transform of its core).
+        elements : sequence of str
+            The elements the nonlinear terms act on.
+        partners : mapping of str to str or None
+            Element → the partner whose displacement its term uses, :data:`DRIVE`, or None.
+
+        Returns
+        -------
+        Lure or None
+            The Lur'e system, or None off the exact linear route.
+        """
         if not self.exact or self.reduced:
             return None
         try:
@@ -632,7 +1011,23 @@ class View:
 
     def states(self, values: Mapping[str, float] | None = None) -> dict[str, np.ndarray]:
         """State trajectories (and the output's rate, key ``"output rate"``) of the current
-        model, integrated."""
+        model, integrated.
+
+        Parameters
+        ----------
+        values : mapping of str to float, optional
+            Parameter values overriding the current ones (others ignored).
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            State name → series on every sample, plus ``"output rate"`` (output units per s).
+
+        Raises
+        ------
+        SimulationError
+            The integration failed or passed the context's time limit.
+        """
         ident = self.identification(self.model, integrate=True)
         known = {p.name for p in ident.sim.eqs.params}
         vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
@@ -644,6 +1039,17 @@ class View:
         return out
 
     def state_of(self, element: str) -> str:
-        """Name of the state variable an element stores (e.g. the displacement of a spring)."""
+        """Name of the state variable an element stores (e.g. the displacement of a spring).
+
+        Parameters
+        ----------
+        element : str
+            The element's name.
+
+        Returns
+        -------
+        str
+            The state's name.
+        """
         eqs = self._ctx.eqs
         return next(str(s.symbol) for s in eqs.states if s.origin == element)

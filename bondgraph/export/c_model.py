@@ -83,7 +83,15 @@ class _Unprintable(Exception):
 
 @dataclass
 class ModelC:
-    """The generated model code: ``source`` (bg_model.c) and its ``layout``."""
+    """The generated model code: ``source`` (bg_model.c) and its ``layout``.
+
+    Parameters
+    ----------
+    source : str
+        The C source of bg_model.c.
+    layout : Layout
+        Where every symbol lives in the C functions' arrays.
+    """
 
     source: str
     layout: Layout
@@ -91,7 +99,20 @@ class ModelC:
 
 def refuse_input_rates(eqs: Equations, external: set[str]) -> None:
     """ModelError naming the element whose law reads the rate of an input the FMU receives from
-    outside (FMI 2.0 model-exchange inputs carry no derivatives)."""
+    outside (FMI 2.0 model-exchange inputs carry no derivatives).
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    external : set of str
+        The inputs the FMU receives from outside.
+
+    Raises
+    ------
+    ModelError
+        A law reads the rate of an external input (the message names the element).
+    """
     rates = {du: str(u) for u, du in zip(eqs.inputs, eqs.input_rates) if str(u) in external}
     if not rates:
         return
@@ -122,7 +143,23 @@ def _laws(eqs: Equations):
 
 
 def operator_sources(eqs: Equations) -> list[CSource]:
-    """Each operator block's :class:`CSource`; ModelError naming the first operator without one."""
+    """Each operator block's :class:`CSource`; ModelError naming the first operator without one.
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+
+    Returns
+    -------
+    list of CSource
+        One per memory operator, in the order of ``eqs.operators``.
+
+    Raises
+    ------
+    ModelError
+        An operator has no C source, or ``c_source()`` returned something else.
+    """
     out = []
     for ob in eqs.operators:
         src = ob.operator.c_source()
@@ -147,7 +184,25 @@ _HELPER_NAME = re.compile(r"\b([A-Za-z_]\w*)\s*\(")
 
 def helpers(sources: list[CSource], names: list[str]) -> list[str]:
     """The operators' helper definitions, each text once; ModelError if one name carries two
-    texts (``names``: the operators', for the message)."""
+    texts (``names``: the operators', for the message).
+
+    Parameters
+    ----------
+    sources : list of CSource
+        The operators' C sources.
+    names : list of str
+        The operators' names, in the same order.
+
+    Returns
+    -------
+    list of str
+        The helper definitions, first occurrence order.
+
+    Raises
+    ------
+    ModelError
+        Two operators define one helper name differently.
+    """
     seen: dict[str, str] = {}
     out = []
     for who, src in zip(names, sources):
@@ -167,6 +222,18 @@ def helpers(sources: list[CSource], names: list[str]) -> list[str]:
 
 def model_source(eqs: Equations, header: str) -> ModelC:
     """``bg_model.c`` for ``eqs`` (see the module docstring); ``header`` is the comment on top.
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    header : str
+        The comment on top of the file.
+
+    Returns
+    -------
+    ModelC
+        The source and its layout.
 
     Raises
     ------
@@ -244,7 +311,22 @@ def model_source(eqs: Equations, header: str) -> ModelC:
 
 
 def operator_functions(k: int, title: str, src: CSource) -> list[str]:
-    """C lines of ``op<k>_output``, ``op<k>_commit`` and ``op<k>_initial`` from ``src``."""
+    """C lines of ``op<k>_output``, ``op<k>_commit`` and ``op<k>_initial`` from ``src``.
+
+    Parameters
+    ----------
+    k : int
+        The operator's index.
+    title : str
+        What the comment above the functions calls it.
+    src : CSource
+        Its C source.
+
+    Returns
+    -------
+    list of str
+        The lines, without line ends.
+    """
     sig = "int n_mem, const double *prm, int n_prm"
     unused = "    (void)mem; (void)n_mem; (void)prm; (void)n_prm;"
     return [
@@ -269,7 +351,18 @@ def operator_functions(k: int, title: str, src: CSource) -> list[str]:
 
 
 def comment(text: str) -> str:
-    """``text`` as a one-line C comment (a ``*/`` inside it is broken up)."""
+    """``text`` as a one-line C comment (a ``*/`` inside it is broken up).
+
+    Parameters
+    ----------
+    text : str
+        The comment's text (whitespace is collapsed).
+
+    Returns
+    -------
+    str
+        ``/* text */``.
+    """
     return "/* " + " ".join(text.replace("*/", "* /").split()) + " */"
 
 

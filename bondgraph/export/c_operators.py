@@ -26,6 +26,18 @@ def c_runs(operators: Sequence[MemoryOperator], cc: str | None = None) -> list[C
     """Per operator, ``run(v, prm=None) -> ndarray``: its output along the sampled input ``v``
     from rest, computed by its C twin (``prm`` defaults to the operator's parameter values).
 
+    Parameters
+    ----------
+    operators : sequence of MemoryOperator
+        The operators to compile.
+    cc : str, optional
+        The C compiler (default ``$CC``, else ``cc``).
+
+    Returns
+    -------
+    list of callable
+        One ``run`` per operator, in order.
+
     Raises
     ------
     ModelError

@@ -17,6 +17,16 @@ FLAGS = ("-std=c99", "-O2", "-fPIC", "-shared", "-fvisibility=hidden")
 def find_compiler(cc: str | None = None) -> str:
     """The path of the C compiler ``cc`` (default ``$CC``, else ``cc``).
 
+    Parameters
+    ----------
+    cc : str, optional
+        The compiler's name or path.
+
+    Returns
+    -------
+    str
+        Its full path.
+
     Raises
     ------
     UsageError
@@ -31,7 +41,24 @@ def find_compiler(cc: str | None = None) -> str:
 
 def build_shared(cc: str, directory: Path, sources: list[str], output: Path) -> str | None:
     """Compile ``sources`` (file names in ``directory``) into the shared library ``output``;
-    returns None on success, else the compiler's first error line."""
+    returns None on success, else the compiler's first error line.
+
+    Parameters
+    ----------
+    cc : str
+        The compiler's path.
+    directory : pathlib.Path
+        The working directory holding the sources.
+    sources : list of str
+        C file names in ``directory``.
+    output : pathlib.Path
+        The shared library to write.
+
+    Returns
+    -------
+    str or None
+        None on success, else the compiler's first error line.
+    """
     cmd = [cc, *FLAGS, "-o", str(output), *sources, "-lm"]
     proc = subprocess.run(cmd, cwd=directory, capture_output=True, text=True)
     if proc.returncode == 0:

@@ -55,7 +55,31 @@ STATIC_SOURCES = ("bg_fmu.c", "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2Typ
 @dataclass
 class FMUReport:
     """What :func:`export_fmu` wrote: the file, its model identifier and GUID, the variables'
-    counts, the state nominals (by state name) and the compile time (s)."""
+    counts, the state nominals (by state name) and the compile time (s).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The FMU file written.
+    model_identifier : str
+        The FMI ``modelIdentifier`` (the name of the binary inside the FMU).
+    guid : str
+        The FMU's GUID.
+    n_states : int
+        Number of continuous states.
+    parameters : list of str
+        Names of the FMU's tunable parameters.
+    inputs : list of str
+        The model inputs that are FMU inputs (set by the importing tool).
+    embedded : list of str
+        The model inputs driven inside the FMU by the ``signals`` given.
+    outputs : list of str
+        Names of the FMU's outputs.
+    nominals : dict of str to float, optional
+        State name → nominal magnitude (state units) written to the FMU.
+    compile_seconds : float, optional
+        Time the C compiler took, s.
+    """
 
     path: Path
     model_identifier: str
@@ -115,6 +139,7 @@ def export_fmu(
     Returns
     -------
     FMUReport
+        The file written and what it holds.
 
     Raises
     ------

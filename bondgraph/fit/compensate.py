@@ -36,7 +36,27 @@ from ..support.errors import ModelError, UsageError, did_you_mean
 def invert_operator(op: MemoryOperator, y, prm=None) -> np.ndarray:
     """The input sequence v (from rest) with op[v] = y sample by sample (units of the
     operator's input). Uses ``op.inverse()`` when available; otherwise solves each sample
-    numerically, which needs an output that increases with the input (monotone hysteresis)."""
+    numerically, which needs an output that increases with the input (monotone hysteresis).
+
+    Parameters
+    ----------
+    op : MemoryOperator
+        The operator to invert.
+    y : array_like
+        The wanted output sequence, in the operator's output units.
+    prm : array_like, optional
+        The operator's parameter vector (default: its own values).
+
+    Returns
+    -------
+    numpy.ndarray
+        v, one input value per sample, in the operator's input units.
+
+    Raises
+    ------
+    ModelError
+        The operator's output does not rise with its input where it must (not monotone).
+    """
     y = np.ascontiguousarray(y, dtype=np.float64).ravel()
     prm = op.parameter_values() if prm is None else np.ascontiguousarray(prm, dtype=np.float64)
     inv = op.inverse()
@@ -84,11 +104,29 @@ class Compensation:
     """Result of :func:`feedforward` (arrays sampled at ``t``; drive in the model input's units,
     reference and predictions in the output's).
 
-    ``drive``/``predicted``: compensated drive and the model's response to it;
-    ``linear_drive``/``linear_predicted``: the uncompensated (linear inverse) drive and response;
-    ``history``: max |error| after each model simulation of the iteration; ``method``:
-    "operator inverse" or "iteration"; ``notes``: what the user must know about the result
-    (a drive clipped to the input's range, an operator that is not monotone)."""
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    reference : numpy.ndarray
+        The desired output trajectory, output units.
+    drive : numpy.ndarray
+        The compensated drive, input units.
+    predicted : numpy.ndarray
+        The model's response to ``drive``.
+    linear_drive : numpy.ndarray
+        The uncompensated (linear inverse) drive: proportional to the reference, spanning the
+        same range as ``drive``.
+    linear_predicted : numpy.ndarray
+        The model's response to ``linear_drive``.
+    method : {"operator inverse", "iteration"}
+        How the drive was found.
+    history : list, optional
+        max |error| after each model simulation of the iteration, output units.
+    notes : list, optional
+        What the user must know about the result (a drive clipped to the input's range, an
+        operator that is not monotone).
+    """
 
     t: np.ndarray
     reference: np.ndarray
@@ -116,6 +154,15 @@ class Compensation:
         return self.linear_error / max(self.error, np.finfo(float).tiny)
 
     def summary(self) -> dict:
+        """The result's numbers as a JSON object (``bondgraph compensate --json``).
+
+        Returns
+        -------
+        dict
+            ``method``, ``simulations``, ``max_error`` and ``max_error_uncompensated``
+            (output units), the same relative to the reference's range, ``improvement`` and
+            ``notes``.
+        """
         span = max(float(np.ptp(self.reference)), np.finfo(float).tiny)
         return {
             "method": self.method,
@@ -171,7 +218,47 @@ def feedforward(
     ``tol`` times the reference's range. ``progress(k)`` is called after each simulation.
     ``drive_range``: (lowest, highest) drive the device accepts (default: the range the model
     declares for ``input``, if any); a drive beyond it is clipped to it, with a note, and the
-    predicted output is the clipped drive's."""
+    predicted output is the clipped drive's.
+
+    Parameters
+    ----------
+    model : Model or Simulator
+        The model to invert.
+    t : array_like
+        Sample times, s, strictly increasing.
+    reference : array_like
+        The desired output at ``t``, output units, measured from the output at rest.
+    input : str, optional
+        The model input to drive.
+    output : str, optional
+        The model output that must follow ``reference``.
+    params : mapping of str to float, optional
+        Parameter values overriding the model's.
+    inputs : mapping of str to Signal, optional
+        Signals of the model's other inputs (default 0).
+    iterations : int, optional
+        Most model simulations of the iteration.
+    tol : float, optional
+        Stop when the largest error is below ``tol`` times the reference's range.
+    rtol : float, optional
+        Relative tolerance of the integrator.
+    progress : callable, optional
+        ``progress(k)`` after the k-th simulation.
+    drive_range : tuple of float, optional
+        (lowest, highest) drive the device accepts, input units.
+
+    Returns
+    -------
+    Compensation
+        The compensated and the linear-inverse drive with their predicted responses.
+
+    Raises
+    ------
+    UsageError
+        ``t`` and ``reference`` differ in length, or an unknown input or output.
+    ModelError
+        The output does not respond to the input, or an operator cannot be inverted.
+    """
     sim = model if isinstance(model, Simulator) else Simulator(model)
     t = np.asarray(t, float).ravel()
     ref = np.asarray(reference, float).ravel()

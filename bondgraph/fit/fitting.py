@@ -36,7 +36,25 @@ FORMAT = FIT_FORMAT
 @dataclass
 class ModelFit:
     """A fit of a model file to data: the result, the parameters solved linearly, every
-    parameter value of the fitted model, the model input/output and the fit's settings."""
+    parameter value of the fitted model, the model input/output and the fit's settings.
+
+    Parameters
+    ----------
+    result : FitResult
+        Values, standard errors, offset and RMS errors of the fit.
+    linear : list of str
+        The fitted parameters solved by linear least squares.
+    params : dict, optional
+        Every parameter value of the fitted model, by name.
+    input : str, optional
+        The model input the data drove.
+    output : str, optional
+        The model output compared with the data.
+    output_unit : str, optional
+        The output's unit (that of the offset and the RMS errors).
+    settings : dict, optional
+        ``validation``, ``split``, ``loss`` and ``starts`` of the fit.
+    """
 
     result: FitResult
     linear: list[str]
@@ -49,7 +67,27 @@ class ModelFit:
     def as_json(
         self, model: str = "", data: str = "", data_input: str | None = None, data_output: str | None = None
     ) -> dict:
-        """The fit file: see the module docstring."""
+        """The fit file: see the module docstring.
+
+        Parameters
+        ----------
+        model : str, optional
+            The model file's path, as recorded.
+        data : str, optional
+            The data file's path, as recorded.
+        data_input : str, optional
+            The data column of the drive (default: the model input's name).
+        data_output : str, optional
+            The data column of the output (default: the model output's name).
+
+        Returns
+        -------
+        dict
+            ``format``, ``model``, ``data``, ``input``, ``output``, ``data_input``,
+            ``data_output``, ``params``, ``fitted``, ``linear``, ``stderr``, ``offset``,
+            ``offset_unit``, ``rms_fit``, ``rms_validation``, ``nfev``, ``success``,
+            ``message`` and ``settings``.
+        """
         res = self.result.as_json()
         return {
             "format": FORMAT,
@@ -89,7 +127,47 @@ def fit_parameters(
 ) -> ModelFit:
     """Least-squares fit of ``names`` of the loaded model file to ``data`` (model input
     ``input`` driven by the data column of that name, compared with output ``output``; both
-    default to the model's first declared input and output)."""
+    default to the model's first declared input and output).
+
+    Parameters
+    ----------
+    loaded : LoadedModel
+        The model file, loaded (:func:`bondgraph.model.modelfile.load_model`).
+    data : Dataset
+        The measured record.
+    names : sequence of str
+        The real-valued parameters to fit, each once.
+    input : str, optional
+        The model input (and data column) driving the model.
+    output : str, optional
+        The model output (and data column) compared.
+    validation : float, optional
+        Share of the record held out for validation, between 0 and 1.
+    split : {"blocks", "tail"}, optional
+        How it is held out (:func:`~bondgraph.fit.identify.split_masks`).
+    loss : str, optional
+        The loss of ``scipy.optimize.least_squares``.
+    starts : int, optional
+        Start points of the fit (the best is kept).
+    progress : callable, optional
+        ``progress(n)`` as simulations run.
+
+    Returns
+    -------
+    ModelFit
+        The fit, with every parameter value of the fitted model.
+
+    Raises
+    ------
+    UsageError
+        No name, a name listed twice, a parameter that is not real-valued, or a bad split.
+    ParameterError
+        A name is not a parameter of the model.
+    DataError
+        A missing column, or a drive that does not vary.
+    SimulationError
+        The model cannot be simulated from its start values.
+    """
     from ..numerics.checks import check_start
 
     names = list(names)

@@ -42,7 +42,28 @@ from ..support.errors import DataError, ParameterError, UsageError, did_you_mean
 
 @dataclass
 class Spec:
-    """How one parameter is fitted: start value, bounds, scale, log transform, linearity."""
+    """How one parameter is fitted: start value, bounds, scale, log transform, linearity.
+
+    The optimiser works on z, the parameter mapped by :meth:`to_z`: z = log v for a log
+    parameter, z = v / scale otherwise.
+
+    Parameters
+    ----------
+    name : str
+        The model parameter.
+    start : float
+        Start value, in the parameter's unit.
+    lower, upper : float, optional
+        Bounds, same unit (default unbounded; a log parameter needs ``lower`` > 0 for a
+        finite lower z bound).
+    scale : float, optional
+        Typical magnitude, same unit (used when not ``log``).
+    log : bool, optional
+        Fit log v (a positive parameter spanning decades).
+    linear : bool, optional
+        The output is linear in this parameter: it is solved by bounded linear least squares
+        at each step of the nonlinear ones instead of being searched for.
+    """
 
     name: str
     start: float
@@ -53,12 +74,46 @@ class Spec:
     linear: bool = False
 
     def to_z(self, v: float) -> float:
+        """The optimiser's coordinate of a value.
+
+        Parameters
+        ----------
+        v : float
+            The parameter's value, in its unit (> 0 for a log parameter).
+
+        Returns
+        -------
+        float
+            log v for a log parameter, v / scale otherwise.
+        """
         return math.log(v) if self.log else v / self.scale
 
     def from_z(self, z: float) -> float:
+        """The value at an optimiser coordinate (the inverse of :meth:`to_z`).
+
+        Parameters
+        ----------
+        z : float
+            The optimiser's coordinate.
+
+        Returns
+        -------
+        float
+            exp z for a log parameter, z · scale otherwise, in the parameter's unit.
+        """
         return math.exp(z) if self.log else z * self.scale
 
     def z_bounds(self) -> tuple[float, float]:
+        """The bounds mapped to the optimiser's coordinate.
+
+        Returns
+        -------
+        lower : float
+            The lower bound in z (−inf where the value's is, or for a log parameter whose
+            lower bound is not positive).
+        upper : float
+            The upper bound in z (inf where the value's is).
+        """
         if self.log:
             return (
                 math.log(self.lower) if self.lower > 0 else -np.inf,
@@ -68,7 +123,24 @@ class Spec:
 
 
 def default_spec(name: str, value: float, bounds=None, linear: bool = False) -> Spec:
-    """Log scale for positive parameters (bounded to ×/÷ 1000 unless given), linear otherwise."""
+    """Log scale for positive parameters (bounded to ×/÷ 1000 unless given), linear otherwise.
+
+    Parameters
+    ----------
+    name : str
+        The parameter.
+    value : float
+        Its start value, in its unit.
+    bounds : tuple of float, optional
+        The declared (lower, upper) bounds, if any.
+    linear : bool, optional
+        The output is linear in the parameter (then never log scale).
+
+    Returns
+    -------
+    Spec
+        How to fit it.
+    """
     lo, hi = bounds if bounds is not None else (-np.inf, np.inf)
     if value > 0 and lo >= 0 and not linear:
         lo = max(lo, value / 1e3) if lo > 0 or bounds is None else value / 1e3
@@ -80,7 +152,30 @@ def default_spec(name: str, value: float, bounds=None, linear: bool = False) -> 
 
 @dataclass
 class FitResult:
-    """Outcome of a fit: values, standard errors, offset, RMS errors (output units)."""
+    """Outcome of a fit: values, standard errors, offset, RMS errors (output units).
+
+    Parameters
+    ----------
+    values : dict of str to float
+        The fitted values, in the parameters' units.
+    stderr : dict of str to float
+        Standard errors of the nonlinearly fitted parameters, same units (conditional on the
+        others; see the module docstring).
+    offset : float
+        The output offset solved with them, output units (measured ≈ model + offset).
+    rms_fit : float
+        RMS error on the fit part, output units.
+    rms_validation : float
+        RMS error on the validation part, output units.
+    nfev : int
+        Number of simulations the fit ran.
+    success : bool
+        The optimiser's success flag.
+    message : str, optional
+        The optimiser's message.
+    prediction : numpy.ndarray, optional
+        The fitted output at every data time, offset included.
+    """
 
     values: dict[str, float]
     stderr: dict[str, float]
@@ -93,6 +188,14 @@ class FitResult:
     prediction: np.ndarray | None = field(default=None, repr=False)
 
     def as_json(self) -> dict:
+        """The result as a JSON object (without the prediction).
+
+        Returns
+        -------
+        dict
+            ``params``, ``stderr``, ``offset``, ``rms_fit``, ``rms_validation``, ``nfev``,
+            ``success`` and ``message``.
+        """
         return {
             "params": self.values,
             "stderr": self.stderr,
@@ -113,7 +216,35 @@ def split_masks(
     ``blocks``: ``blocks`` equal time blocks, a share ``validation`` of them (spread evenly,
     never the first) held out, each ``shift`` blocks later for another fold; ``tail``: the last
     ``validation`` of the time span.  The first ``skip`` of the span is in neither: the model
-    starts at rest, a measured device may not."""
+    starts at rest, a measured device may not.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s, increasing.
+    validation : float, optional
+        Share held out for validation, between 0 and 1.
+    mode : {"blocks", "tail"}, optional
+        How it is held out.
+    blocks : int, optional
+        Number of equal time blocks of the ``blocks`` mode.
+    skip : float, optional
+        Share of the time span at the start left out of both parts.
+    shift : int, optional
+        Blocks by which the held-out blocks move (another fold).
+
+    Returns
+    -------
+    fit : numpy.ndarray
+        Boolean mask of the fit part.
+    validation : numpy.ndarray
+        Boolean mask of the validation part.
+
+    Raises
+    ------
+    UsageError
+        ``validation`` outside (0, 1), or an unknown mode.
+    """
     if not 0.0 < validation < 1.0:
         raise UsageError(f"validation share must be between 0 and 1, not {validation}")
     span = t[-1] - t[0]
@@ -136,7 +267,48 @@ class Identification:
 
     ``input``/``output`` name the model's input and output (default: its first declared
     ones); ``data_input``/``data_output`` the data columns (default: the same names);
-    ``validation``, ``split``, ``blocks`` and ``shift``: the held-out part (:func:`split_masks`)."""
+    ``validation``, ``split``, ``blocks`` and ``shift``: the held-out part (:func:`split_masks`).
+
+    Parameters
+    ----------
+    model : Model or Simulator
+        The model (compiled here unless a :class:`~bondgraph.Simulator` is given).
+    data : Dataset
+        The measured record.
+    input : str, optional
+        The model input the data drive (default: its first declared one).
+    output : str, optional
+        The model output compared with the data (default: its first declared one).
+    data_input : str, optional
+        The data column of the drive (default: the same name as ``input``).
+    data_output : str, optional
+        The data column of the output (default: the same name as ``output``).
+    validation : float, optional
+        Share held out for validation, between 0 and 1.
+    split : {"blocks", "tail"}, optional
+        How it is held out.
+    max_fit_points : int, optional
+        The fit part is thinned to at most about this many samples.
+    rtol : float, optional
+        Relative tolerance of the integrator.
+    method : str, optional
+        Integrator (see :meth:`bondgraph.Simulator.run`).
+    lti : LTI, optional
+        The model's exact linear form, when already built.
+    cut : float, optional
+        Modes faster than this, rad/s, are residualised on the exact linear route.
+    blocks : int, optional
+        Number of time blocks of the ``blocks`` split.
+    shift : int, optional
+        Blocks by which the held-out blocks move (another fold).
+
+    Raises
+    ------
+    UsageError
+        An unknown input or output, or a bad split.
+    DataError
+        A missing column, or a drive that does not vary.
+    """
 
     def __init__(
         self,
@@ -189,7 +361,20 @@ class Identification:
         self.cut = cut
 
     def like(self, model: Model | Simulator, **kw) -> "Identification":
-        """The same data, input/output mapping and split for another (e.g. extended) model."""
+        """The same data, input/output mapping and split for another (e.g. extended) model.
+
+        Parameters
+        ----------
+        model : Model or Simulator
+            The other model.
+        **kw
+            Constructor arguments to change (e.g. ``rtol``, ``method``).
+
+        Returns
+        -------
+        Identification
+            A new identification.
+        """
         args = dict(
             input=self.input,
             output=self.output,
@@ -219,7 +404,29 @@ class Identification:
         is linear and the data uniformly sampled, with the modes faster than ``cut``
         residualised, from rest; else the compiled integrator).  ``drive``: other input samples
         for the exact route (one per data time, units of the input); ``deadline``: the
-        integrator's (see :meth:`Simulator.run`)."""
+        integrator's (see :meth:`Simulator.run`).
+
+        Parameters
+        ----------
+        values : mapping of str to float, optional
+            Parameter values overriding the model's.
+        inputs : mapping of str to Signal, optional
+            Further input signals (forces the integrator).
+        drive : numpy.ndarray, optional
+            Other drive samples for the exact route.
+        deadline : float, optional
+            A ``time.monotonic()`` value past which the integrator stops.
+
+        Returns
+        -------
+        numpy.ndarray
+            The model output at every data time, output units, without offset.
+
+        Raises
+        ------
+        SimulationError
+            The integrator failed or passed ``deadline``.
+        """
         self.nfev += 1
         if self.lti is not None and not inputs:
             th = self.sim.theta(values)
@@ -248,7 +455,24 @@ class Identification:
         parameters ``names``, at the sample indices ``rows`` (every sample for None): (Y (rows,
         columns), dY (names, rows, columns)), from the output sensitivities of
         :mod:`bondgraph.linear.sensitivity`, or None off the exact linear route, from a state
-        other than rest, or for a model without a well-conditioned modal form."""
+        other than rest, or for a model without a well-conditioned modal form.
+
+        Parameters
+        ----------
+        values : mapping of str to float or None
+            Parameter values overriding the model's.
+        names : sequence of str
+            The parameters to differentiate with respect to.
+        inputs : numpy.ndarray, optional
+            Input samples, one row per data time (one column per drive).
+        rows : numpy.ndarray, optional
+            Sample indices to return.
+
+        Returns
+        -------
+        tuple of numpy.ndarray or None
+            (Y, dY), dY per unit of each parameter; or None.
+        """
         if self.lti is None:
             return None
         th = self.sim.theta(values)
@@ -260,20 +484,72 @@ class Identification:
         return modal.time(self.dt, self.u if inputs is None else inputs, rows)
 
     def offset(self, pred: np.ndarray) -> float:
+        """The output offset that fits a prediction best on the fit part.
+
+        Parameters
+        ----------
+        pred : numpy.ndarray
+            Model output at every data time.
+
+        Returns
+        -------
+        float
+            mean(measured − pred) on the fit part, output units.
+        """
         return float(np.mean(self.y[self.fit_idx] - pred[self.fit_idx]))
 
     def scores(self, pred: np.ndarray) -> tuple[float, float, float]:
-        """(offset, rms on the fit part, rms on the validation part)."""
+        """(offset, rms on the fit part, rms on the validation part).
+
+        Parameters
+        ----------
+        pred : numpy.ndarray
+            Model output at every data time.
+
+        Returns
+        -------
+        tuple of float
+            The offset (:meth:`offset`) and the RMS errors after it, output units.
+        """
         b = self.offset(pred)
         r = self.y - pred - b
         return b, float(np.sqrt(np.mean(r[self.fit_mask] ** 2))), float(np.sqrt(np.mean(r[self.val_mask] ** 2)))
 
     def evaluate(self, values: Mapping[str, float] | None = None) -> FitResult:
+        """Score the model at given values without fitting.
+
+        Parameters
+        ----------
+        values : mapping of str to float, optional
+            Parameter values overriding the model's.
+
+        Returns
+        -------
+        FitResult
+            The values, offset, RMS errors and prediction (no standard errors).
+        """
         pred = self.predict(values)
         b, rf, rv = self.scores(pred)
         return FitResult(dict(values or {}), {}, b, rf, rv, 1, True, "evaluated", pred + b)
 
     def current(self, name: str) -> float:
+        """A parameter's value in the model.
+
+        Parameters
+        ----------
+        name : str
+            The parameter.
+
+        Returns
+        -------
+        float
+            Its value, in its unit.
+
+        Raises
+        ------
+        ParameterError
+            The model has no such parameter.
+        """
         table = {p.name: v for p, v in zip(self.sim.eqs.params, self.sim.theta())}
         if name not in table:
             raise ParameterError(did_you_mean(name, table, "parameter"))
@@ -281,6 +557,25 @@ class Identification:
 
     # ---- fitting -----------------------------------------------------------------------------
     def specs(self, names: Sequence[str], linear: Sequence[str] = ()) -> list[Spec]:
+        """Default fit specifications (:func:`default_spec`) from the model's values and bounds.
+
+        Parameters
+        ----------
+        names : sequence of str
+            The parameters to fit.
+        linear : sequence of str, optional
+            Those the output depends on linearly (:func:`detect_linear`).
+
+        Returns
+        -------
+        list of Spec
+            One per name.
+
+        Raises
+        ------
+        ParameterError
+            A name is not a parameter of the model.
+        """
         decl = self.sim.eqs.model.all_parameters()
         out = []
         for n in names:
@@ -301,7 +596,39 @@ class Identification:
         seed: int = 0,
         stderr: bool = True,
     ) -> FitResult:
-        """Fit ``specs`` (others at their model values, or ``fixed``); see the module docstring."""
+        """Fit ``specs`` (others at their model values, or ``fixed``); see the module docstring.
+
+        Parameters
+        ----------
+        specs : sequence of Spec
+            The parameters to fit.
+        fixed : mapping of str to float, optional
+            Values held for other parameters.
+        loss : str, optional
+            The loss of ``scipy.optimize.least_squares`` (``linear``, ``soft_l1``, ...).
+        starts : int, optional
+            Start points (the first from the specs, the others perturbed); the best is kept.
+        max_nfev : int, optional
+            Evaluation budget of each nonlinear round.
+        rounds : int, optional
+            Alternations of the nonlinear and the exact linear solves.
+        progress : callable, optional
+            Called as simulations run.
+        seed : int, optional
+            Seed of the perturbed start points.
+        stderr : bool, optional
+            Compute standard errors.
+
+        Returns
+        -------
+        FitResult
+            The best fit over the start points.
+
+        Raises
+        ------
+        SimulationError
+            The model cannot be simulated at the start values.
+        """
         fixed = dict(fixed or {})
         lin = [s for s in specs if s.linear]
         non = [s for s in specs if not s.linear]
@@ -412,14 +739,46 @@ def bounded_lstsq(A: np.ndarray, b: np.ndarray, lower, upper) -> np.ndarray:
     cannot tell from the others (a diagonal of R below 1e-10 of the largest, or beyond the
     number of rows; a column that vanishes here up to rounding among them) get 0: any split
     between them would fit, and elsewhere, where they differ, a huge one would be anything
-    but a fit."""
+    but a fit.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        m × n matrix.
+    b : numpy.ndarray
+        m right-hand side.
+    lower, upper : sequence of float
+        Bounds of each x (±inf for none).
+
+    Returns
+    -------
+    numpy.ndarray
+        x, n values.
+    """
     return bounded_lstsq_free(A, b, lower, upper)[0]
 
 
 def bounded_lstsq_free(A: np.ndarray, b: np.ndarray, lower, upper) -> tuple[np.ndarray, np.ndarray]:
     """(x, free): :func:`bounded_lstsq`'s solution and a boolean mask of its free columns,
     those solved from the data: neither on a bound nor set to 0 for want of being told apart
-    (what a derivative of the solution with respect to the columns moves)."""
+    (what a derivative of the solution with respect to the columns moves).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        m × n matrix.
+    b : numpy.ndarray
+        m right-hand side.
+    lower, upper : sequence of float
+        Bounds of each x (±inf for none).
+
+    Returns
+    -------
+    x : numpy.ndarray
+        The solution, n values.
+    free : numpy.ndarray
+        Boolean mask of the free columns.
+    """
     norms = np.linalg.norm(A, axis=0)
     out = np.zeros(A.shape[1])
     free = np.zeros(A.shape[1], bool)
@@ -445,7 +804,22 @@ def bounded_lstsq_free(A: np.ndarray, b: np.ndarray, lower, upper) -> tuple[np.n
 
 
 def check_varies(u: np.ndarray, name: str, path: str | None = None) -> None:
-    """Refuse a constant drive: a model driven by it can only be compared with its own rest."""
+    """Refuse a constant drive: a model driven by it can only be compared with its own rest.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    name : str
+        Its column name (for the message).
+    path : str, optional
+        The data file (for the message).
+
+    Raises
+    ------
+    DataError
+        The drive's range is below 1e-9 of its peak.
+    """
     scale = max(float(np.max(np.abs(u))), 1e-300)
     if float(np.ptp(u)) <= 1e-9 * scale:
         where = f"{path}: " if path else ""
@@ -456,7 +830,22 @@ def check_varies(u: np.ndarray, name: str, path: str | None = None) -> None:
 
 
 def detect_linear(ident: Identification, names: Sequence[str], fixed: Mapping | None = None) -> list[str]:
-    """Parameters the output depends on linearly (superposition checked with two extra runs each)."""
+    """Parameters the output depends on linearly (superposition checked with two extra runs each).
+
+    Parameters
+    ----------
+    ident : Identification
+        The model and data.
+    names : sequence of str
+        The candidates.
+    fixed : mapping, optional
+        Values held for other parameters.
+
+    Returns
+    -------
+    list of str
+        The names whose second difference of the output is below 1e-6 of the first.
+    """
     fixed = dict(fixed or {})
     base_vals = {n: ident.current(n) for n in names}
     base_vals.update(fixed)

@@ -22,7 +22,28 @@ from ..support.errors import UsageError, did_you_mean
 
 @dataclass
 class LinearModel:
-    """Numeric state-space model x' = A x + B u, y = C x + D u around an operating point."""
+    """Numeric state-space model x' = A x + B u, y = C x + D u around an operating point.
+
+    Single input, single output; the deviations x, u, y from the operating point are in the SI
+    units of the states, the input and the output (so A is in 1/s for like states).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        n × n state matrix.
+    B : numpy.ndarray
+        n × 1 input matrix.
+    C : numpy.ndarray
+        1 × n output matrix.
+    D : numpy.ndarray
+        1 × 1 feedthrough.
+    states : list of str
+        The state names, in the order of A's rows.
+    input : str
+        The input's name.
+    output : str
+        The output's name.
+    """
 
     A: np.ndarray
     B: np.ndarray
@@ -34,6 +55,7 @@ class LinearModel:
 
     @property
     def poles(self) -> np.ndarray:
+        """Eigenvalues of A (rad/s, complex; stable when the real parts are negative), sorted."""
         return np.sort_complex(np.linalg.eigvals(self.A)) if self.A.size else np.zeros(0, complex)
 
     @property
@@ -60,6 +82,14 @@ class LinearModel:
         return np.sort(w[w > tol])
 
     def damping_ratios(self) -> np.ndarray:
+        """Damping ratios ζ = −Re λ / |λ| of the poles, one per conjugate pair.
+
+        Returns
+        -------
+        numpy.ndarray
+            ζ (dimensionless; 1 for a real pole, < 0 for an unstable one) in the order of
+            :attr:`natural_frequencies`; poles at 0 excluded.
+        """
         p = self.poles
         p = p[p.imag >= 0]
         w = np.abs(p)
@@ -68,7 +98,18 @@ class LinearModel:
         return (-p[keep].real / w[keep])[order]
 
     def frequency_response(self, omega) -> np.ndarray:
-        """H(jω) = C (jωI − A)⁻¹ B + D at angular frequencies ``omega`` (rad/s)."""
+        """H(jω) = C (jωI − A)⁻¹ B + D at angular frequencies ``omega`` (rad/s).
+
+        Parameters
+        ----------
+        omega : float or array_like
+            Angular frequencies, rad/s.
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex H(jω), output unit per input unit, one per frequency.
+        """
         omega = np.atleast_1d(np.asarray(omega, float))
         n = self.A.shape[0]
         out = np.empty(omega.size, complex)
@@ -77,6 +118,13 @@ class LinearModel:
         return out
 
     def dc_gain(self) -> float:
+        """The static gain H(0) = D − C A⁻¹ B.
+
+        Returns
+        -------
+        float
+            Output unit per input unit; ``inf`` when A is singular (a free integrator).
+        """
         try:
             return float((self.D - self.C @ np.linalg.solve(self.A, self.B))[0, 0])
         except np.linalg.LinAlgError:
@@ -89,6 +137,21 @@ class LinearModel:
 
             sys = linearize(derive(model), "V", "x").to_control()
             control.bode_plot(sys)
+
+        Parameters
+        ----------
+        name : str, optional
+            The system's name (default: python-control's own).
+
+        Returns
+        -------
+        control.StateSpace
+            The same A, B, C, D with named signals.
+
+        Raises
+        ------
+        UsageError
+            python-control is not installed.
         """
         try:
             import control
@@ -107,7 +170,20 @@ class LinearModel:
 
     def python_control_script(self, name: str = "model", comment: str = "") -> str:
         """Python source that builds this model as ``control.StateSpace`` named ``model``
-        (numbers written exactly), e.g. to save and import from a control-design script."""
+        (numbers written exactly), e.g. to save and import from a control-design script.
+
+        Parameters
+        ----------
+        name : str, optional
+            The ``name`` given to ``control.ss`` in the script.
+        comment : str, optional
+            The first line's comment (default: "linearised by bondgraph").
+
+        Returns
+        -------
+        str
+            The script's source, ending with a newline.
+        """
 
         def arr(M):
             return "np.array(" + repr(np.asarray(M, float).tolist()) + ")"
@@ -134,7 +210,15 @@ class LinearModel:
         return linear_model_html(self)
 
     def summary(self) -> dict:
-        """The JSON object of ``bondgraph linearize --json``."""
+        """The JSON object of ``bondgraph linearize --json``.
+
+        Returns
+        -------
+        dict
+            ``input``, ``output``, ``states``, ``natural_frequencies_rad_s``,
+            ``damping_ratios``, ``poles`` and ``zeros`` (as [re, im] pairs, rad/s),
+            ``rhp_zeros`` (count), ``dc_gain`` and the matrices ``A``, ``B``, ``C``, ``D``.
+        """
         z = self.zeros
         return {
             "input": self.input,
@@ -154,7 +238,35 @@ class LinearModel:
 
 
 def symbolic_matrices(eqs: Equations, input: str, output: str, op_gains: dict | None = None):
-    """Symbolic (A, B, C, D) in the parameters and the operating point symbols."""
+    """Symbolic (A, B, C, D) in the parameters and the operating point symbols.
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    input : str
+        The input's name.
+    output : str
+        The output's name.
+    op_gains : dict, optional
+        Operator output symbol → its small-signal slope (0 when not given: frozen memory).
+
+    Returns
+    -------
+    A : sympy.Matrix
+        n × n.
+    B : sympy.Matrix
+        n × 1.
+    C : sympy.Matrix
+        1 × n.
+    D : sympy.Matrix
+        1 × 1.
+
+    Raises
+    ------
+    UsageError
+        An unknown input or output.
+    """
     names = [str(u) for u in eqs.inputs]
     if input not in names:
         raise UsageError(did_you_mean(input, names, "input"))

@@ -132,7 +132,23 @@ def _one_column(Ad, b, c, d, x, u, rows, y):
 @dataclass(frozen=True)
 class StateSpace:
     """Numeric single-input single-output (A, B, C, D); ``fast`` modes were residualised, and
-    ``D1`` (output per unit input rate, s) is their first-order term (module docstring)."""
+    ``D1`` (output per unit input rate, s) is their first-order term (module docstring).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        n × n state matrix.
+    B : numpy.ndarray
+        n × 1 input matrix.
+    C : numpy.ndarray
+        1 × n output matrix.
+    D : numpy.ndarray
+        1 × 1 feedthrough.
+    fast : int, optional
+        Number of modes residualised.
+    D1 : float, optional
+        Feedthrough of the input's rate, output units per (input unit / s).
+    """
 
     A: np.ndarray
     B: np.ndarray
@@ -143,12 +159,32 @@ class StateSpace:
 
     @property
     def n(self) -> int:
+        """Number of states kept."""
         return self.A.shape[0]
 
     def poles(self) -> np.ndarray:
+        """Eigenvalues of A, rad/s (unsorted).
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex poles (empty without states).
+        """
         return np.linalg.eigvals(self.A) if self.n else np.zeros(0, complex)
 
     def frequency_response(self, omega) -> np.ndarray:
+        """H(jω) = C (jωI − A)⁻¹ B + D + jω·D1 at ``omega`` (rad/s).
+
+        Parameters
+        ----------
+        omega : float or array_like
+            Angular frequencies, rad/s.
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex H(jω), output units per input unit.
+        """
         H = frequency_response(self.A, self.B, self.C, self.D, omega)
         return H + 1j * np.atleast_1d(np.asarray(omega, float)) * self.D1 if self.D1 else H
 
@@ -157,7 +193,24 @@ class StateSpace:
     ) -> np.ndarray:
         """Output for each column of ``U`` (inputs sampled every ``dt`` s, linear in between),
         from the state ``x0`` (default rest); at the sample indices ``rows`` (ascending) only,
-        if given."""
+        if given.
+
+        Parameters
+        ----------
+        dt : float
+            Sample interval, s.
+        U : numpy.ndarray
+            Input samples, one column per input series (a 1-D array is one column).
+        x0 : numpy.ndarray, optional
+            Initial state (default: rest).
+        rows : numpy.ndarray, optional
+            Sample indices to return, ascending.
+
+        Returns
+        -------
+        numpy.ndarray
+            (rows, columns) output, output units.
+        """
         U = np.asarray(U, float)
         U = np.ascontiguousarray(U.reshape(-1, 1) if U.ndim == 1 else U)
         if self.n == 0:
@@ -179,7 +232,22 @@ class StateSpace:
 class LTI:
     """The (A, B, C, D) of one input → one output of a model, as numeric functions of θ.
 
-    ``input``/``output`` default to the model's first declared input and output."""
+    ``input``/``output`` default to the model's first declared input and output.
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    input : str, optional
+        The input's name.
+    output : str, optional
+        The output's name.
+
+    Raises
+    ------
+    UsageError
+        An unknown input or output, or a model that declares none.
+    """
 
     def __init__(self, eqs: Equations, input: str | None = None, output: str | None = None):
         names = [str(u) for u in eqs.inputs]
@@ -200,6 +268,18 @@ class LTI:
         self.n = len(eqs.state_symbols)
 
     def matrices(self, th: np.ndarray):
+        """The numeric (A, B, C, D) at θ.
+
+        Parameters
+        ----------
+        th : numpy.ndarray
+            θ, the model's parameter vector (order of ``eqs.params``).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            A (n × n), B (n × 1), C (1 × n), D (1 × 1).
+        """
         A, B, C, D = (
             np.array(M, dtype=float).reshape(shape)
             for M, shape in zip(self._fn(np.asarray(th, float)), [(self.n, self.n), (self.n, 1), (1, self.n), (1, 1)])
@@ -213,6 +293,18 @@ class LTI:
         difference taken), when the matrices are analytic in θ (arithmetic, powers and the
         functions of :data:`ANALYTIC`); else from their symbolic derivatives, compiled on first
         use.
+
+        Parameters
+        ----------
+        th : numpy.ndarray
+            θ, the model's parameter vector (order of ``eqs.params``).
+        names : sequence of str
+            The parameters.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (∂A, ∂B, ∂C, ∂D), each of shape (len(names), *matrix shape), per unit parameter.
 
         Raises
         ------
@@ -251,12 +343,42 @@ class LTI:
         return tuple(out)
 
     def state_space(self, th: np.ndarray, cut: float | None = None) -> StateSpace:
-        """The numeric model at θ; modes faster than ``cut`` (rad/s) residualised."""
+        """The numeric model at θ; modes faster than ``cut`` (rad/s) residualised.
+
+        Parameters
+        ----------
+        th : numpy.ndarray
+            θ, the model's parameter vector (order of ``eqs.params``).
+        cut : float, optional
+            Cut-off, rad/s (None: keep every mode).
+
+        Returns
+        -------
+        StateSpace
+            The numeric model.
+        """
         A, B, C, D = self.matrices(th)
         return residualise(A, B, C, D, cut) if cut is not None else StateSpace(A, B, C, D)
 
     def response(self, th: np.ndarray, dt: float, U: np.ndarray, x0: np.ndarray | None = None) -> np.ndarray:
-        """Output of the full model for each column of ``U`` (see :meth:`StateSpace.response`)."""
+        """Output of the full model for each column of ``U`` (see :meth:`StateSpace.response`).
+
+        Parameters
+        ----------
+        th : numpy.ndarray
+            θ, the model's parameter vector (order of ``eqs.params``).
+        dt : float
+            Sample interval, s.
+        U : numpy.ndarray
+            Input samples, one column per series.
+        x0 : numpy.ndarray, optional
+            Initial state (default: rest).
+
+        Returns
+        -------
+        numpy.ndarray
+            (samples, columns) output, output units.
+        """
         return self.state_space(th).response(dt, U, x0)
 
 
@@ -265,7 +387,26 @@ def linear_matrices(eqs: Equations, inputs: Sequence[str], outputs: Sequence[str
     whether they say everything (the model is affine in its states and every input: the slopes
     in the states and these inputs move with nothing, those in the other inputs with no state
     or input; the route is then exact) and the parameters they depend on.  The other inputs,
-    the input rates and operator outputs are set to zero.  Returns (matrices, exact, symbols)."""
+    the input rates and operator outputs are set to zero.  Returns (matrices, exact, symbols).
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    inputs : sequence of str
+        Input names.
+    outputs : sequence of str
+        Output names.
+
+    Returns
+    -------
+    matrices : list of sympy.Matrix
+        A, B, C, D.
+    exact : bool
+        Whether the model is affine as described (the linear route is then exact).
+    symbols : set
+        The symbols the matrices depend on.
+    """
     names = [str(u) for u in eqs.inputs]
     us = [eqs.inputs[names.index(i)] for i in inputs]
     xs = eqs.state_symbols
@@ -285,7 +426,23 @@ def linear_matrices(eqs: Equations, inputs: Sequence[str], outputs: Sequence[str
 
 
 def first_input(eqs: Equations) -> str:
-    """The model's first declared input (what identification drives unless told otherwise)."""
+    """The model's first declared input (what identification drives unless told otherwise).
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+
+    Returns
+    -------
+    str
+        The input's name.
+
+    Raises
+    ------
+    UsageError
+        The model declares no input.
+    """
     declared = list(eqs.model.inputs)
     if not declared:
         raise UsageError(f"{eqs.model.name} declares no input")
@@ -293,7 +450,23 @@ def first_input(eqs: Equations) -> str:
 
 
 def first_output(eqs: Equations) -> str:
-    """The model's first declared output."""
+    """The model's first declared output.
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+
+    Returns
+    -------
+    str
+        The output's name.
+
+    Raises
+    ------
+    UsageError
+        The model declares no output.
+    """
     if not eqs.outputs:
         raise UsageError(f"{eqs.model.name} declares no output")
     return next(iter(eqs.outputs))
@@ -314,7 +487,26 @@ def frequency_response(A, B, C, D, omega) -> np.ndarray:
     As the modal sum Σ_k r_k/(jω − λ_k) (A = VΛV⁻¹ after balancing the states' scales,
     r_k = (CV)_k (V⁻¹B)_k): one eigendecomposition instead of a solve per frequency; by a
     solve per frequency when the eigenvectors are ill-conditioned (near-defective A, more
-    than :data:`MODAL_COND`)."""
+    than :data:`MODAL_COND`).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        n × n state matrix.
+    B : numpy.ndarray
+        n × 1 input matrix.
+    C : numpy.ndarray
+        1 × n output matrix.
+    D : numpy.ndarray
+        1 × 1 feedthrough.
+    omega : float or array_like
+        Angular frequencies, rad/s.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex H(jω), output units per input unit.
+    """
     omega = np.atleast_1d(np.asarray(omega, float))
     n = A.shape[0]
     if n == 0:
@@ -332,7 +524,26 @@ def frequency_response(A, B, C, D, omega) -> np.ndarray:
 def residualise(A, B, C, D, cut: float) -> StateSpace:
     """Keep the modes with |λ| ≤ ``cut`` (rad/s) exactly; replace the others by their static
     contribution (see the module docstring).  The ordered real Schur form A = Z·T·Zᵀ puts the
-    slow eigenvalues first; X solving T11·X − X·T22 = −T12 decouples the two blocks."""
+    slow eigenvalues first; X solving T11·X − X·T22 = −T12 decouples the two blocks.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        n × n state matrix.
+    B : numpy.ndarray
+        n × 1 input matrix.
+    C : numpy.ndarray
+        1 × n output matrix.
+    D : numpy.ndarray
+        1 × 1 feedthrough.
+    cut : float
+        Cut-off angular frequency, rad/s.
+
+    Returns
+    -------
+    StateSpace
+        The slow modes, with the fast ones' static gain in D and their rate term in D1.
+    """
     n = A.shape[0]
     if n == 0:
         return StateSpace(A, B, C, D)
@@ -370,7 +581,26 @@ def foh(A: np.ndarray, B: np.ndarray, dt: float):
     """First-order-hold discretisation: (Φ, Γ, Γ1) with ξ[k+1] = Φξ[k] + Γu[k], x = ξ + Γ1·u.
 
     The block-exponential construction of ``scipy.signal.cont2discrete(..., method='foh')``,
-    returning Γ1 as well, which the initial state needs."""
+    returning Γ1 as well, which the initial state needs.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        n × n state matrix.
+    B : numpy.ndarray
+        n × m input matrix.
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    Phi : numpy.ndarray
+        Φ, n × n.
+    Gamma : numpy.ndarray
+        Γ, n × m.
+    Gamma1 : numpy.ndarray
+        Γ1, n × m.
+    """
     n, m = B.shape
     em = np.zeros((n + 2 * m, n + 2 * m))
     em[:n, :n] = A * dt

@@ -54,7 +54,27 @@ class ModalSensitivity:
     ``lam``: the kept (slow) eigenvalues (rad/s); ``res`` (n) their residues; ``alpha``,
     ``kappa`` (P, n) the derivative weights of 1/(s − λ) and 1/(s − λ)²; ``d``, ``d1``: the
     feedthrough of the input and of its rate (s) after the fast modes are residualised, and
-    ``dd``, ``dd1`` (P) their derivatives."""
+    ``dd``, ``dd1`` (P) their derivatives.
+
+    Parameters
+    ----------
+    lam : numpy.ndarray
+        The kept eigenvalues, rad/s (complex).
+    res : numpy.ndarray
+        Their residues (complex).
+    alpha : numpy.ndarray
+        (P, n) weights of 1/(s − λ) in the derivatives.
+    kappa : numpy.ndarray
+        (P, n) weights of 1/(s − λ)² in the derivatives.
+    d : float
+        Feedthrough of the input, output units per input unit.
+    d1 : float
+        Feedthrough of the input's rate, s times ``d``'s unit.
+    dd : numpy.ndarray
+        (P) derivatives of ``d``.
+    dd1 : numpy.ndarray
+        (P) derivatives of ``d1``.
+    """
 
     lam: np.ndarray
     res: np.ndarray
@@ -68,7 +88,20 @@ class ModalSensitivity:
     def frequency(self, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(H, dH): the frequency response at ``omega`` (rad/s), as
         :meth:`bondgraph.linear.lti.StateSpace.frequency_response` gives it, and its
-        derivatives dH[i] with respect to each parameter."""
+        derivatives dH[i] with respect to each parameter.
+
+        Parameters
+        ----------
+        omega : numpy.ndarray
+            Angular frequencies, rad/s.
+
+        Returns
+        -------
+        H : numpy.ndarray
+            Complex frequency response, one per frequency.
+        dH : numpy.ndarray
+            (P, frequencies) derivatives, per unit parameter.
+        """
         jw = 1j * np.atleast_1d(np.asarray(omega, float))
         g = 1.0 / (jw[:, None] - self.lam[None, :])
         H = g @ self.res + self.d + jw * self.d1
@@ -79,7 +112,24 @@ class ModalSensitivity:
         """(Y, dY) from rest for each column of ``U`` (inputs sampled every ``dt`` s, linear in
         between), at the sample indices ``rows`` (ascending; every sample for None): Y[r, j]
         as :meth:`bondgraph.linear.lti.StateSpace.response` gives it, dY[i, r, j] its
-        derivative with respect to parameter i."""
+        derivative with respect to parameter i.
+
+        Parameters
+        ----------
+        dt : float
+            Sample interval, s.
+        U : numpy.ndarray
+            Input samples, one column per series (a 1-D array is one column).
+        rows : numpy.ndarray, optional
+            Sample indices to return, ascending.
+
+        Returns
+        -------
+        Y : numpy.ndarray
+            (rows, columns) output.
+        dY : numpy.ndarray
+            (P, rows, columns) derivatives, per unit parameter.
+        """
         U = np.asarray(U, float)
         U = np.ascontiguousarray(U.reshape(-1, 1) if U.ndim == 1 else U)
         N, m = U.shape
@@ -118,7 +168,29 @@ class ModalSensitivity:
 def sensitivity(lti: LTI, th: np.ndarray, names: Sequence[str], cut: float | None = None) -> ModalSensitivity | None:
     """The output of ``lti`` at θ and its derivatives with respect to the parameters ``names``
     (:meth:`~bondgraph.linear.lti.LTI.derivatives`), modes faster than ``cut`` (rad/s)
-    residualised: a :class:`ModalSensitivity`, or None (see :func:`modal_sensitivity`)."""
+    residualised: a :class:`ModalSensitivity`, or None (see :func:`modal_sensitivity`).
+
+    Parameters
+    ----------
+    lti : LTI
+        The model's linear form.
+    th : numpy.ndarray
+        θ, the model's parameter vector.
+    names : sequence of str
+        The parameters.
+    cut : float, optional
+        Cut-off angular frequency, rad/s (None: keep every mode).
+
+    Returns
+    -------
+    ModalSensitivity or None
+        The modal form, or None without a well-conditioned one.
+
+    Raises
+    ------
+    ParameterError
+        A name that is no parameter of the model.
+    """
     return modal_sensitivity(*lti.matrices(th), *lti.derivatives(th, names), cut)
 
 
@@ -126,7 +198,29 @@ def modal_sensitivity(A, B, C, D, dA, dB, dC, dD, cut: float | None = None) -> M
     """The :class:`ModalSensitivity` of (A, B, C, D) (single input and output) with respect to
     P parameters whose derivatives are dA (P, n, n), dB (P, n, 1), dC (P, 1, n), dD (P, 1, 1);
     modes with |λ| > ``cut`` (rad/s) residualised.  None when the model has no well-conditioned
-    modal form (module docstring)."""
+    modal form (module docstring).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        n × n state matrix.
+    B : numpy.ndarray
+        n × 1 input matrix.
+    C : numpy.ndarray
+        1 × n output matrix.
+    D : numpy.ndarray
+        1 × 1 feedthrough.
+    dA, dB, dC, dD : numpy.ndarray
+        Their derivatives, stacked along a first axis of P parameters.
+    cut : float, optional
+        Cut-off angular frequency, rad/s (None: keep every mode).
+
+    Returns
+    -------
+    ModalSensitivity or None
+        The modal form, or None for ill-conditioned eigenvectors or nearly coincident
+        eigenvalues.
+    """
     n = A.shape[0]
     P = dA.shape[0]
     if n == 0:
@@ -177,7 +271,24 @@ def modal_sensitivity(A, B, C, D, dA, dB, dC, dD, cut: float | None = None) -> M
 def jordan_foh(lam: np.ndarray, dt: float):
     """First-order-hold discretisation (as :func:`bondgraph.linear.lti.foh`) of the Jordan pairs
     v' = λv + w, w' = λw + u, one per eigenvalue in ``lam``: (Φ (K, 2, 2), Γ (K, 2), Γ1 (K, 2))
-    with ξ[k+1] = Φξ[k] + Γu[k] and (v, w) = ξ + Γ1·u."""
+    with ξ[k+1] = Φξ[k] + Γu[k] and (v, w) = ξ + Γ1·u.
+
+    Parameters
+    ----------
+    lam : numpy.ndarray
+        Eigenvalues, rad/s (complex).
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    Phi : numpy.ndarray
+        Φ, (K, 2, 2), complex.
+    Gamma : numpy.ndarray
+        Γ, (K, 2), complex.
+    Gamma1 : numpy.ndarray
+        Γ1, (K, 2), complex.
+    """
     K = lam.size
     em = np.zeros((K, 4, 4), complex)
     em[:, 0, 0] = em[:, 1, 1] = lam * dt

@@ -26,7 +26,25 @@ MAX_RATE = 1e50
 def check_start(sim, params: Mapping | None = None, inputs: Mapping | None = None, t0: float = 0.0) -> None:
     """ParameterError unless ``sim`` (a :class:`~bondgraph.numerics.simulate.Simulator`) has finite
     state equations, outputs and Jacobian, and no rate above :data:`MAX_RATE`, at its initial
-    state with parameter values ``params`` (name → value over the model's) and ``inputs``."""
+    state with parameter values ``params`` (name → value over the model's) and ``inputs``.
+
+    Parameters
+    ----------
+    sim : Simulator
+        The compiled model.
+    params : mapping of str to float, optional
+        Parameter values overriding the model's.
+    inputs : mapping of str to Signal or float, optional
+        The inputs (an input not given is 0).
+    t0 : float, optional
+        Start time, s.
+
+    Raises
+    ------
+    ParameterError
+        The equations are not finite or too fast at the start; the message names the
+        parameter(s) whose model default cures it.
+    """
     values = {p.name: v for p, v in zip(sim.eqs.params, sim.theta(params))}
     problem = _problem(sim, values, inputs, t0)
     if problem is None:
@@ -42,7 +60,22 @@ def check_start(sim, params: Mapping | None = None, inputs: Mapping | None = Non
 
 def check_linear(model, matrices, values: Mapping[str, float]) -> None:
     """ParameterError unless the numeric state-space matrices are finite and the poles'
-    magnitudes below :data:`MAX_RATE`; names the parameter farthest from its default."""
+    magnitudes below :data:`MAX_RATE`; names the parameter farthest from its default.
+
+    Parameters
+    ----------
+    model : Model
+        The model (for its defaults).
+    matrices : sequence of numpy.ndarray
+        A, B, C, D.
+    values : mapping of str to float
+        The parameter values they were computed with.
+
+    Raises
+    ------
+    ParameterError
+        A matrix is not finite, or a pole is faster than :data:`MAX_RATE` (1/s).
+    """
     A = matrices[0]
     problem = None
     if not all(np.all(np.isfinite(M)) for M in matrices):

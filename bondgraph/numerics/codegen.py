@@ -37,7 +37,13 @@ _NO_AUX = np.zeros(1)
 
 
 def cache_dir() -> Path:
-    """Directory of generated model code: $BONDGRAPH_CACHE or ~/.cache/bondgraph."""
+    """Directory of generated model code: $BONDGRAPH_CACHE or ~/.cache/bondgraph.
+
+    Returns
+    -------
+    pathlib.Path
+        The directory, created if missing (``$XDG_CACHE_HOME/bondgraph`` when that is set).
+    """
     base = os.environ.get("BONDGRAPH_CACHE") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "bondgraph"
     )
@@ -82,7 +88,19 @@ class _Printer(PythonCodePrinter):
 
 @dataclass
 class Layout:
-    """Where every symbol lives in the compiled functions' arrays."""
+    """Where every symbol lives in the compiled functions' arrays.
+
+    Parameters
+    ----------
+    names : dict
+        Symbol → its slot in generated code (``x[i]``, ``u[i]``, ``du[i]``, ``th[i]``, ``vK``).
+    mem_slices : list of tuple of int
+        Per memory operator, its (start, stop) in ``mem``.
+    prm_slices : list of tuple of int
+        Per memory operator, its parameters' (start, stop) in θ.
+    n_mem : int
+        Length of the memory vector.
+    """
 
     names: dict
     mem_slices: list[tuple[int, int]]
@@ -91,6 +109,23 @@ class Layout:
 
 
 def layout(eqs: Equations) -> Layout:
+    """The array layout of ``eqs``'s compiled functions.
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+
+    Returns
+    -------
+    Layout
+        The slots of every symbol and the operators' memory and parameter slices.
+
+    Raises
+    ------
+    RuntimeError
+        An operator's parameters are not contiguous in θ (a derivation error).
+    """
     names: dict = {}
     for i, s in enumerate(eqs.state_symbols):
         names[s] = f"x[{i}]"
@@ -116,7 +151,20 @@ def layout(eqs: Equations) -> Layout:
 
 def generate_source(eqs: Equations, jacobian: JacobianProgram | None = None) -> str:
     """Python source of the compiled functions (see the module docstring); with ``jacobian``,
-    of ``jac`` alone: the values of its local partials (:mod:`bondgraph.numerics.jacobian`)."""
+    of ``jac`` alone: the values of its local partials (:mod:`bondgraph.numerics.jacobian`).
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    jacobian : JacobianProgram, optional
+        Generate the Jacobian's partials instead of the model's functions.
+
+    Returns
+    -------
+    str
+        The module's Python source (numba-compiled functions).
+    """
     lay = layout(eqs)
     names = dict(lay.names)
     if jacobian is not None:
@@ -175,7 +223,18 @@ def generate_source(eqs: Equations, jacobian: JacobianProgram | None = None) -> 
 
 def compile_equations(eqs: Equations) -> ModelFunctions:
     """The numeric functions of ``eqs``: generated, cached and compiled by numba, or for long
-    programs (more statements than ``codegen.tape_threshold``) the tape interpreter."""
+    programs (more statements than ``codegen.tape_threshold``) the tape interpreter.
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+
+    Returns
+    -------
+    ModelFunctions
+        ``rhs``, ``output``, ``opin``, ``commit``, the layout and the route taken.
+    """
     if len(eqs.program) > config.get("codegen.tape_threshold"):
         with waiting("compiling the tape interpreter", status="the first run only: numba keeps it for later runs"):
             from . import tape
@@ -198,7 +257,17 @@ class CompiledJacobian(NamedTuple):
     :class:`~bondgraph.numerics.jacobian.JacobianProgram`, its ``aux`` and its route.
 
     On the numba route ``aux[k]`` is the direction (+1 or −1) in which memory operator ``k``'s
-    slope is taken: the direction its input last moved (the integrator keeps it up to date)."""
+    slope is taken: the direction its input last moved (the integrator keeps it up to date).
+
+    Parameters
+    ----------
+    jac : callable
+        The compiled function.
+    aux : numpy.ndarray
+        Its auxiliary data.
+    route : {"numba", "tape"}
+        How it was compiled.
+    """
 
     jac: Callable
     aux: np.ndarray
@@ -207,7 +276,20 @@ class CompiledJacobian(NamedTuple):
 
 def compile_jacobian(eqs: Equations, jacobian: JacobianProgram) -> CompiledJacobian:
     """The partials of ``jacobian`` compiled like :func:`compile_equations` compiles a model
-    (the tape when the statements they need and the partials outnumber ``codegen.tape_threshold``)."""
+    (the tape when the statements they need and the partials outnumber ``codegen.tape_threshold``).
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    jacobian : JacobianProgram
+        The sparse Jacobian program.
+
+    Returns
+    -------
+    CompiledJacobian
+        The compiled partials.
+    """
     if len(eqs.needed(jacobian.partials)[0]) + len(jacobian.partials) > config.get("codegen.tape_threshold"):
         from . import tape
 
@@ -250,6 +332,17 @@ def _load(eqs: Equations, src: str):
 
 
 def parameter_vector(eqs: Equations) -> np.ndarray:
-    """θ in the order of ``eqs.params`` from the model's parameter values."""
+    """θ in the order of ``eqs.params`` from the model's parameter values.
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+
+    Returns
+    -------
+    numpy.ndarray
+        θ, each parameter in its SI unit.
+    """
     table = eqs.model.parameter_table()
     return np.array([float(table[p]) for p in eqs.params], float)

@@ -61,7 +61,29 @@ STATUS = {
 
 
 class ImplicitStats(NamedTuple):
-    """Outcome of :func:`radau5`: status code (see STATUS) and counts."""
+    """Outcome of :func:`radau5`: status code (see STATUS) and counts.
+
+    Parameters
+    ----------
+    status : int
+        0 when the run succeeded, else a code of ``STATUS``.
+    steps : int
+        Accepted steps.
+    rejected : int
+        Steps rejected by the error test.
+    rhs_calls : int
+        Right-hand-side evaluations.
+    reversal_rejections : int
+        Steps rejected because a memory operator's input reversed inside them.
+    written : int
+        Output samples written (the failure time when ``status`` is not 0).
+    jacobians : int
+        Jacobian evaluations.
+    factorizations : int
+        LU factorizations.
+    newton_failures : int
+        Steps retried at half the size because the Newton iteration diverged.
+    """
 
     status: int
     steps: int

@@ -191,7 +191,17 @@ def _dense(x, Q, h, theta, out):
 
 
 class Flags(NamedTuple):
-    """What the model's functions read, so the integrator evaluates inputs only when needed."""
+    """What the model's functions read, so the integrator evaluates inputs only when needed.
+
+    Parameters
+    ----------
+    input_rates : bool
+        The laws use input rates (du is evaluated at every stage).
+    outputs_use_inputs : bool
+        The outputs read inputs or input rates.
+    opins_use_inputs : bool
+        The operator inputs read inputs or input rates.
+    """
 
     input_rates: bool  # the laws use input rates (evaluate du at every stage)
     outputs_use_inputs: bool  # the outputs read inputs or input rates
@@ -199,7 +209,23 @@ class Flags(NamedTuple):
 
 
 class Stats(NamedTuple):
-    """Outcome of :func:`dopri5`: status code (0 ok, see STATUS) and counts."""
+    """Outcome of :func:`dopri5`: status code (0 ok, see STATUS) and counts.
+
+    Parameters
+    ----------
+    status : int
+        0 when the run succeeded, else a code of ``STATUS``.
+    steps : int
+        Accepted steps.
+    rejected : int
+        Steps rejected by the error test.
+    rhs_calls : int
+        Right-hand-side evaluations.
+    reversal_rejections : int
+        Steps rejected because a memory operator's input reversed inside them.
+    written : int
+        Output samples written (the failure time when ``status`` is not 0).
+    """
 
     status: int
     steps: int

@@ -51,10 +51,28 @@ ONE, MINUS_ONE, FIRST_PARTIAL = 0, 1, 2  # fixed slots of the work array
 class RightSign(sp.Function):
     """``sign(u)`` with the value +1 at ``u = 0``: the right derivative of ``|u|``.
 
-    It is never 0, so ``RightSign(u)**2`` is 1 everywhere."""
+    It is never 0, so ``RightSign(u)**2`` is 1 everywhere.
+
+    Parameters
+    ----------
+    arg : sympy.Expr
+        u.
+    """
 
     @classmethod
     def eval(cls, arg):
+        """±1 for a number (+1 at 0); None (stay unevaluated) otherwise.
+
+        Parameters
+        ----------
+        arg : sympy.Expr
+            u.
+
+        Returns
+        -------
+        sympy.Integer or None
+            The value, or None for a symbolic argument.
+        """
         if arg.is_Number:
             return sp.Integer(1) if arg >= 0 else sp.Integer(-1)
         return None
@@ -127,13 +145,37 @@ def _merge_kinks(e: sp.Expr) -> sp.Expr:
 
 
 def local_partials(expr: sp.Expr, wrt) -> dict:
-    """{s: ∂expr/∂s} for the symbols ``wrt`` (a set) that ``expr`` reads, zero derivatives left out."""
+    """{s: ∂expr/∂s} for the symbols ``wrt`` (a set) that ``expr`` reads, zero derivatives left out.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        The expression.
+    wrt : set of sympy.Symbol
+        The symbols to differentiate by.
+
+    Returns
+    -------
+    dict
+        Symbol → derivative (with the kink conventions of the module docstring).
+    """
     parts = {s: _merge_kinks(d) for s, d in _gradient(expr, wrt).items()}
     return {s: d for s, d in parts.items() if d != 0}
 
 
 def slope_symbol(k: int) -> sp.Symbol:
-    """The slope of operator ``k``'s output at frozen memory (computed by the generated code)."""
+    """The slope of operator ``k``'s output at frozen memory (computed by the generated code).
+
+    Parameters
+    ----------
+    k : int
+        The operator's index in ``eqs.operators``.
+
+    Returns
+    -------
+    sympy.Symbol
+        ``_slopeK``.
+    """
     return sp.Symbol(f"_slope{k}", real=True)
 
 
@@ -145,7 +187,35 @@ class JacobianProgram:
     ``W`` holds ``[1, −1, partials..., accumulators...]``; ``plan`` rows ``(dst, a, b)`` mean
     ``W[dst] += W[a]·W[b]`` after the accumulators are zeroed; ``indptr``/``indices`` are the
     CSC pattern of ``J_aug`` (size ``n + n_hubs``, every diagonal entry present), its values
-    ``W[slots]``; ``diagonal[i]`` the position of entry (i, i) in the CSC data."""
+    ``W[slots]``; ``diagonal[i]`` the position of entry (i, i) in the CSC data.
+
+    Parameters
+    ----------
+    n : int
+        Number of states.
+    hubs : list of str
+        The program variables kept as extra unknowns.
+    partials : list of sympy.Expr
+        The symbolic local partials.
+    slopes : list of int
+        The memory operators whose slopes the partials read.
+    plan : numpy.ndarray
+        Rows (dst, a, b) of the accumulation ``W[dst] += W[a]·W[b]``.
+    n_work : int
+        Length of the work array.
+    first_accumulator : int
+        Index of the first accumulator in the work array.
+    indptr : numpy.ndarray
+        CSC column pointers of ``J_aug``.
+    indices : numpy.ndarray
+        CSC row indices of ``J_aug``.
+    slots : numpy.ndarray
+        Work-array slot of each CSC entry.
+    diagonal : numpy.ndarray
+        Position of each diagonal entry in the CSC data.
+    constant : bool
+        The Jacobian depends on no state, input or operator (computed once).
+    """
 
     n: int
     hubs: list[str]
@@ -167,7 +237,21 @@ class JacobianProgram:
 
 
 def build_program(eqs: Equations, hub_support: int | None = None) -> JacobianProgram:
-    """The sparse Jacobian program of ``eqs`` (see the module docstring)."""
+    """The sparse Jacobian program of ``eqs`` (see the module docstring).
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    hub_support : int, optional
+        A program variable whose gradient reaches more states becomes a hub (default: the
+        setting ``jacobian.hub_support``).
+
+    Returns
+    -------
+    JacobianProgram
+        The program.
+    """
     hub_support = config.get("jacobian.hub_support") if hub_support is None else hub_support
     xs = eqs.state_symbols
     n = len(xs)

@@ -32,7 +32,27 @@ SIGNATURE = "void(float64, " + ", ".join(["float64[::1]"] * (len(ARGUMENTS) - 1)
 
 
 class ModelFunctions(NamedTuple):
-    """The compiled functions of a model (see the module docstring), its array layout and aux data."""
+    """The compiled functions of a model (see the module docstring), its array layout and aux data.
+
+    Parameters
+    ----------
+    rhs : callable
+        out = dx/dt.
+    output : callable
+        out = the named outputs.
+    opin : callable
+        out = the memory operators' inputs.
+    commit : callable
+        Advances the operators' memory (accepted steps only).
+    layout : Layout
+        Where every symbol lives in the arrays.
+    aux : numpy.ndarray
+        Read-only data and scratch space of the route.
+    source : str, optional
+        The generated module's file (numba route).
+    route : {"numba", "tape"}, optional
+        How the functions were compiled.
+    """
 
     rhs: Callable
     output: Callable

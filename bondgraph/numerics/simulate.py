@@ -77,7 +77,26 @@ def _check_deadline(deadline: float | None, t: float) -> None:
 class SimResult:
     """Sampled simulation result: ``t`` (s), inputs, outputs and states by name.
 
-    The inputs are sampled when first asked for (fitting loops read only the outputs)."""
+    The inputs are sampled when first asked for (fitting loops read only the outputs).
+    ``result["name"]`` looks a name up in the outputs, then the inputs, then the states.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s, strictly increasing.
+    outputs : dict of str to numpy.ndarray
+        The model's outputs at ``t``, in their own units (one array of ``len(t)`` each).
+    states : dict of str to numpy.ndarray
+        The state variables at ``t`` (generalised displacements and momenta, SI units).
+    stats : dict, optional
+        What the integrator did: ``method`` and ``reason`` (why that method ran), ``steps``,
+        ``rejected``, ``rhs_calls``, ``reversal_rejections`` and, for radau5, ``jacobians``,
+        ``factorizations``, ``newton_failures``.
+    bank : SignalBank or None, optional
+        The packed input signals of the run, sampled for :attr:`inputs`.
+    _inputs : dict or None, optional
+        The sampled inputs once computed (internal cache; leave it ``None``).
+    """
 
     t: np.ndarray
     outputs: dict[str, np.ndarray]
@@ -88,6 +107,7 @@ class SimResult:
 
     @property
     def inputs(self) -> dict[str, np.ndarray]:
+        """The input signals sampled at :attr:`t` (name → array, the input's unit), computed once."""
         if self._inputs is None:
             U = self.bank.sample(self.t)
             self._inputs = {n: U[:, i] for i, n in enumerate(self.bank.names)}
@@ -100,6 +120,18 @@ class SimResult:
         raise KeyError(name)
 
     def columns(self, with_states: bool = False) -> dict[str, np.ndarray]:
+        """The sampled columns by name, as a record would hold them.
+
+        Parameters
+        ----------
+        with_states : bool, optional
+            Also include the state variables (default: inputs and outputs only).
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            The inputs, then the outputs (then the states), each sampled at :attr:`t`.
+        """
         cols = {**self.inputs, **self.outputs}
         if with_states:
             cols.update(self.states)
@@ -107,7 +139,19 @@ class SimResult:
 
 
 class Simulator:
-    """A model derived and compiled once, ready to simulate with any parameters and inputs."""
+    """A model derived and compiled once, ready to simulate with any parameters and inputs.
+
+    Parameters
+    ----------
+    model : Model or Equations
+        The model to simulate; a :class:`~bondgraph.Model` is derived first
+        (:func:`~bondgraph.derive`), an :class:`~bondgraph.Equations` is used as it is.
+
+    Raises
+    ------
+    BondGraphError
+        The model cannot be derived (e.g. :class:`~bondgraph.CausalityError`) or compiled.
+    """
 
     def __init__(self, model: Model | Equations):
         self.eqs = model if isinstance(model, Equations) else derive(model)
@@ -132,7 +176,23 @@ class Simulator:
 
     # ---- setup -------------------------------------------------------------------------------
     def theta(self, params: Mapping | None = None) -> np.ndarray:
-        """θ from the model's values with ``params`` (name → value) overriding some."""
+        """θ, the parameter vector, from the model's values with ``params`` overriding some.
+
+        Parameters
+        ----------
+        params : mapping of str to float, optional
+            Parameter name → value (SI units of the parameter) for the ones to change.
+
+        Returns
+        -------
+        numpy.ndarray
+            θ, one value per parameter in the order of ``eqs.params``.
+
+        Raises
+        ------
+        ParameterError
+            A name is not a parameter of the model (the message suggests the closest).
+        """
         th = self._theta.copy()
         for k, v in (params or {}).items():
             if str(k) not in self._index:
@@ -141,10 +201,39 @@ class Simulator:
         return th
 
     def initial_state(self, th: np.ndarray) -> np.ndarray:
+        """The states' initial values x0 declared by the model, evaluated at θ.
+
+        Parameters
+        ----------
+        th : numpy.ndarray
+            θ, the parameter vector (see :meth:`theta`).
+
+        Returns
+        -------
+        numpy.ndarray
+            x0, one value per state in the order of :attr:`state_names`.
+        """
         values = dict(zip(self.eqs.params, th))
         return np.array([float(s.x0.xreplace(values)) for s in self.eqs.states], float)
 
     def signal_bank(self, inputs: Mapping[str, Signal] | None) -> SignalBank:
+        """The inputs packed for the compiled integrator.
+
+        Parameters
+        ----------
+        inputs : mapping of str to Signal or float, or None
+            Input name → signal, or a number for a constant; an input not given is 0.
+
+        Returns
+        -------
+        SignalBank
+            Every input of the model, in the order of :attr:`input_names`.
+
+        Raises
+        ------
+        SignalError
+            A name is not an input of the model, or a value is neither a number nor a signal.
+        """
         inputs = dict(inputs or {})
         unknown = set(inputs) - set(self.input_names)
         if unknown:
@@ -157,7 +246,25 @@ class Simulator:
         )
 
     def initial_memory(self, t0, x0, th, bank: SignalBank) -> np.ndarray:
-        """The operators' memory at rest at the initial state and inputs."""
+        """The operators' memory at rest at the initial state and inputs.
+
+        Parameters
+        ----------
+        t0 : float
+            Start time, s.
+        x0 : numpy.ndarray
+            Initial state.
+        th : numpy.ndarray
+            θ, the parameter vector (see :meth:`theta`).
+        bank : SignalBank
+            The packed inputs (see :meth:`signal_bank`).
+
+        Returns
+        -------
+        numpy.ndarray
+            The memory vector of the model's memory operators (hysteresis, creep), at rest at
+            their input values at ``t0``; zeros (length at least 1) without operators.
+        """
         lay = self.compiled.layout
         mem = np.zeros(max(lay.n_mem, 1))
         if not self.eqs.operators:
@@ -198,7 +305,51 @@ class Simulator:
         twenty chunks it then runs in; the compiled dopri5 checks it between chunks only (one
         chunk unless ``progress`` is given).  With ``method="auto"`` (see :meth:`choose`) a
         radau5 run that fails is repeated on dopri5.  ``stats`` of the result: the method
-        that ran and the reason, step and call counts."""
+        that ran and the reason, step and call counts.
+
+        Parameters
+        ----------
+        t : array_like or float
+            Output times, s, strictly increasing (at least two); a scalar is the end time of
+            1001 samples from 0.
+        inputs : mapping of str to Signal or float, optional
+            Input name → signal or constant number; an input not given is 0.
+        params : mapping of str to float, optional
+            Parameter name → value, overriding the model's values.
+        x0 : array_like, optional
+            Initial state in the order of :attr:`state_names` (default: the model's x0).
+        method : {"auto", "dopri5", "radau5", "radau", "bdf", "lsoda"}, optional
+            The integrator (default ``auto``).
+        rtol : float, optional
+            Relative tolerance (default: setting ``simulate.rtol``).
+        atol : float or array_like, optional
+            Absolute tolerance, one for all states or one per state, in the states' units
+            (default: setting ``simulate.atol_floor``).
+        max_step : float, optional
+            Largest step, s (further capped by the input tables' spacing).
+        max_steps : int, optional
+            Largest number of steps (default: setting ``simulate.max_steps``).
+        progress : callable, optional
+            ``progress(fraction)`` called between chunks, fraction in [0, 1].
+        deadline : float, optional
+            A ``time.monotonic()`` value past which the run stops.
+
+        Returns
+        -------
+        SimResult
+            The outputs and states sampled at ``t``, with the run's ``stats``.
+
+        Raises
+        ------
+        SignalError
+            Bad output times, an unknown method or input, or an input that is not a signal.
+        ParameterError
+            An unknown parameter name.
+        SimulationTimeout
+            The run passed ``deadline``.
+        SimulationError
+            The integrator failed (step-size underflow, non-finite state, too many steps).
+        """
         rtol = config.get("simulate.rtol") if rtol is None else rtol
         atol = config.get("simulate.atol_floor") if atol is None else atol
         max_steps = config.get("simulate.max_steps") if max_steps is None else max_steps
@@ -360,6 +511,11 @@ class Simulator:
     def sparse_jacobian(self) -> SparseJacobian:
         """The model's sparse analytic Jacobian (:mod:`.stiffness`), built and compiled once.
 
+        Returns
+        -------
+        SparseJacobian
+            The compiled sparse Jacobian of the right-hand side, shared by later calls.
+
         Raises
         ------
         SimulationError
@@ -376,9 +532,36 @@ class Simulator:
         return self._sparse
 
     def jacobian_at(self, t0, x, th, mem, bank, sparse: bool = False):
-        """∂(dx/dt)/∂x at time t0 and state x from the sparse analytic Jacobian: a dense array,
-        or with ``sparse`` a scipy CSC matrix.  Where the equations have a kink the entries
-        are the derivatives from the right (:mod:`bondgraph.numerics.jacobian`)."""
+        """∂(dx/dt)/∂x at time t0 and state x from the sparse analytic Jacobian.
+
+        Where the equations have a kink the entries are the derivatives from the right
+        (:mod:`bondgraph.numerics.jacobian`).
+
+        Parameters
+        ----------
+        t0 : float
+            Time, s.
+        x : array_like
+            State, in the order of :attr:`state_names`.
+        th : numpy.ndarray
+            θ, the parameter vector (see :meth:`theta`).
+        mem : numpy.ndarray
+            The memory operators' memory (see :meth:`initial_memory`).
+        bank : SignalBank
+            The packed inputs (see :meth:`signal_bank`).
+        sparse : bool, optional
+            Return a scipy CSC matrix instead of a dense array.
+
+        Returns
+        -------
+        numpy.ndarray or scipy.sparse.csc_matrix
+            The n × n Jacobian, 1/s for rates of states of like units.
+
+        Raises
+        ------
+        SimulationError
+            The model has no analytic Jacobian (see :meth:`sparse_jacobian`).
+        """
         sj = self.sparse_jacobian()
         nu = max(len(self.input_names), 1)
         u, du = np.zeros(nu), np.zeros(nu)
@@ -392,7 +575,28 @@ class Simulator:
 
         The spectral radius comes from a finite-difference Jacobian of the compiled right-hand
         side for small models (no compilation), from the sparse analytic one above
-        ``DENSE_EIGEN`` states."""
+        ``DENSE_EIGEN`` states.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Output times of the run, s.
+        x : numpy.ndarray
+            Initial state.
+        th : numpy.ndarray
+            θ, the parameter vector (see :meth:`theta`).
+        mem : numpy.ndarray
+            The memory operators' initial memory (see :meth:`initial_memory`).
+        bank : SignalBank
+            The packed inputs (see :meth:`signal_bank`).
+
+        Returns
+        -------
+        method : str
+            ``"radau5"`` or ``"dopri5"``.
+        reason : str
+            Why, in words (stored as ``stats["reason"]`` of the result).
+        """
         n = x.size
         if n == 0:
             return "dopri5", "no states"
@@ -414,7 +618,26 @@ class Simulator:
         return "radau5", verdict.reason()
 
     def choose_method(self, t, x, th, mem, bank) -> str:
-        """The method ``auto`` runs (see :meth:`choose`)."""
+        """The method ``auto`` runs (see :meth:`choose`).
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Output times of the run, s.
+        x : numpy.ndarray
+            Initial state.
+        th : numpy.ndarray
+            θ, the parameter vector (see :meth:`theta`).
+        mem : numpy.ndarray
+            The memory operators' initial memory (see :meth:`initial_memory`).
+        bank : SignalBank
+            The packed inputs (see :meth:`signal_bank`).
+
+        Returns
+        -------
+        str
+            ``"radau5"`` or ``"dopri5"``.
+        """
         return self.choose(t, x, th, mem, bank)[0]
 
     def _finite_difference_jacobian(self, t0, x, th, mem, bank) -> np.ndarray:
@@ -514,5 +737,30 @@ class Simulator:
 
 
 def simulate(model: Model | Equations, t, inputs: Mapping[str, Signal] | None = None, **kw) -> SimResult:
-    """One-shot simulation: derive, compile (cached) and run; see :meth:`Simulator.run`."""
+    """One-shot simulation: derive, compile (cached) and run; see :meth:`Simulator.run`.
+
+    Parameters
+    ----------
+    model : Model or Equations
+        The model, derived here when it is a :class:`~bondgraph.Model`.
+    t : array_like or float
+        Output times, s, strictly increasing; a scalar is the end time of 1001 samples from 0.
+    inputs : mapping of str to Signal or float, optional
+        Input name → signal or constant number; an input not given is 0.
+    **kw
+        The other keywords of :meth:`Simulator.run` (``params``, ``x0``, ``method``,
+        ``rtol``, ``atol``, ``max_step``, ``max_steps``, ``progress``, ``deadline``).
+
+    Returns
+    -------
+    SimResult
+        The outputs and states sampled at ``t``.
+
+    Raises
+    ------
+    BondGraphError
+        The model cannot be derived, or bad input (see :meth:`Simulator.run`).
+    SimulationError
+        The integrator failed or passed its deadline.
+    """
     return Simulator(model).run(t, inputs, **kw)

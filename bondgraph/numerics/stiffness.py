@@ -55,13 +55,42 @@ class SparseJacobian:
         self._q: np.ndarray | None = None
 
     def work(self) -> np.ndarray:
-        """A fresh work array ``[1, −1, 0, ...]`` of the program."""
+        """A fresh work array ``[1, −1, 0, ...]`` of the program.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``n_work`` values.
+        """
         W = np.zeros(self.program.n_work)
         W[0], W[1] = 1.0, -1.0
         return W
 
     def augmented(self, t, x, u, du, th, mem, aux=None) -> sps.csc_matrix:
-        """``J_aug`` at (t, x) with inputs u, du, parameters θ and operator memory ``mem``."""
+        """``J_aug`` at (t, x) with inputs u, du, parameters θ and operator memory ``mem``.
+
+        Parameters
+        ----------
+        t : float
+            Time, s.
+        x : numpy.ndarray
+            State.
+        u : numpy.ndarray
+            Input values.
+        du : numpy.ndarray
+            Input rates (input units per s).
+        th : numpy.ndarray
+            θ, the parameter vector.
+        mem : numpy.ndarray
+            The memory operators' memory.
+        aux : numpy.ndarray, optional
+            Register array of the compiled program (default: a copy of the compiled one).
+
+        Returns
+        -------
+        scipy.sparse.csc_matrix
+            The augmented Jacobian over the states and the program's hub variables.
+        """
         p = self.program
         aux = self.compiled.aux.copy() if aux is None else aux
         W = self.work()
@@ -70,7 +99,18 @@ class SparseJacobian:
         return sps.csc_matrix((W[p.slots], p.indices, p.indptr), shape=(p.size, p.size))
 
     def reduced(self, J_aug: sps.csc_matrix) -> sps.csc_matrix:
-        """``J = F_x + F_w·(I − G_w)⁻¹·G_x`` from ``J_aug`` (sparse, n × n)."""
+        """``J = F_x + F_w·(I − G_w)⁻¹·G_x`` from ``J_aug`` (sparse, n × n).
+
+        Parameters
+        ----------
+        J_aug : scipy.sparse.csc_matrix
+            The augmented Jacobian (:meth:`augmented`).
+
+        Returns
+        -------
+        scipy.sparse.csc_matrix
+            ∂(dx/dt)/∂x, n × n.
+        """
         n = self.n
         A = J_aug[:n, :n]
         if self.size == n:
@@ -81,7 +121,13 @@ class SparseJacobian:
 
     def column_order(self) -> np.ndarray:
         """The LU's column order (computed once): COLAMD on the pattern of the state block of
-        ``J_aug``, then the hubs (their dense rows and columns last, where they fill nothing)."""
+        ``J_aug``, then the hubs (their dense rows and columns last, where they fill nothing).
+
+        Returns
+        -------
+        numpy.ndarray
+            A permutation of the augmented Jacobian's columns (int64).
+        """
         if self._q is None:
             p = self.program
             rng = np.random.default_rng(0)
@@ -95,7 +141,19 @@ class SparseJacobian:
 
 class Stiffness(NamedTuple):
     """What :func:`stiffness` found: the spectral radius ρ (1/s), the output's Nyquist
-    frequency (rad/s), the explicit method's step count at its stability limit, and the verdict."""
+    frequency (rad/s), the explicit method's step count at its stability limit, and the verdict.
+
+    Parameters
+    ----------
+    radius : float
+        Spectral radius ρ of the Jacobian, 1/s.
+    nyquist : float
+        The output's Nyquist angular frequency, rad/s.
+    explicit_steps : float
+        Steps dopri5 would need at its stability limit over the run.
+    stiff : bool
+        The verdict.
+    """
 
     radius: float
     nyquist: float
@@ -104,7 +162,13 @@ class Stiffness(NamedTuple):
 
     def reason(self) -> str:
         """One phrase for the summary line, e.g. ``stiff: spectral radius 4.1e+08 1/s, 1300 × the
-        output's Nyquist frequency; dopri5 would need ~1.2e+07 steps``."""
+        output's Nyquist frequency; dopri5 would need ~1.2e+07 steps``.
+
+        Returns
+        -------
+        str
+            The phrase.
+        """
         verdict = "stiff" if self.stiff else "not stiff"
         return (
             f"{verdict}: spectral radius {self.radius:.2g} 1/s, {self.radius / self.nyquist:.2g} × the output's "
@@ -113,7 +177,18 @@ class Stiffness(NamedTuple):
 
 
 def spectral_radius(J: sps.spmatrix) -> float:
-    """|λ|max of the sparse matrix ``J`` (dense eigenvalues for small ones, ARPACK otherwise)."""
+    """|λ|max of the sparse matrix ``J`` (dense eigenvalues for small ones, ARPACK otherwise).
+
+    Parameters
+    ----------
+    J : scipy.sparse.spmatrix
+        A square Jacobian, 1/s.
+
+    Returns
+    -------
+    float
+        The spectral radius, 1/s (inf when ``J`` has a non-finite entry).
+    """
     n = J.shape[0]
     if n == 0:
         return 0.0
@@ -131,7 +206,21 @@ def spectral_radius(J: sps.spmatrix) -> float:
 
 
 def stiffness(radius: float, t: np.ndarray) -> Stiffness:
-    """The verdict of the module docstring for spectral radius ``radius`` and output times ``t``."""
+    """The verdict of the module docstring for spectral radius ``radius`` and output times ``t``.
+
+    Parameters
+    ----------
+    radius : float
+        Spectral radius of the Jacobian, 1/s.
+    t : numpy.ndarray
+        Output times of the run, s.
+
+    Returns
+    -------
+    Stiffness
+        The numbers and the verdict (thresholds: settings ``simulate.stiff_ratio``,
+        ``simulate.stiff_min_steps``, ``simulate.explicit_step_limit``).
+    """
     span = float(t[-1] - t[0])
     dt = span / max(t.size - 1, 1)
     nyquist = math.pi / dt

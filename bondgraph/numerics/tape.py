@@ -129,7 +129,25 @@ def build_tape(eqs: Equations, roots: tuple[list, list] | None = None) -> np.nda
     """The tape of ``eqs`` (see the module docstring); TapeUnsupported if it cannot be built.
 
     ``roots``: the expressions of the two sections instead of the rates and the outputs (the
-    tape's ``rhs`` then writes the first, ``output`` the second)."""
+    tape's ``rhs`` then writes the first, ``output`` the second).
+
+    Parameters
+    ----------
+    eqs : Equations
+        The derived model.
+    roots : tuple of (list, list), optional
+        The expressions of the two sections.
+
+    Returns
+    -------
+    numpy.ndarray
+        The tape (the ``aux`` array of the tape interpreter).
+
+    Raises
+    ------
+    TapeUnsupported
+        The model has memory operators, or an expression the tape cannot hold.
+    """
     if eqs.operators:
         raise TapeUnsupported("memory operators")
     if roots is None:

@@ -7,7 +7,20 @@ from . import figures
 
 def plot_diagnosis(report, path: str) -> None:
     """Measured vs calibrated vs extended output (after each named cause), residuals, and
-    residual-vs-input loops."""
+    residual-vs-input loops.
+
+    Parameters
+    ----------
+    report : Report
+        A diagnosis report (:func:`bondgraph.diagnosis.diagnose`) with its ``predictions``.
+    path : str or path-like
+        The image to write (png, pdf or svg; written atomically).
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     plt = figures.pyplot()
     p = report.predictions
     t, u, y, base = p["t"], p["u"], p["y"], p["baseline"]

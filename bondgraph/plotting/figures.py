@@ -15,7 +15,18 @@ from ..support.errors import UsageError
 
 
 def pyplot():
-    """matplotlib's pyplot on the Agg backend, or a one-line :class:`UsageError` without it."""
+    """matplotlib's pyplot on the Agg backend, or a one-line :class:`UsageError` without it.
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``, with the non-interactive Agg backend selected.
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed (the message names the ``plot`` extra).
+    """
     try:
         import matplotlib
 
@@ -27,7 +38,20 @@ def pyplot():
 
 
 def save(fig, path: str) -> None:
-    """Write ``fig`` atomically; the format follows the file name's suffix (png, pdf, svg)."""
+    """Write ``fig`` atomically and close it; the format follows the file name's suffix.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure to write (closed afterwards, written or not).
+    path : str or path-like
+        The file to write: ``.png`` (the default without a suffix), ``.pdf`` or ``.svg``.
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     plt = pyplot()
     fmt = os.path.splitext(os.fspath(path))[1].lstrip(".").lower() or "png"
     try:
@@ -38,12 +62,37 @@ def save(fig, path: str) -> None:
 
 
 def axis_label(name: str, unit: str) -> str:
-    """``x (m)``, or just ``x`` for a quantity without unit (``(m)`` without a name)."""
+    """``x (m)``, or just ``x`` for a quantity without unit (``(m)`` without a name).
+
+    Parameters
+    ----------
+    name : str
+        The quantity's name.
+    unit : str
+        Its unit ("" for none).
+
+    Returns
+    -------
+    str
+        The axis label.
+    """
     return f"{name} ({unit})".strip() if unit else name
 
 
 def varies(y) -> bool:
-    """Whether a sampled signal changes at all (beyond rounding)."""
+    """Whether a sampled signal changes at all (beyond rounding).
+
+    Parameters
+    ----------
+    y : array_like
+        The samples.
+
+    Returns
+    -------
+    bool
+        True when the peak-to-peak range exceeds 1e-12 of the peak magnitude (and the signal
+        has two samples or more and is not all zero).
+    """
     y = np.asarray(y, float)
     if y.size < 2:
         return False
@@ -53,7 +102,24 @@ def varies(y) -> bool:
 
 def envelope(t, y, limit: int = 20000):
     """At most about ``limit`` points that keep every bucket's minimum and maximum (a
-    million-sample signal draws as fast as a short one and loses no peak)."""
+    million-sample signal draws as fast as a short one and loses no peak).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    y : numpy.ndarray
+        Samples at ``t``.
+    limit : int, optional
+        About the most points returned.
+
+    Returns
+    -------
+    t : numpy.ndarray
+        The thinned times in order (the input itself when short enough).
+    y : numpy.ndarray
+        The samples at them.
+    """
     n = t.size
     if n <= limit:
         return t, y

@@ -10,7 +10,21 @@ from . import figures
 
 def plot_bond_graph(causality, path: str) -> None:
     """Elements as labelled nodes, bonds with half-arrows (power) and causal strokes (the
-    layout of :func:`bondgraph.model.drawing.layout`)."""
+    layout of :func:`bondgraph.model.drawing.layout`).
+
+    Parameters
+    ----------
+    causality : Causality
+        The model with its assigned causality (:func:`~bondgraph.assign_causality`); elements
+        in derivative causality are marked.
+    path : str or path-like
+        The image to write (png, pdf or svg; written atomically).
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     plt = figures.pyplot()
     lay = layout(causality.model, causality.stroke_end, {e for e, _ in causality.derivative})
     pos = lay.positions

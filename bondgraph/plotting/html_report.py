@@ -70,7 +70,18 @@ def need_bokeh() -> None:
 def curves(report) -> list[tuple[str, np.ndarray]]:
     """The model outputs to draw, in order: the calibrated model (or plausible device), then
     the model after each named step (or, when the report does not keep them, after the whole
-    chain), each with its legend."""
+    chain), each with its legend.
+
+    Parameters
+    ----------
+    report : Report
+        A diagnosis report with its ``predictions``.
+
+    Returns
+    -------
+    list of tuple of (str, numpy.ndarray)
+        (legend, prediction on the report's time grid, output units).
+    """
     p = report.predictions
     base = "calibrated model" if report.baseline == "calibrated" else "plausible device"
     out = [(base, np.asarray(p["baseline"], float))]
@@ -85,7 +96,20 @@ def curves(report) -> list[tuple[str, np.ndarray]]:
 
 def noise_psd(noise: float, fs: float) -> float:
     """The one-sided power spectral density of white noise of RMS ``noise`` sampled at ``fs``
-    (its integral from 0 to fs/2 is noise²), in output units² per Hz."""
+    (its integral from 0 to fs/2 is noise²), in output units² per Hz.
+
+    Parameters
+    ----------
+    noise : float
+        The noise's RMS, output units.
+    fs : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    float
+        2·noise²/fs, output units² per Hz.
+    """
     return 2.0 * noise**2 / fs
 
 

@@ -23,7 +23,26 @@ SCALES = ("linear", "log", "symlog")
 @dataclass
 class Curve:
     """One line or set of markers: ``x``, ``y`` (equal lengths), a legend ``label`` (none if
-    empty), a matplotlib format ``style`` ("-", "--", "o", "k:", ...) and a line ``width``."""
+    empty), a matplotlib format ``style`` ("-", "--", "o", "k:", ...) and a line ``width``.
+
+    Parameters
+    ----------
+    x : array_like
+        Abscissae (any unit; flattened to floats).
+    y : array_like
+        Ordinates, as many as ``x``.
+    label : str, optional
+        Legend entry ("" for none).
+    style : str, optional
+        matplotlib format string (default "-", a solid line).
+    width : float, optional
+        Line width, points.
+
+    Raises
+    ------
+    ModelError
+        ``x`` and ``y`` differ in length or are empty.
+    """
 
     x: object
     y: object
@@ -41,7 +60,28 @@ class Curve:
 @dataclass
 class Panel:
     """One set of axes: ``curves``, a ``title``, axis labels, axis scales (linear, log, symlog),
-    ``equal`` for equal x and y scales (an x-y path), and a ``note`` written in a corner."""
+    ``equal`` for equal x and y scales (an x-y path), and a ``note`` written in a corner.
+
+    Parameters
+    ----------
+    curves : list of Curve
+        The curves drawn on these axes.
+    title : str, optional
+        The panel's title.
+    xlabel, ylabel : str, optional
+        Axis labels, with units (e.g. "f (Hz)").
+    xscale, yscale : {"linear", "log", "symlog"}, optional
+        Axis scales.
+    equal : bool, optional
+        Equal x and y scales.
+    note : str, optional
+        Text written in the upper left corner (monospace).
+
+    Raises
+    ------
+    ModelError
+        An unknown scale, or a curve that is not a :class:`Curve`.
+    """
 
     curves: list
     title: str = ""
@@ -63,7 +103,24 @@ class Panel:
 @dataclass
 class Figure:
     """A figure: ``panels`` laid out ``columns`` wide, a ``title``, and ``numbers``, the values
-    the figure shows that a reader (and a test) checks, name -> number."""
+    the figure shows that a reader (and a test) checks, name -> number.
+
+    Parameters
+    ----------
+    title : str
+        The figure's title.
+    panels : list of Panel
+        One or more panels, laid out row by row.
+    numbers : dict of str to float, optional
+        The values the figure shows, name (with unit) → number.
+    columns : int, optional
+        Panels per row (default 2).
+
+    Raises
+    ------
+    ModelError
+        No panel, or a panel that is not a :class:`Panel`.
+    """
 
     title: str
     panels: list
@@ -77,7 +134,20 @@ class Figure:
 
 
 def render(figure: Figure, path: str) -> None:
-    """Draw ``figure`` and write it atomically to ``path`` (png, pdf or svg)."""
+    """Draw ``figure`` and write it atomically to ``path`` (png, pdf or svg).
+
+    Parameters
+    ----------
+    figure : Figure
+        The figure to draw.
+    path : str
+        The image to write.
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     from .figures import pyplot, save
 
     plt = pyplot()

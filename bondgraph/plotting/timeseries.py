@@ -15,7 +15,26 @@ from . import figures
 def plot_signals(t, signals: dict, units: dict, path: str, title: str = "") -> None:
     """Signals against time, one panel per unit: signals that share a unit share the panel
     (with a legend), the y axis says the unit; signals that never change are left out and
-    listed in the title.  ``signals``: name → samples; ``units``: name → unit text."""
+    listed in the title.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times, s.
+    signals : dict of str to array_like
+        Signal name → samples at ``t``.
+    units : dict of str to str
+        Signal name → unit text (a signal without one gets a panel of its own).
+    path : str or path-like
+        The image to write (png, pdf or svg; written atomically).
+    title : str, optional
+        The figure's title.
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     plt = figures.pyplot()
     panels: dict = {}
     constant = []
@@ -50,12 +69,54 @@ def plot_signals(t, signals: dict, units: dict, path: str, title: str = "") -> N
 def plot_simulation(res, path: str, title: str = "", units: dict | None = None, columns: dict | None = None) -> None:
     """Inputs and outputs of a :class:`~bondgraph.numerics.simulate.SimResult` against time (see
     :func:`plot_signals`); ``units`` name → unit (e.g. from the model's inputs and outputs),
-    ``columns`` replaces the result's signals (e.g. outputs with a fit's offset added)."""
+    ``columns`` replaces the result's signals (e.g. outputs with a fit's offset added).
+
+    Parameters
+    ----------
+    res : SimResult
+        The simulation result (its ``t``, inputs and outputs are drawn).
+    path : str or path-like
+        The image to write (png, pdf or svg; written atomically).
+    title : str, optional
+        The figure's title.
+    units : dict of str to str, optional
+        Signal name → unit text.
+    columns : dict of str to array_like, optional
+        Signals to draw instead of the result's inputs and outputs, sampled at ``res.t``.
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     plot_signals(res.t, columns if columns is not None else {**res.inputs, **res.outputs}, units or {}, path, title)
 
 
 def plot_fit(t, measured, fitted, path: str, name: str = "y", unit: str = "", title: str = "") -> None:
-    """Measured and fitted output (offset included) on one panel, the residual below."""
+    """Measured and fitted output (offset included) on one panel, the residual below.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times, s.
+    measured : array_like
+        The measured output at ``t``.
+    fitted : array_like
+        The fitted model's output at ``t``, same unit; the residual drawn is measured − fitted.
+    path : str or path-like
+        The image to write (png, pdf or svg; written atomically).
+    name : str, optional
+        The output's name (y axis).
+    unit : str, optional
+        The output's unit.
+    title : str, optional
+        The figure's title.
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     plt = figures.pyplot()
     t = np.asarray(t, float)
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
@@ -77,7 +138,29 @@ def plot_bode(
     w, H, path: str, title: str = "", input: tuple[str, str] = ("u", ""), output: tuple[str, str] = ("y", "")
 ) -> None:
     """Magnitude and phase of the frequency response H(jω) of ``output`` to ``input``
-    (each a (name, unit) pair; the magnitude's unit is theirs divided)."""
+    (each a (name, unit) pair; the magnitude's unit is theirs divided).
+
+    Parameters
+    ----------
+    w : array_like
+        Angular frequencies, rad/s (log axis).
+    H : array_like
+        Complex H(jω) at ``w``, output unit per input unit; the phase is drawn unwrapped, in
+        degrees.
+    path : str or path-like
+        The image to write (png, pdf or svg; written atomically).
+    title : str, optional
+        The figure's title.
+    input : tuple of (str, str), optional
+        The input's name and unit.
+    output : tuple of (str, str), optional
+        The output's name and unit.
+
+    Raises
+    ------
+    UsageError
+        matplotlib is not installed.
+    """
     plt = figures.pyplot()
     (u, uu), (y, yu) = input, output
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
