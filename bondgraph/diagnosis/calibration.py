@@ -225,7 +225,26 @@ def param_bounds(ctx: Context, name: str, value: float, factor: float | None = N
 
 def sensitivities(ctx: Context, names: Sequence[str], values: dict, raw: np.ndarray, rel: float = 0.01):
     """Output change per relative change of each parameter, on the fit part, with the
-    directions of the output itself and of a constant (sensor gain, offset) projected out."""
+    directions of the output itself and of a constant (sensor gain, offset) projected out.
+
+    Parameters
+    ----------
+    ctx : Context
+        The diagnosis context (its identification problem and fit samples).
+    names : sequence of str
+        The parameters.
+    values : dict
+        Parameter values by name, where the derivatives are taken.
+    raw : ndarray
+        The raw prediction (sensor gain 1, no offset) at ``values``.
+    rel : float
+        The relative step of the forward differences.
+
+    Returns
+    -------
+    ndarray
+        One column per parameter, one row per fit sample (output units per unit relative
+        change)."""
     idx = ctx.ident.fit_idx
     cols = []
     for n in names:
