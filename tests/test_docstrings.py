@@ -122,6 +122,7 @@ def problems(name: str, skip: frozenset = frozenset()) -> list[str]:
 
 OBJECTS = public_objects()
 
+
 @pytest.mark.parametrize("stage", sorted(OBJECTS))
 def test_public_docstrings_follow_numpydoc(stage):
     failures = []
