@@ -215,17 +215,25 @@ def _duration(seconds: float) -> str:
     return f"{h} h {m:02d} min"
 
 
+#: seconds a :class:`waiting` block runs before a report in a log (``lines`` mode)
+LOG_DELAY = 10.0
+
+
 class waiting:
     """A :class:`Progress` with no amount, kept alive by a timer thread while one blocking call
     runs (a compilation, an import): it shows the label and the time elapsed once the call has
-    taken more than ``delay`` seconds, and the time it took at the end.  ``mode`` as for
+    taken more than ``delay`` seconds (default: 1 s on a terminal, :data:`LOG_DELAY` in a log
+    or a pipe, where every report stays as a line), and the time it took at the end.  ``mode`` as for
     :class:`Progress`; the environment variable ``BONDGRAPH_PROGRESS`` applies.  Usable as a
     context manager only; ``seconds`` holds the time the block took when it ends.  ``mode``
     defaults to :data:`default_mode` (a command's ``--quiet`` sets it to quiet while it runs).
     """
 
-    def __init__(self, label: str, *, status: str = "", mode: str | None = None, stream: IO | None = None, delay=1.0):
-        self.progress = Progress(label, mode=mode or default_mode, stream=stream, delay=delay)
+    def __init__(self, label: str, *, status: str = "", mode: str | None = None, stream: IO | None = None, delay=None):
+        self.progress = Progress(label, mode=mode or default_mode, stream=stream)
+        # a terminal redraws one line: shown after a second; a log keeps every line: only a
+        # wait that a reader would wonder about (a first compilation of tens of seconds)
+        self.progress.delay = delay if delay is not None else (1.0 if self.progress.mode == "bar" else LOG_DELAY)
         self.progress.status = status
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
