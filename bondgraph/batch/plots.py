@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plotting import pyplot, save
+from ..plotting import figures
 
 
 def plot_sweep(result, path: str) -> None:
     """One column per metric: its histogram over the runs (mean and ±1 std marked) on top,
     the tornado plot of its sensitivity below (bars from the baseline to the output at each
-    parameter's low and high value, the largest swing on top)."""
-    plt = pyplot()
+    parameter's low and high value, the largest swing on top); the axes say the metric's unit,
+    SI-prefixed to suit its values."""
+    plt = figures.pyplot()
     metrics = result.metrics
     n = len(metrics)
     n_par = len(result.params)
@@ -19,6 +20,8 @@ def plot_sweep(result, path: str) -> None:
     for k, (m, sens) in enumerate(zip(metrics, result.sensitivity())):
         y = result.table.column(m)
         y = y[np.isfinite(y)]
+        label, f = figures.scaled_label(m, result.units.get(m, ""), y)
+        y = f * y
         ax = axes[0, k]
         if y.size:
             ax.hist(y, bins=min(50, max(5, int(np.sqrt(y.size)))), color="#4c72b0", alpha=0.85)
@@ -27,22 +30,23 @@ def plot_sweep(result, path: str) -> None:
             for s in (-1, 1):
                 ax.axvline(mu + s * sd, color="k", lw=0.8, ls="--")
         ax.set_title(f"{m}  ({y.size} runs)")
+        ax.set_xlabel(label)
         ax.set_ylabel("runs")
         ax.grid(alpha=0.3)
         ax = axes[1, k]
         ranking = list(reversed(sens["ranking"]))
-        base = sens["baseline"]
+        base = f * sens["baseline"]
         pos = np.arange(len(ranking))
-        lows = np.array([r["low"] for r in ranking]) - base
-        highs = np.array([r["high"] for r in ranking]) - base
+        lows = f * np.array([r["low"] for r in ranking]) - base
+        highs = f * np.array([r["high"] for r in ranking]) - base
         ax.barh(pos, lows, left=base, color="#dd8452", label="parameter low")
         ax.barh(pos, highs, left=base, color="#55a868", alpha=0.85, label="parameter high")
         ax.axvline(base, color="k", lw=1.0)
         ax.set_yticks(pos, [r["parameter"] for r in ranking])
-        ax.set_xlabel(m)
+        ax.set_xlabel(label)
         ax.set_title(f"sensitivity ({result.design})")
         ax.grid(alpha=0.3, axis="x")
         if k == 0:
             ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
-    save(fig, path)
+    figures.save(fig, path)

@@ -35,6 +35,8 @@ class SweepResult:
     metrics: list[str]
     seed: int | None = None
     nominal: dict = field(default_factory=dict)
+    #: metric → unit (empty when the model declares none)
+    units: dict = field(default_factory=dict)
 
     @property
     def params(self) -> list[str]:
@@ -141,7 +143,9 @@ def sweep(
     table = execute(
         opts, [Job(i, tuple(p.items())) for i, p in enumerate(points)], scheduler, workers, progress, say, per_task
     )
-    return SweepResult(table, space, design, [m.text for m in opts.metrics], seed, nominal)
+    signal_units = {n: v.unit for n, v in {**lm.model.inputs, **lm.model.outputs}.items() if v.unit}
+    units = {m.text: m.unit(signal_units) for m in opts.metrics}
+    return SweepResult(table, space, design, [m.text for m in opts.metrics], seed, nominal, units)
 
 
 def _finite(obj):
