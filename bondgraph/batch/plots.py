@@ -34,6 +34,17 @@ def plot_sweep(result, path: str) -> None:
         ax.set_ylabel("runs")
         ax.grid(alpha=0.3)
         ax = axes[1, k]
+        if "noise" in sens:
+            ax.text(
+                0.5,
+                0.5,
+                f"not ranked: the runs spread by {sens['noise']:.2g}\nof the value (numerical noise)",
+                ha="center",
+                va="center",
+                transform=ax.transAxes,
+            )
+            ax.set_axis_off()
+            continue
         ranking = list(reversed(sens["ranking"]))
         base = f * sens["baseline"]
         pos = np.arange(len(ranking))

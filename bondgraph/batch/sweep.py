@@ -1,8 +1,8 @@
 """Parameter sweeps and Monte Carlo tolerance analysis of a model file's simulation.
 
     from bondgraph import batch
-    res = batch.sweep("models/apa120ml.py", {"K": "normal(10.77e6, 5%)", "c": "uniform(2500, 3500)"},
-                      draws=1000, seed=1, metrics=["peak(x)", "resonance"])
+    res = batch.sweep("models/bimorph_t215.py", {"omega_1": "normal(2247.4, 3%)", "zeta_1": "uniform(0.008, 0.016)"},
+                      draws=1000, seed=1, metrics=["p2p(x)", "resonance"])
     res.table.write("mc.csv"); print(res.text()); res.plot("mc.png")
 
 The runs come from :mod:`~bondgraph.batch.sampling` (reproducible with ``seed``), each one
@@ -84,6 +84,15 @@ class SweepResult:
             else:
                 lines.append(f"  {s['metric']:<16} {0:>5}  (every run failed)")
         for sens in self.sensitivity():
+            if "noise" in sens:
+                spread = (
+                    f"its runs spread by {sens['noise']:.2g} of its value, the level of numerical noise "
+                    f"(below {analysis.NOISE_SPREAD:g})"
+                    if sens["noise"] > 0
+                    else "it is the same in every run"
+                )
+                lines += ["", f"  sensitivity of {sens['metric']}: not ranked, {spread}"]
+                continue
             lines += [
                 "",
                 f"  sensitivity of {sens['metric']} (baseline {sens['baseline']:.5g}"
@@ -91,6 +100,9 @@ class SweepResult:
                 + "):",
             ]
             for r in sens["ranking"]:
+                if r.get("negligible"):
+                    lines.append(f"    {r['parameter']:<14} no effect above numerical noise")
+                    continue
                 extra = f"  SRC {r['src']:+.3f}  Spearman {r['spearman']:+.3f}" if "src" in r else ""
                 lines.append(
                     f"    {r['parameter']:<14} swing {r['swing']:<11.4g} low {r['low']:<12.5g} "
