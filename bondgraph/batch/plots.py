@@ -38,7 +38,9 @@ def plot_sweep(result, path: str) -> None:
             ax.text(
                 0.5,
                 0.5,
-                f"not ranked: the runs spread by {sens['noise']:.2g}\nof the value (numerical noise)",
+                f"not ranked: the runs spread by {sens['noise']:.2g}\nof the value (numerical noise)"
+                if sens["noise"] > 0
+                else "not ranked: the same in every run",
                 ha="center",
                 va="center",
                 transform=ax.transAxes,
