@@ -362,3 +362,37 @@ def test_sweep_report_json_and_plot(tmp_path):
     pytest.importorskip("matplotlib")
     res.plot(str(tmp_path / "sweep.png"))
     assert (tmp_path / "sweep.png").stat().st_size > 10_000
+
+
+# ---- a spread at the level of numerical noise is not ranked ----------------------------------------
+def test_a_metric_that_varies_by_numerical_noise_is_not_ranked(tmp_path):
+    """A stroke that varies by 1e-9 of its value over the runs (the integrator's rounding) has
+    no sensitivity to rank: the ranking says so instead of ordering the parameters by noise;
+    a parameter that moves a real metric by less than that is listed as without effect."""
+    from bondgraph.batch import SweepResult
+
+    rng = np.random.default_rng(2)
+    a, b = rng.uniform(1, 2, 80), rng.normal(0, 1, 80)
+    rows = [
+        {"job": i, "a": a[i], "b": b[i], "stroke": 1.1e-4 * (1 + 1e-9 * rng.normal()), "y": 2 * a[i] + 1e-9 * b[i]}
+        for i in range(80)
+    ]
+    t = Table(rows, ["a", "b"])
+    assert analysis.relative_spread(t.column("stroke")) < 1e-8
+    s = analysis.sensitivity(t, ["a", "b"], "stroke", "random")
+    assert s["ranking"] == [] and 0 < s["noise"] < analysis.NOISE_SPREAD
+    s = analysis.sensitivity(t, ["a", "b"], "y", "random")
+    assert [r["parameter"] for r in s["ranking"]] == ["a", "b"]
+    assert "negligible" not in s["ranking"][0] and s["ranking"][1]["negligible"]
+    res = SweepResult(t, {"a": sampling.uniform(1, 2), "b": sampling.normal(0, 1)}, "random", ["stroke", "y"], seed=2)
+    text = res.text()
+    assert "sensitivity of stroke: not ranked, its runs spread by" in text and "numerical noise" in text
+    assert "    b              no effect above numerical noise" in text
+    assert "sensitivity of y (baseline" in text
+    same = Table([{"job": i, "a": a[i], "m": 5.0} for i in range(10)], ["a"])
+    assert analysis.sensitivity(same, ["a"], "m", "random")["noise"] == 0.0
+    doc = json.loads(json.dumps(res.as_json(), allow_nan=False))
+    assert doc["sensitivity"][0]["ranking"] == [] and doc["sensitivity"][0]["noise"] > 0
+    pytest.importorskip("matplotlib")
+    res.plot(str(tmp_path / "noise.png"))
+    assert (tmp_path / "noise.png").stat().st_size > 10_000

@@ -269,7 +269,8 @@ def test_plots_carry_units_skip_constants_and_label_shared_axes(work, capsys, mo
     assert rc == 0, err
     axes = figs[0].axes
     labels = [a.get_ylabel() for a in axes]
-    assert labels == ["V (N)", "x, x2 (m)", "v (m/s)"], labels  # F (unused, constant) is left out
+    # F (unused, constant) is left out; a 1 mN drive and its µm response read in SI-prefixed units
+    assert labels == ["V (mN)", "x, x2 (µm)", "v (m/s)"], labels
     assert "constant F = 0 N" in axes[0].get_title()
     assert axes[-1].get_xlabel() == "t (s)"
     assert axes[0].get_legend() is None and axes[2].get_legend() is None

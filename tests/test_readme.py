@@ -91,11 +91,12 @@ def block_with(text: str) -> list[str]:
 #: blocks with a test of their own (they need an earlier block's output or show numbers; the
 #: real stack's block is docs/papers.md's, run by tests/test_compensate.py)
 FIT_FILE, PLANT, STACK = "apa.csv --params", "--format python-control", "p885_stack.py"
+MONTE_CARLO = "bimorph_t215.py --vary"
 
 
 @pytest.mark.parametrize(
     "cmds",
-    [c for c in readme_commands() if not any(FIT_FILE in x or PLANT in x or STACK in x for x in c)],
+    [c for c in readme_commands() if not any(FIT_FILE in x or PLANT in x or STACK in x or MONTE_CARLO in x for x in c)],
     ids=lambda c: c[0][:40],
 )
 def test_readme_commands_run(cmds, tmp_path, monkeypatch):
@@ -164,3 +165,32 @@ def test_readme_model_file_prints_the_equations_shown(tmp_path, capsys):
     assert shown, "README shows the equations"
     for line in shown:
         assert line in out
+
+
+NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:e[-+]?\d+)?")
+
+
+def test_batch_guide_monte_carlo_numbers(tmp_path, monkeypatch):
+    """docs/batch.md's tolerance analysis of the T215 bimorph's first mode prints the
+    statistics and rankings the page shows, line by line (numbers to 4 digits)."""
+    pytest.importorskip("dask.distributed")
+    ran = run_commands(block_with(MONTE_CARLO), setup_dir(tmp_path), monkeypatch)
+    printed = ran[next(c for c in ran if MONTE_CARLO in c)][0]
+    shown = next(b for b in blocks("console", GUIDES) if "sensitivity of p2p(x)" in b)
+    sections = [sec.splitlines() for sec in printed.split("\n\n")]
+    for part in shown.strip().split("\n\n"):
+        lines = part.splitlines()
+        head = NUMBER.sub("#", lines[0]).strip()
+        (section,) = [sec for sec in sections if NUMBER.sub("#", sec[0]).strip() == head]
+        assert len(section) == len(lines), section
+        for want, got in zip(lines, section):
+            assert NUMBER.sub("#", want).split() == NUMBER.sub("#", got).split(), (want, got)
+            numbers = [float(v) for v in NUMBER.findall(want)]
+            assert [float(v) for v in NUMBER.findall(got)] == pytest.approx(numbers, rel=1e-3, abs=1e-12), (want, got)
+    # what the page's text says of them
+    stats = {ln.split()[0]: [float(v) for v in ln.split()[2:4]] for ln in sections[1][1:]}
+    text = " ".join(GUIDES[0].split())
+    f, df = map(float, re.search(r"resonance \((\d+) ± (\d+) Hz\)", text).groups())
+    assert (f, df) == (round(stats["resonance"][0]), round(stats["resonance"][1]))
+    x, dx = map(float, re.search(r"\(([\d.]+) ± ([\d.]+) µm peak to peak\)", text).groups())
+    assert (x, dx) == (round(1e6 * stats["p2p(x)"][0], 1), round(1e6 * stats["p2p(x)"][1], 1))

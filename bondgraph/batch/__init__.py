@@ -4,8 +4,8 @@ tolerance analysis, on one machine or a cluster (the ``dask`` extra: ``pip insta
     from bondgraph import batch
     table = batch.diagnose("models/apa120ml.py", ["unit01.csv", "unit02.csv"])  # one row per file
     table.write("lot.csv")                                                     # or lot.parquet
-    res = batch.sweep("models/apa120ml.py", {"K": "normal(10.77e6, 5%)"}, draws=1000, seed=1,
-                      metrics=["peak(x)", "resonance"], scheduler="tcp://head:8786")
+    res = batch.sweep("models/bimorph_t215.py", {"omega_1": "normal(2247.4, 3%)"}, draws=1000, seed=1,
+                      metrics=["p2p(x)", "resonance"], scheduler="tcp://head:8786")
 
 * :func:`diagnose`, :func:`fit`, :func:`simulate` over data files × parameter sets
   (:mod:`~bondgraph.batch.runs`), returning a :class:`Table`;

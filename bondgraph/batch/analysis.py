@@ -14,6 +14,12 @@ the tornado bars reach from ``baseline``):
   correlation ``spearman`` (scipy) and the regression's ``r2``; baseline: the mean output.
 
 Failed runs (no value) are left out and counted.
+
+A metric whose values over the runs spread by less than :data:`NOISE_SPREAD` of their size
+(range over the largest magnitude) is not ranked: such a spread is the integrator's rounding,
+not the parameters' effect (its ranking comes back empty, with the relative spread as
+``noise``); a parameter whose swing is below that share of the metric's size is marked
+``"negligible": True``.
 """
 
 from __future__ import annotations
@@ -25,6 +31,20 @@ import numpy as np
 from scipy import stats
 
 from .table import Table
+
+#: relative spread (range over largest magnitude) below which a metric's variation over the
+#: runs is taken for numerical noise and not ranked
+NOISE_SPREAD = 1e-6
+
+
+def relative_spread(y: np.ndarray) -> float:
+    """The range of the finite values of ``y`` over their largest magnitude (0 for a metric
+    that is zero in every run, NaN without a value)."""
+    ok = y[np.isfinite(y)]
+    if not ok.size:
+        return math.nan
+    size = float(np.max(np.abs(ok)))
+    return float(np.ptp(ok)) / size if size > 0 else 0.0
 
 
 def summary(table: Table, metrics: Sequence[str]) -> list[dict]:
@@ -83,9 +103,14 @@ def sensitivity(table: Table, params: Sequence[str], metric: str, design: str) -
     dict
         ``metric``, ``baseline`` and ``ranking`` (largest swing first; ``low``/``high`` are
         the metric at the parameter's low and high end, in the metric's unit), and for
-        random and lhs designs ``r2`` and each parameter's ``src`` and ``spearman``.
+        random and lhs designs ``r2`` and each parameter's ``src`` and ``spearman``; for a
+        metric whose runs spread by less than :data:`NOISE_SPREAD` of its size, an empty
+        ranking and ``noise``, the relative spread.
     """
     y = table.column(metric)
+    spread = relative_spread(y)
+    if spread < NOISE_SPREAD:
+        return {"metric": metric, "baseline": _mean(y), "ranking": [], "noise": spread}
     if design == "oat":
         base = float(y[0])
         ranking = [
@@ -115,6 +140,10 @@ def sensitivity(table: Table, params: Sequence[str], metric: str, design: str) -
         ranking, extra = _regression(table, params, y)
         base = extra.pop("mean")
     ranking.sort(key=lambda r: -r["swing"] if math.isfinite(r["swing"]) else math.inf)
+    size = float(np.nanmax(np.abs(y))) if np.isfinite(y).any() else math.nan
+    for r in ranking:
+        if r["swing"] < NOISE_SPREAD * size:
+            r["negligible"] = True
     return {"metric": metric, "baseline": base, "ranking": ranking, **extra}
 
 

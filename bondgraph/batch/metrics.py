@@ -67,6 +67,13 @@ class Metric:
         """Whether it comes from the linearisation (``resonance``, ``damping``)."""
         return self.kind in _LINEAR
 
+    def unit(self, signal_units: dict) -> str:
+        """The metric's unit: Hz for ``resonance``, none for ``damping``, else its signal's
+        unit in ``signal_units`` (name → unit; empty when not declared)."""
+        if self.linear:
+            return "Hz" if self.kind == "resonance" else ""
+        return signal_units.get(self.arg, "")
+
     def of(self, result, linear=None) -> float:
         """The value on a :class:`~bondgraph.numerics.simulate.SimResult` (and its ``LinearModel``).
 

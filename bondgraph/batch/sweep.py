@@ -1,8 +1,8 @@
 """Parameter sweeps and Monte Carlo tolerance analysis of a model file's simulation.
 
     from bondgraph import batch
-    res = batch.sweep("models/apa120ml.py", {"K": "normal(10.77e6, 5%)", "c": "uniform(2500, 3500)"},
-                      draws=1000, seed=1, metrics=["peak(x)", "resonance"])
+    res = batch.sweep("models/bimorph_t215.py", {"omega_1": "normal(2247.4, 3%)", "zeta_1": "uniform(0.008, 0.016)"},
+                      draws=1000, seed=1, metrics=["p2p(x)", "resonance"])
     res.table.write("mc.csv"); print(res.text()); res.plot("mc.png")
 
 The runs come from :mod:`~bondgraph.batch.sampling` (reproducible with ``seed``), each one
@@ -52,6 +52,8 @@ class SweepResult:
     metrics: list[str]
     seed: int | None = None
     nominal: dict = field(default_factory=dict)
+    #: metric → unit (empty when the model declares none)
+    units: dict = field(default_factory=dict)
 
     @property
     def params(self) -> list[str]:
@@ -131,6 +133,15 @@ class SweepResult:
             else:
                 lines.append(f"  {s['metric']:<16} {0:>5}  (every run failed)")
         for sens in self.sensitivity():
+            if "noise" in sens:
+                spread = (
+                    f"its runs spread by {sens['noise']:.2g} of its value, the level of numerical noise "
+                    f"(below {analysis.NOISE_SPREAD:g})"
+                    if sens["noise"] > 0
+                    else "it is the same in every run"
+                )
+                lines += ["", f"  sensitivity of {sens['metric']}: not ranked, {spread}"]
+                continue
             lines += [
                 "",
                 f"  sensitivity of {sens['metric']} (baseline {sens['baseline']:.5g}"
@@ -138,6 +149,9 @@ class SweepResult:
                 + "):",
             ]
             for r in sens["ranking"]:
+                if r.get("negligible"):
+                    lines.append(f"    {r['parameter']:<14} no effect above numerical noise")
+                    continue
                 extra = f"  SRC {r['src']:+.3f}  Spearman {r['spearman']:+.3f}" if "src" in r else ""
                 lines.append(
                     f"    {r['parameter']:<14} swing {r['swing']:<11.4g} low {r['low']:<12.5g} "
@@ -256,7 +270,9 @@ def sweep(
     table = execute(
         opts, [Job(i, tuple(p.items())) for i, p in enumerate(points)], scheduler, workers, progress, say, per_task
     )
-    return SweepResult(table, space, design, [m.text for m in opts.metrics], seed, nominal)
+    signal_units = {n: v.unit for n, v in {**lm.model.inputs, **lm.model.outputs}.items() if v.unit}
+    units = {m.text: m.unit(signal_units) for m in opts.metrics}
+    return SweepResult(table, space, design, [m.text for m in opts.metrics], seed, nominal, units)
 
 
 def _finite(obj):

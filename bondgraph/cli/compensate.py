@@ -116,7 +116,8 @@ def run(args):
                 print(",".join(repr(float(v)) for v in [res.t[k], *(c[k] for c in columns.values())]))
         if args.plot:
             with out.path(args.plot) as tmp:
-                _plot(res, tmp, u, y, lm.model.name)
+                unit = {n: s.unit for n, s in {**lm.model.inputs, **lm.model.outputs}.items()}
+                _plot(res, tmp, (u, unit.get(u, "")), (y, unit.get(y, "")), lm.model.name)
     if args.json:
         print(json.dumps(summary, indent=1))
     for note in res.notes:  # said even with --quiet: the drive is not what the numbers suggest
@@ -146,26 +147,33 @@ def _drive_range(text: str | None) -> tuple[float, float] | None:
     return lo, hi
 
 
-def _plot(res, path: str, u: str, y: str, title: str) -> None:
-    from ..plotting import pyplot, save
+def _plot(res, path: str, u: tuple[str, str], y: tuple[str, str], title: str) -> None:
+    """Reference and predicted outputs, their tracking errors and the drives against time;
+    ``u`` and ``y`` are (name, unit) of the drive and the output."""
+    from ..plotting import figures
 
-    plt = pyplot()
+    plt = figures.pyplot()
     fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
-    a1.plot(res.t, res.reference, "k", lw=1.6, label="reference")
-    a1.plot(res.t, res.linear_predicted, lw=1.0, label="linear inverse")
-    a1.plot(res.t, res.predicted, "--", lw=1.0, label="compensated")
-    a1.set_ylabel(y)
+    label, f = figures.scaled_label(y[0], y[1], res.reference, res.predicted, res.linear_predicted)
+    a1.plot(res.t, f * res.reference, "k", lw=1.6, label="reference")
+    a1.plot(res.t, f * res.linear_predicted, lw=1.0, label="linear inverse")
+    a1.plot(res.t, f * res.predicted, "--", lw=1.0, label="compensated")
+    a1.set_ylabel(label)
     a1.legend(fontsize=8)
-    a2.plot(res.t, res.linear_predicted - res.reference, lw=1.0, label="linear inverse")
-    a2.plot(res.t, res.predicted - res.reference, lw=1.0, label="compensated")
-    a2.set_ylabel(f"{y} error")
+    errors = [res.linear_predicted - res.reference, res.predicted - res.reference]
+    label, f = figures.scaled_label(f"{y[0]} error", y[1], *errors)
+    a2.plot(res.t, f * errors[0], lw=1.0, label="linear inverse")
+    a2.plot(res.t, f * errors[1], lw=1.0, label="compensated")
+    a2.set_ylabel(label)
     a2.legend(fontsize=8)
-    a3.plot(res.t, res.linear_drive, lw=1.0, label="linear inverse")
-    a3.plot(res.t, res.drive, lw=1.0, label="compensated")
-    a3.set_ylabel(u)
+    figures.residual_scale(a2, res.t, [f * e for e in errors])
+    label, f = figures.scaled_label(u[0], u[1], res.linear_drive, res.drive)
+    a3.plot(res.t, f * res.linear_drive, lw=1.0, label="linear inverse")
+    a3.plot(res.t, f * res.drive, lw=1.0, label="compensated")
+    a3.set_ylabel(label)
     a3.set_xlabel("t (s)")
     a3.legend(fontsize=8)
     for a in (a1, a2, a3):
         a.grid(alpha=0.3)
     a1.set_title(f"{title}: feedforward compensation")
-    save(fig, path)
+    figures.save(fig, path)

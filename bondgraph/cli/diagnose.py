@@ -63,7 +63,7 @@ def run(args):
             from ..plotting import plot_diagnosis
 
             with out.path(args.plot) as tmp:
-                plot_diagnosis(report, tmp)
+                plot_diagnosis(report, tmp, lm.model)
         if args.report:
             from ..plotting.html_report import report_page
 

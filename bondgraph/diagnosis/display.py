@@ -243,7 +243,7 @@ def parameters_table(j: dict, units: dict | None = None) -> str:
                 "<td>solved with the calibration</td></tr>"
             )
     for k, s in enumerate(j.get("steps") or [], 1):
-        named = next((c for c in s.get("candidates", []) if c.get("cause") == s["cause"] and c.get("passed")), None)
+        named = next((c for c in s.get("candidates", []) if c.get("named")), None)
         for name, v in ((named or {}).get("params") or {}).items():
             rows.append(
                 f"<tr><td>{escape(name)}</td>{_cell(v, 'num')}<td></td><td></td><td>{escape(units.get(name, ''))}</td>"
@@ -279,7 +279,7 @@ def candidates_tables(j: dict) -> str:
         cands = sorted(s.get("candidates") or [], key=lambda c: (bool(c.get("skipped") or c.get("error")), -c["gain"]))
         rows = []
         for c in cands:
-            named = c.get("passed") and c.get("cause") == s.get("cause")
+            named = bool(c.get("named"))
             if c.get("skipped") or c.get("error"):
                 verdict = f"not tried: {c['skipped']}" if c.get("skipped") else f"failed: {c['error']}"
                 cells = '<td colspan="5"></td>'

@@ -331,6 +331,7 @@ def assess(
         winner.result.site if winner else "",
         winner.result.label if winner else "",
         rule,
+        winner.result if winner else None,
     )
     return step, winner
 
@@ -719,16 +720,31 @@ def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float]) -> tup
     the drive to go on from (0: ``a``, 1: ``b``) and why: the better fit; when the two are within
     ``diagnosis.equivalent`` of each other and only one names a cause, the one naming none (the
     data cannot tell the readings apart, and a cause must not be credited with what a reading
-    explains)."""
-    alike = max(a[2], b[2]) <= config.get("diagnosis.equivalent") * min(a[2], b[2])
+    explains).  Two fits within that factor (or equal to the digits shown) are said to fit as
+    well, never one better, and an RMS equal to the digits shown is given once."""
+    shown = f"{a[2]:.4g}", f"{b[2]:.4g}"
+    alike = max(a[2], b[2]) <= config.get("diagnosis.equivalent") * min(a[2], b[2]) or shown[0] == shown[1]
     if alike and (a[1] == "none") != (b[1] == "none"):
-        k, why = (0 if a[1] == "none" else 1), "fits as well without a cause"
+        k = 0 if a[1] == "none" else 1
     else:
-        k, why = (0 if a[2] <= b[2] else 1), "fits the validation part better"
+        k = 0 if a[2] <= b[2] else 1
     best, other = (a, b) if k == 0 else (b, a)
-    return k, (
-        f"its first step {why} (validation RMS {best[2]:.4g}, {best[1]}) than under the {other[0]} "
-        f"reading ({other[2]:.4g}, {other[1]})"
+    rms = shown[k] if shown[0] == shown[1] else f"{shown[k]} against {shown[1 - k]}"
+    named = f"both naming {best[1]}" if best[1] == other[1] else f"naming {best[1]} against {other[1]}"
+    if not alike:
+        return (
+            k,
+            f"its first step fits the validation part better than under the {other[0]} reading (validation RMS {rms}; {named})",
+        )
+    if best[1] == "none":
+        return k, (
+            f"its first step, naming no cause, fits as well as the {other[0]} reading's, which names {other[1]} "
+            f"(validation RMS {rms}): the readings cannot be told apart, and no cause is credited with what a "
+            "reading explains"
+        )
+    return (
+        k,
+        f"its first step fits the validation part as well as under the {other[0]} reading (validation RMS {rms}; {named})",
     )
 
 
@@ -973,7 +989,7 @@ def drift_step(ctx: Context, state: State, solved: float | None) -> tuple[Step, 
         f"named: nothing else explains the record, and a slow drift of the output, {size:.0%} of its RMS, "
         f"lowers the validation RMS {cmp.gain:.3g}× (z = {cmp.z:.1f})"
     )
-    step = Step("drift", cmp.gain, before, after, before, [res], why, "output", res.label, "drift-when-nothing")
+    step = Step("drift", cmp.gain, before, after, before, [res], why, "output", res.label, "drift-when-nothing", res)
     return step, state.prediction + drift - removed
 
 

@@ -221,6 +221,9 @@ class Step:
     #: the rule that decided the step: how the winner was chosen, or for none the rule that
     #: refused the best candidate
     rule: str = ""
+    #: the named candidate, one of ``candidates`` (None for none): other passing candidates
+    #: may share its cause, label and site, so only this one is marked named
+    winner: CandidateResult | None = None
 
     def as_json(self) -> dict:
         """The step as a JSON object (the ``steps`` entries of :meth:`Report.as_json`).
@@ -240,7 +243,7 @@ class Step:
             "rms_before": self.rms_before,
             "reference_rms": self.reference_rms,
             "why": self.why,
-            "candidates": [c.as_json() for c in self.candidates],
+            "candidates": [c.as_json() | ({"named": True} if c is self.winner else {}) for c in self.candidates],
         }
 
 
@@ -333,9 +336,7 @@ class Report:
         them ('' otherwise)."""
         outside = self.calibration.get("outside_tolerance") or {}
         if not outside or any(
-            c.passed and c.cause == s.cause and c.kind == LINEAR and c.against == "plausible"
-            for s in self.steps
-            for c in s.candidates
+            s.winner is not None and s.winner.kind == LINEAR and s.winner.against == "plausible" for s in self.steps
         ):
             return ""
         return (
@@ -373,7 +374,7 @@ class Report:
             "baseline_rms": self.baseline_rms,
             "baseline": self.baseline,
             "extended_rms": self.extended_rms,
-            "candidates": [c.as_json() for c in self.candidates],
+            "candidates": self.steps[0].as_json()["candidates"] if self.steps else [],
             "steps": [s.as_json() for s in steps],
             "why": self.steps[-1].why if self.steps else "",
             "stop": self.steps[-1].as_json() if self.steps and self.steps[-1].cause == "none" else None,
@@ -529,7 +530,7 @@ class Report:
                     if c.effort < 1.0
                     else ""
                 )
-                won = c.passed and c.cause == s.cause and c.label == s.label and (c.site or "") == (s.site or "")
+                won = c is s.winner
                 lines.append(
                     f"  {c.cause:<18} {site:<12} {c.gain:>7.3g} {c.rms_validation:>10.4g} {c.z:>6.1f} {vr:>7}  "
                     f"{'NAMED' if won else c.verdict}; {c.label}{flag}"

@@ -79,6 +79,104 @@ def axis_label(name: str, unit: str) -> str:
     return f"{name} ({unit})".strip() if unit else name
 
 
+#: SI prefixes an axis may take, by power of ten
+PREFIXES = {-12: "p", -9: "n", -6: "µ", -3: "m", 0: "", 3: "k", 6: "M", 9: "G"}
+#: units that take an SI prefix on an axis (a compound unit such as m/s keeps its own scale)
+PREFIXABLE = frozenset({"m", "V", "A", "N", "C", "W", "J", "Pa", "F", "H", "Hz", "Ω"})
+#: share of a record at its start that never sets the scale of a residual panel
+START_SHARE = 0.02
+#: percentiles of the settled part of the residuals that set a residual panel's scale
+ROBUST_PERCENTILES = (0.1, 99.9)
+
+
+def si_scale(unit: str, *values) -> tuple[float, str]:
+    """The factor to multiply ``values`` by and the SI-prefixed unit to show them in, chosen
+    so that their largest magnitude reads between 1 and 1000 (``(1e6, "µm")`` for a stroke of
+    1e-4 m); ``(1.0, unit)`` for a unit that takes no prefix or values that are all zero."""
+    if unit not in PREFIXABLE:
+        return 1.0, unit
+    peaks = [np.nanmax(np.abs(v)) for v in (np.asarray(v, float).ravel() for v in values) if np.isfinite(v).any()]
+    peak = max(peaks, default=0.0)
+    if not np.isfinite(peak) or peak <= 0:
+        return 1.0, unit
+    power = int(np.clip(3 * np.floor(np.log10(peak) / 3), min(PREFIXES), max(PREFIXES)))
+    return 10.0**-power, PREFIXES[power] + unit
+
+
+def scaled_label(name: str, unit: str, *values) -> tuple[str, float]:
+    """The axis label of ``name`` in the SI-prefixed ``unit`` that suits ``values`` (see
+    :func:`si_scale`) and the factor to multiply the values by: ``("x (µm)", 1e6)``."""
+    factor, shown = si_scale(unit, *values)
+    return axis_label(name, shown), factor
+
+
+def settled_start(t, *residuals) -> int:
+    """The first sample from which residuals set a panel's scale: after the first
+    :data:`START_SHARE` of the record, and after a start-up transient (the last sample of the
+    record's first half at which a residual is more than three times as far from its centre as
+    the second half's 0.1–99.9 % spread reaches)."""
+    n = len(np.asarray(t))
+    start = int(np.ceil(START_SHARE * n))
+    half = n // 2
+    for r in residuals:
+        r = np.asarray(r, float)
+        tail = r[half:][np.isfinite(r[half:])]
+        if tail.size < 2:
+            continue
+        lo, hi = np.percentile(tail, ROBUST_PERCENTILES)
+        centre, width = (lo + hi) / 2, max((hi - lo) / 2, 1e-300)
+        away = np.flatnonzero(np.abs(r[:half] - centre) > 3 * width)
+        if away.size:
+            start = max(start, int(away[-1]) + 1)
+    return min(start, half)
+
+
+def robust_limits(t, residuals, noise: float = 0.0) -> tuple[float, float, int, bool]:
+    """The y-limits of a residual panel, set by the part of the record after its start-up
+    transient (:func:`settled_start`): the :data:`ROBUST_PERCENTILES` of every residual there,
+    widened by 10 % (and to the noise band ±``noise``).
+
+    Returns
+    -------
+    (lo, hi, start, clipped)
+        The limits, the first sample that set them, and whether some sample (of the transient,
+        or an outlier) lies outside them.
+    """
+    residuals = [np.asarray(r, float) for r in residuals]
+    start = settled_start(t, *residuals)
+    part = np.concatenate([r[start:] for r in residuals])
+    part = part[np.isfinite(part)]
+    if part.size == 0:
+        return -1.0, 1.0, start, False
+    lo, hi = np.percentile(part, ROBUST_PERCENTILES)
+    lo, hi = min(lo, -noise), max(hi, noise)
+    pad = 0.1 * (hi - lo) or max(abs(hi), 1.0) * 0.1
+    lo, hi = float(lo - pad), float(hi + pad)
+    every = np.concatenate(residuals)
+    every = every[np.isfinite(every)]
+    return lo, hi, start, bool(np.any((every < lo) | (every > hi)))
+
+
+def residual_scale(ax, t, residuals, noise: float = 0.0, time_unit: str = "s") -> None:
+    """Set a residual panel's y-limits by :func:`robust_limits` (the data stay plotted) and,
+    when samples lie outside them, say in the panel which part of the record set the scale."""
+    lo, hi, start, clipped = robust_limits(t, residuals, noise)
+    ax.set_ylim(lo, hi)
+    if clipped:
+        t = np.asarray(t, float)
+        ax.text(
+            0.99,
+            0.02,
+            f"scale from t ≥ {t[start]:.3g} {time_unit} ({ROBUST_PERCENTILES[0]:g}–{ROBUST_PERCENTILES[1]:g} %): "
+            "start-up transient and outliers off scale",
+            transform=ax.transAxes,
+            ha="right",
+            va="bottom",
+            fontsize=7,
+            color="0.3",
+        )
+
+
 def varies(y) -> bool:
     """Whether a sampled signal changes at all (beyond rounding).
 

@@ -34,7 +34,7 @@ from ..diagnosis.display import (
 from ..model.drawing import MAX_ELEMENTS, svg
 from ..support.atomic import atomic_write
 from ..support.errors import UsageError
-from .figures import axis_label, envelope
+from .figures import axis_label, envelope, robust_limits, scaled_label, si_scale
 
 #: colours of the curves: measured, the calibrated model, then the steps
 PALETTE = ("#444444", "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2")
@@ -115,14 +115,20 @@ def noise_psd(noise: float, fs: float) -> float:
 
 def _figures(report, units: dict, limit: int):
     from bokeh.layouts import column, row
-    from bokeh.models import BoxAnnotation, FactorRange, Label, Span
+    from bokeh.models import BoxAnnotation, FactorRange, Label, Range1d, Span
     from bokeh.plotting import figure
 
     p = report.predictions
     t, u, y = (np.asarray(p[k], float) for k in ("t", "u", "y"))
     inp, out = report.data.get("input", "input"), report.data.get("output", "output")
-    y_label, u_label = axis_label(out, units.get(out, "")), axis_label(inp, units.get(inp, ""))
     models = curves(report)
+    y_label, fy = scaled_label(out, units.get(out, ""), y, *(m for _, m in models))
+    u_label, fu = scaled_label(inp, units.get(inp, ""), u)
+    residuals = [y - m for _, m in models]
+    fr, r_unit = si_scale(units.get(out, ""), *residuals)
+    r_label = axis_label(f"{out} residual", r_unit)
+    lo, hi, start, clipped = robust_limits(t, [fr * r for r in residuals], fr * (report.noise or 0.0))
+    scale = f" (scale from t ≥ {t[start]:.3g} s: start-up transient off scale)" if clipped else ""
     noise = report.noise
     tools = "pan,box_zoom,wheel_zoom,reset,save"
 
@@ -132,21 +138,24 @@ def _figures(report, units: dict, limit: int):
         return f
 
     fit = fig("Measured vs calibrated vs extended output", x_axis_label="t (s)", y_axis_label=y_label)
-    fit.line(*envelope(t, y, limit), color=PALETTE[0], line_width=1.2, legend_label="measured")
+    fit.line(*envelope(t, fy * y, limit), color=PALETTE[0], line_width=1.2, legend_label="measured")
     for k, (label, m) in enumerate(models, 1):
-        fit.line(*envelope(t, m, limit), color=PALETTE[k % len(PALETTE)], line_width=1.0, legend_label=label)
+        fit.line(*envelope(t, fy * m, limit), color=PALETTE[k % len(PALETTE)], line_width=1.0, legend_label=label)
 
     res = fig(
-        "Residual (measured − model) before and after each step",
+        "Residual (measured − model) before and after each step" + scale,
         x_axis_label="t (s)",
-        y_axis_label=f"{y_label} residual",
+        y_axis_label=r_label,
         x_range=fit.x_range,
+        y_range=Range1d(lo, hi),
     )
-    for k, (label, m) in enumerate(models, 1):
-        res.line(*envelope(t, y - m, limit), color=PALETTE[k % len(PALETTE)], line_width=0.8, legend_label=label)
+    for k, ((label, _), r) in enumerate(zip(models, residuals), 1):
+        res.line(*envelope(t, fr * r, limit), color=PALETTE[k % len(PALETTE)], line_width=0.8, legend_label=label)
     if noise:
-        res.add_layout(BoxAnnotation(bottom=-noise, top=noise, fill_color="#999999", fill_alpha=0.25))
-        res.line([t[0], t[-1]], [noise, noise], color="#999999", line_dash="dashed", legend_label="noise floor ±1σ")
+        res.add_layout(BoxAnnotation(bottom=-fr * noise, top=fr * noise, fill_color="#999999", fill_alpha=0.25))
+        res.line(
+            [t[0], t[-1]], [fr * noise, fr * noise], color="#999999", line_dash="dashed", legend_label="noise floor ±1σ"
+        )
 
     fs = float(report.data.get("rate_hz") or 1.0 / np.median(np.diff(t)))
     spec = fig(
@@ -170,11 +179,18 @@ def _figures(report, units: dict, limit: int):
     if band:
         spec.add_layout(Span(location=band, dimension="height", line_color="#888888", line_dash="dotted"))
 
-    loops = fig("Residual against the drive", x_axis_label=u_label, y_axis_label=f"{y_label} residual")
+    loops = fig(
+        "Residual against the drive" + scale, x_axis_label=u_label, y_axis_label=r_label, y_range=Range1d(lo, hi)
+    )
     every = slice(None, None, max(1, -(-len(t) // limit)))  # a loop plot of every k-th sample
     for k, (label, m) in enumerate(models, 1):
         loops.line(
-            u[every], (y - m)[every], color=PALETTE[k % len(PALETTE)], line_width=0.6, alpha=0.8, legend_label=label
+            fu * u[every],
+            fr * (y - m)[every],
+            color=PALETTE[k % len(PALETTE)],
+            line_width=0.6,
+            alpha=0.8,
+            legend_label=label,
         )
 
     rms = [report.baseline_rms] + [s.rms for s in report.steps if s.cause != "none"]
@@ -182,7 +198,10 @@ def _figures(report, units: dict, limit: int):
         f"+ {s.cause}" for s in report.steps if s.cause != "none"
     ]
     chain = fig(
-        "Validation RMS along the chain", x_range=FactorRange(*names), y_axis_label=f"{y_label} RMS", y_axis_type="log"
+        "Validation RMS along the chain",
+        x_range=FactorRange(*names),
+        y_axis_label=axis_label(f"{out} RMS", units.get(out, "")),
+        y_axis_type="log",
     )
     named = [s for s in report.steps if s.cause != "none"]
     floor = min(rms + [s.reference_rms for s in named]) / 10

@@ -1,6 +1,7 @@
 """Signals against time, fits and Bode diagrams.
 
-Axes carry the quantity and its unit (taken from the model's declared inputs and outputs);
+Axes carry the quantity and its unit (taken from the model's declared inputs and outputs,
+SI-prefixed to suit the data: µm rather than 0.0001 m);
 signals that never change are left out (and listed in the title); curves that share a unit
 share a panel, with a legend.
 """
@@ -49,9 +50,9 @@ def plot_signals(t, signals: dict, units: dict, path: str, title: str = "") -> N
     n = max(len(panels), 1)
     fig, axes = plt.subplots(n, 1, figsize=(8, 1.9 * n + 0.8), sharex=True, squeeze=False)
     for ax, names in zip(axes[:, 0], panels.values()):
-        unit = units.get(names[0], "")
+        factor, unit = figures.si_scale(units.get(names[0], ""), *(signals[n] for n in names))
         for name in names:
-            ax.plot(*figures.envelope(np.asarray(t), np.asarray(signals[name], float)), lw=1.0, label=name)
+            ax.plot(*figures.envelope(np.asarray(t), factor * np.asarray(signals[name], float)), lw=1.0, label=name)
         joined = ", ".join(names)
         ax.set_ylabel(figures.axis_label(joined if len(joined) <= 24 else "", unit).strip() if unit else joined)
         if len(names) > 1:
@@ -93,7 +94,8 @@ def plot_simulation(res, path: str, title: str = "", units: dict | None = None, 
 
 
 def plot_fit(t, measured, fitted, path: str, name: str = "y", unit: str = "", title: str = "") -> None:
-    """Measured and fitted output (offset included) on one panel, the residual below.
+    """Measured and fitted output (offset included) on one panel, the residual below (its
+    scale set after the start-up transient, :func:`~bondgraph.plotting.figures.residual_scale`).
 
     Parameters
     ----------
@@ -108,7 +110,7 @@ def plot_fit(t, measured, fitted, path: str, name: str = "y", unit: str = "", ti
     name : str, optional
         The output's name (y axis).
     unit : str, optional
-        The output's unit.
+        The output's unit (shown SI-prefixed to suit the data).
     title : str, optional
         The figure's title.
 
@@ -118,14 +120,18 @@ def plot_fit(t, measured, fitted, path: str, name: str = "y", unit: str = "", ti
         matplotlib is not installed.
     """
     plt = figures.pyplot()
-    t = np.asarray(t, float)
+    t, measured, fitted = (np.asarray(v, float) for v in (t, measured, fitted))
+    residual = measured - fitted
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
-    a1.plot(*figures.envelope(t, np.asarray(measured, float)), lw=0.8, label="measured")
-    a1.plot(*figures.envelope(t, np.asarray(fitted, float)), lw=0.8, label="fitted model")
-    a1.set_ylabel(figures.axis_label(name, unit))
+    label, f = figures.scaled_label(name, unit, measured, fitted)
+    a1.plot(*figures.envelope(t, f * measured), lw=0.8, label="measured")
+    a1.plot(*figures.envelope(t, f * fitted), lw=0.8, label="fitted model")
+    a1.set_ylabel(label)
     a1.legend(fontsize=8, loc="best")
-    a2.plot(*figures.envelope(t, np.asarray(measured, float) - np.asarray(fitted, float)), lw=0.6, color="tab:red")
-    a2.set_ylabel(figures.axis_label("residual", unit))
+    label, f = figures.scaled_label(f"{name} residual", unit, residual)
+    a2.plot(*figures.envelope(t, f * residual), lw=0.6, color="tab:red")
+    a2.set_ylabel(label)
+    figures.residual_scale(a2, t, [f * residual])
     a2.set_xlabel("t (s)")
     for a in (a1, a2):
         a.grid(alpha=0.3)

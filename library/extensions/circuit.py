@@ -58,6 +58,13 @@ class LoopInductance(Candidate):
     def _base(self, view):
         return self.build(view, view.core() if view.on_core else view.rewrite(), float(SCAN_H[0]))
 
+    def _predictor(self, view, model):
+        """values -> raw prediction of ``model`` (:meth:`_base`), taking from ``values`` only the parameters
+        it has: on the core, the drive transform named before (a Bouc–Wen state's ``bw.kappa``)
+        is in the view's values but acts through the drive, not as a parameter of the core."""
+        predict, known = view.predictor(model, self._core_drive(view))
+        return lambda values: predict({k: v for k, v in values.items() if k in known})
+
     def fit(self, view):
         core = view.core()
         _, resistors = drive_loop(core, view.input)
@@ -65,7 +72,7 @@ class LoopInductance(Candidate):
             n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values.get(n, 0.0) > 0
         ]
         model = self._base(view)
-        predict = view.predictor(model, self._core_drive(view))[0]
+        predict = self._predictor(view, model)
         scores = []
         for L in SCAN_H:
             raw = predict({**view.values, "loop.L": float(L)})
@@ -80,7 +87,7 @@ class LoopInductance(Candidate):
         return Extension(model, values, ["loop.L"] + rs, raw, None, None, at, ok, msg)
 
     def mimics_recalibration(self, view, ext):
-        predict = view.predictor(self._base(view), self._core_drive(view))[0]
+        predict = self._predictor(view, self._base(view))
         with_l = view.score(predict(ext.values))[3]
         without = view.score(predict({**ext.values, "loop.L": float(SCAN_H[0])}))[3]
         if without <= float(config.get("diagnosis.equivalent")) * with_l:
