@@ -44,6 +44,8 @@ class SweepResult:
         The random seed of ``random`` and ``lhs`` designs.
     nominal : dict, optional
         The model's values of the varied parameters, name → value.
+    units : dict, optional
+        Each metric's unit (SI), name → unit string, for tables and plot axes.
     """
 
     table: Table

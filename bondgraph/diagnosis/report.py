@@ -205,6 +205,8 @@ class Step:
         The named candidate's label.
     rule : str, optional
         The rule that decided the step.
+    winner : CandidateResult, optional
+        The named candidate, one of ``candidates`` (None for none).
     """
 
     cause: str
