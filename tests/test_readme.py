@@ -113,6 +113,9 @@ def test_readme_fit_file_numbers(tmp_path, monkeypatch):
     assert offset == pytest.approx(shown_number(r"prints `offset of x\s+(\S+)\s+m`"), rel=2e-3)
     assert rms_fit == pytest.approx(shown_number(r"rms error: fit (\S+) m,"), rel=2e-3)
     assert rms_val == pytest.approx(shown_number(r"validation\s+(\S+) m`"), rel=2e-3)
+    rho = float(re.search(r"lag-1 autocorrelation (\S+)\)", out).group(1))
+    assert rho == pytest.approx(shown_number(r"`lag-1 autocorrelation (\S+)`"), abs=0.005)
+    assert "understate the error" in out
     apa, refit = read_csv(d / "apa.csv"), read_csv(d / "refit.csv")
     np.testing.assert_array_equal(refit.t, apa.t)
     miss = float(np.sqrt(np.mean((refit.columns["x"] - apa.columns["x"]) ** 2)))

@@ -47,7 +47,7 @@ from .registry import DATA_ARGS, MODEL_ARGS, PLOT_SUFFIXES, QUIET_ARG, arg, comm
     ],
 )
 def run(args):
-    from ..fit.fitting import fit_parameters
+    from ..fit.fitting import CORRELATED, fit_parameters, residual_correlation
 
     with outputs(args, "out", "plot") as out:
         lm = load(args)
@@ -87,6 +87,14 @@ def run(args):
             print(("  ".join(c.ljust(w) for c, w in zip(r[:4], widths)) + (f"  ({r[4]})" if r[4] else "")).rstrip())
         u = f" {unit_y}" if unit_y else ""
         print(f"rms error: fit {res.rms_fit:.4g}{u}, validation {res.rms_validation:.4g}{u} ({res.nfev} simulations)")
+        rho = residual_correlation(data.column(args.model_output), res.prediction)
+        if rho > CORRELATED and any(res.stderr.values()):
+            print(
+                f"note: the residual is correlated from sample to sample (lag-1 autocorrelation {rho:.2f}): "
+                "the model misses something systematic, or the noise is far slower than the sampling; "
+                f"the ± assume independent residuals and understate the error (about {((1 + rho) / (1 - rho)) ** 0.5:.0f}× "
+                "for such a residual); bondgraph diagnose names what the model misses"
+            )
         if args.out:
             with out.open(args.out, "w") as fh:
                 json.dump(fit.as_json(str(args.model), str(args.data), args.input, args.output), fh, indent=1)

@@ -23,6 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
+import numpy as np
+
 from ..data import Dataset
 from ..model.modelfile import LoadedModel
 from ..model.parameters import FIT_FORMAT
@@ -31,6 +33,38 @@ from .identify import FitResult, Identification, detect_linear
 
 #: the ``format`` entry of fit files
 FORMAT = FIT_FORMAT
+
+#: lag-1 autocorrelation of the residual above which ``bondgraph fit`` warns that its
+#: standard errors, which assume independent residuals, understate the parameters' error
+CORRELATED = 0.5
+
+
+def residual_correlation(measured, predicted) -> float:
+    """The lag-1 autocorrelation of the residual measured − predicted (its mean removed).
+
+    Near 0 for a model that leaves only white noise; near 1 for a residual that is a smooth
+    curve (a systematic model error such as a hysteresis loop the model lacks, or noise far
+    slower than the sampling).  The standard errors of a least-squares fit assume independent
+    residuals: with a correlated one they understate the parameters' error, by about
+    sqrt((1 + ρ)/(1 − ρ)) for a first-order autoregressive residual.
+
+    Parameters
+    ----------
+    measured, predicted : array_like
+        The measured output and the model's prediction on the same samples (same unit).
+
+    Returns
+    -------
+    float
+        ρ in [−1, 1]; 0 when the residual is constant or has fewer than three samples.
+    """
+    r = np.asarray(measured, float) - np.asarray(predicted, float)
+    r = r[np.isfinite(r)]
+    if r.size < 3:
+        return 0.0
+    r = r - r.mean()
+    energy = float(r @ r)
+    return float(r[1:] @ r[:-1]) / energy if energy > 0 else 0.0
 
 
 @dataclass
