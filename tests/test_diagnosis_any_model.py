@@ -176,3 +176,16 @@ def test_an_output_that_does_not_follow_the_drive_is_refused(dead, tmp_path, cap
     assert main(["diagnose", str(tmp_path / "msd.py"), str(tmp_path / "dead.csv"), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert "does not follow the drive" in err[-1] and not any("Traceback" in line for line in err)
+
+
+def test_a_site_is_named_by_its_element_unless_several_share_it():
+    """A role one element plays is reported by that element; a role several share, by the
+    role; untagged elements of repeated components, by their shared local name."""
+    from bondgraph.diagnosis.sites import element_sites
+
+    g = two_mass_chain()
+    g.tag("spring2", "stiffness")
+    assert [s.name for s in element_sites(g, ("C",))] == ["spring1", "spring2"]
+    g.tag("spring1", "stiffness")
+    ((name, elements),) = [(s.name, s.elements) for s in element_sites(g, ("C",))]
+    assert name == "stiffness" and elements == ("spring1", "spring2")

@@ -34,8 +34,9 @@ class Site:
     Parameters
     ----------
     name : str
-        How reports name it: the element's name, the role shared by its elements, or
-        ``*.<local name>`` for the elements of repeated components.
+        How reports name it: the element's name (also for a role only one element plays),
+        the role shared by its elements, or ``*.<local name>`` for the elements of repeated
+        components.
     kind : str
         ``"C"``, ``"I"`` or ``"R"`` (an element law), ``"drive"`` or ``"sensor"``.
     elements : tuple of str
@@ -106,6 +107,8 @@ def element_sites(model: Model, kinds: tuple[str, ...] = ("C", "I", "R")) -> lis
             out.append(Site(names[0], kind, tuple(names)))
         elif how == "local":
             out.append(Site(f"*.{label}", kind, tuple(names)))
+        elif how == "role" and len(names) == 1:  # a role one element plays: named by it
+            out.append(Site(names[0], kind, tuple(names), label))
         else:
             out.append(Site(label, kind, tuple(names), label if how == "role" else None))
     return out
