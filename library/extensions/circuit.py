@@ -12,6 +12,9 @@ from bondgraph import I, config
 from bondgraph.diagnosis import LINEAR, NOT_A_DRIVE, Candidate, Extension, Spec
 from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
 
+#: the drive units of a voltage ("" when the model file declares none)
+VOLTS = ("V", "volt", "volts", "")
+
 #: inductances scanned for the start, and the fit's bounds (H): from bond wires to a large
 #: output transformer
 SCAN_H = np.geomspace(1e-9, 1e3, 25)
@@ -38,6 +41,9 @@ class LoopInductance(Candidate):
             return "needs a model linear in its states"
         if drive_loop(view.core(), view.input) is None:
             return "the drive is not a voltage source in a loop of the model"
+        unit = view.model.inputs[view.input].unit
+        if unit not in VOLTS:  # an effort source of another domain: no electrical loop
+            return f"the drive is not a voltage (its unit is {unit})"
         return True
 
     @staticmethod
