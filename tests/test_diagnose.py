@@ -276,13 +276,17 @@ class Broken(Candidate):
 
 def test_a_candidates_defect_is_its_failed_line_not_the_end_of_the_diagnosis():
     """In the worker pool, a candidate raising an exception the engine does not expect is
-    reported FAILED with it; the others are judged as before (the worker used to die and end
-    the whole diagnosis)."""
+    reported as failed with it; the others are judged as before (the worker used to die and end
+    the whole diagnosis).  The text lists it in one line, not as a candidate row, its error
+    only with ``debug``."""
     rep = diagnose(lag_model(), lag_record(square=0.4), candidates=[Broken(), SquareLaw()], workers=2, chain=False)
     assert rep.causes == ["square-law"]
     broken = next(c for c in rep.steps[0].candidates if c.cause == "broken")
     assert broken.error.startswith("TypeError") and not broken.passed
-    assert "FAILED: TypeError" in rep.text()
+    text = rep.text()
+    assert "failed (a defect of the candidate, not a verdict on the data): broken at" in text
+    assert "TypeError" not in text and "FAILED" not in text
+    assert "broken at drive: TypeError" in rep.text(debug=True)
 
 
 class PowerLaw(Candidate):

@@ -58,7 +58,7 @@ def run(args):
         if args.json:
             print(json.dumps(report.as_json()))
         else:
-            sys.stdout.write(report.text(equations=args.equations))
+            sys.stdout.write(report.text(equations=args.equations, debug=getattr(args, "debug", False)))
         if args.plot:
             from ..plotting import plot_diagnosis
 

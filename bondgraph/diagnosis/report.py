@@ -443,15 +443,19 @@ class Report:
         lines += [f"  note: {n}" for n in self.notes]
         return [ln for ln in lines if ln]
 
-    def text(self, equations: bool = False) -> str:
+    def text(self, equations: bool = False, debug: bool = False) -> str:
         """The readable report: the answer first (:meth:`summary_lines`), then how the data were
         treated, every chain step's candidates and verdicts, and with ``equations`` the extended
-        model's state equations.
+        model's state equations.  A candidate that raised an error is a defect of that
+        candidate, not a verdict on the data: it is listed in one line per step, its error
+        only with ``debug`` (the JSON always has it).
 
         Parameters
         ----------
         equations : bool, optional
             Append the extended model's state equations.
+        debug : bool, optional
+            Give the errors of candidates that failed.
 
         Returns
         -------
@@ -518,12 +522,9 @@ class Report:
                 + f" (validation RMS {s.rms_before:.4g}; flexible linear reference {s.reference_rms:.4g})",
                 f"  {'cause':<18} {'site':<12} {'gain':>7} {'val. RMS':>10} {'z':>6} {'vs ref':>7}  verdict / extension",
             ]
-            tried = [c for c in s.candidates if not c.skipped]
-            for c in sorted(tried, key=lambda c: (bool(c.error), -c.gain)):
+            tried = [c for c in s.candidates if not c.skipped and not c.error]
+            for c in sorted(tried, key=lambda c: -c.gain):
                 site = c.site or "drive"
-                if c.error:
-                    lines.append(f"  {c.cause:<18} {site:<12} {'':>7} {'':>10} {'':>6} {'':>7}  FAILED: {c.error}")
-                    continue
                 vr = f"{c.gain_reference:.3g}" if c.gain_reference is not None else "-"
                 flag = ("" if c.success else " [optimiser: not converged]") + (
                     f" [fitted again, {c.effort:g}× the evaluations]"
@@ -540,6 +541,16 @@ class Report:
             skipped = [c for c in s.candidates if c.skipped]
             if skipped:
                 lines.append(f"  not fitted: {len(skipped)} (" + "; ".join(_grouped(skipped)) + ")")
+            failed = [c for c in s.candidates if c.error and not c.skipped]
+            if failed:
+                lines.append(
+                    "  failed (a defect of the candidate, not a verdict on the data): "
+                    + (
+                        "; ".join(f"{c.cause} at {c.site or 'drive'}: {c.error}" for c in failed)
+                        if debug
+                        else ", ".join(f"{c.cause} at {c.site or 'drive'}" for c in failed) + " (--debug: the errors)"
+                    )
+                )
             lines.append(f"  → {s.cause}" + (f" (rule '{s.rule}')" if s.rule else "") + f": {s.why}")
             if s.cause != "none":
                 named.append(s.cause)
