@@ -29,6 +29,7 @@ cached machine code.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -36,7 +37,7 @@ import numpy as np
 from numba import njit, types
 from scipy.integrate._ivp import radau as _radau
 
-from .integrators import _FLAGS, INPUTS_TYPE, REVERSAL_TYPE, SIGNAL_TYPES
+from .integrators import _FLAGS, INPUTS_TYPE, REVERSAL_TYPE, SIGNAL_TYPES, store_sample
 from .model_functions import FUNCTION_TYPE
 
 _C = np.ascontiguousarray(_radau.C, float)
@@ -351,38 +352,54 @@ _i2 = types.int64[:, ::1]
 _STATS = types.NamedUniTuple(types.int64, len(ImplicitStats._fields), ImplicitStats)
 
 
-@njit(
-    _STATS(
-        *((FUNCTION_TYPE,) * 5),
-        INPUTS_TYPE,
-        REVERSAL_TYPE,
-        _f1,
-        _f1,
-        _f1,
-        _f1,
-        _f1,
-        types.int64,
-        *SIGNAL_TYPES,
-        types.float64,
-        _f1,
-        _f1,
-        types.float64,
-        types.int64,
-        _f2,
-        _f2,
-        _FLAGS,
-        _i1,
-        _i1,
-        _i1,
-        _i1,
-        _i2,
-        types.int64,
-        types.int64,
-        types.boolean,
-        _i1,
-    ),
-    cache=True,
+#: the numba signature of :func:`radau5` (first-class model functions: one build serves every model)
+_RADAU5_SIGNATURE = _STATS(
+    *((FUNCTION_TYPE,) * 5),
+    INPUTS_TYPE,
+    REVERSAL_TYPE,
+    _f1,
+    _f1,
+    _f1,
+    _f1,
+    _f1,
+    types.int64,
+    *SIGNAL_TYPES,
+    types.float64,
+    _f1,
+    _f1,
+    types.float64,
+    types.int64,
+    _f2,
+    _f2,
+    _FLAGS,
+    _i1,
+    _i1,
+    _i1,
+    _i1,
+    _i2,
+    types.int64,
+    types.int64,
+    types.boolean,
+    _i1,
 )
+
+
+@functools.cache
+def compiled_radau5():
+    """:func:`radau5` compiled by numba, built (or loaded from numba's disk cache) on first use.
+
+    Compiling the implicit integrator takes several seconds of CPU the first time after an
+    install; deferring it to the first stiff run keeps it off every run that never needs it
+    (a non-stiff model on ``dopri5``).
+
+    Returns
+    -------
+    numba.core.registry.CPUDispatcher
+        The compiled kernel, called with :func:`radau5`'s arguments.
+    """
+    return njit(_RADAU5_SIGNATURE, cache=True)(radau5)
+
+
 def radau5(
     rhs,
     output,
@@ -424,9 +441,10 @@ def radau5(
     constant_jacobian,
     q,
 ):
-    """Integrate from t_out[0] to t_out[-1]; write states X and outputs Y at t_out.
+    """Integrate from t_out[0] to t_out[-1]; write states X and outputs Y at t_out (run through
+    :func:`compiled_radau5`, which compiles it on first use).
 
-    ``rhs``, ``output``, ``opin``, ``commit`` are the model's functions, ``jac`` writes the
+    ``rhs``, ``output``, ``opin``, ``commit`` are the model's functions, ``jac``  writes the
     local partials of its Jacobian program (``jaux`` its aux data; with memory operators, the
     direction of each one's slope, kept here), ``inputs`` and ``reversal_at`` are
     :func:`~bondgraph.numerics.integrators.input_values` and
@@ -499,9 +517,8 @@ def radau5(
     if nv:
         commit(t, x, u, du, th, mem, aux, v1)
     while k_out < n_out and t_out[k_out] <= t:
-        X[k_out, :] = x
         output(t, x, u, du, th, mem, aux, y)
-        Y[k_out, :ny] = y[:ny]
+        store_sample(X, Y, k_out, x, y, ny)
         k_out += 1
 
     n_jac = 0
@@ -768,8 +785,7 @@ def radau5(
             if out_inputs:
                 inputs(t_out[k_out], skind, spar, soff, slen, stt, stv, scur, u, du, rates)
             output(t_out[k_out], xd, u, du, th, mem, aux, y)
-            X[k_out, :] = xd
-            Y[k_out, :ny] = y[:ny]
+            store_sample(X, Y, k_out, xd, y, ny)
             k_out += 1
         if nv:
             if hit:  # follow the input up to the jump, then across it

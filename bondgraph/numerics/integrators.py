@@ -30,7 +30,7 @@ from ..model.signals import CHIRP, CONST, PWL, RAMP, SINE, STEP  # signal kinds 
 from .model_functions import FUNCTION_TYPE
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du=True):
     """Write every input's value and time derivative at time t into u and du.
 
@@ -142,7 +142,8 @@ def sample_inputs(t, kind, par, off, ln, tt, tv, cur, out):
     du = np.zeros(kind.shape[0])
     for k in range(t.shape[0]):
         eval_inputs(t[k], kind, par, off, ln, tt, tv, cur, u, du, False)
-        out[k, :] = u
+        for i in range(u.shape[0]):  # element by element: see store_sample
+            out[k, i] = u[i]
 
 
 _A = np.ascontiguousarray(RK45.A, float)
@@ -188,6 +189,17 @@ def _dense(x, Q, h, theta, out):
         for j in range(Q.shape[0] - 1, -1, -1):
             acc = (acc + Q[j, i]) * theta
         out[i] = x[i] + h * acc
+
+
+@njit(cache=True)
+def store_sample(X, Y, k, x, y, ny):
+    """Row k of the states X and outputs Y from x and y[:ny] (element by element: numba's
+    slice assignment would compile its shape-mismatch error text, seconds of the first build).
+    """
+    for i in range(x.shape[0]):
+        X[k, i] = x[i]
+    for i in range(ny):
+        Y[k, i] = y[i]
 
 
 class Flags(NamedTuple):
@@ -335,9 +347,8 @@ def dopri5(
         commit(t, x, u, du, th, mem, aux, v1)
     # outputs at the start
     while k_out < n_out and t_out[k_out] <= t:
-        X[k_out, :] = x
         output(t, x, u, du, th, mem, aux, y)
-        Y[k_out, :ny] = y[:ny]
+        store_sample(X, Y, k_out, x, y, ny)
         k_out += 1
     # initial step (Hairer & Wanner), as in scipy
     _weights(x, x, peak, atol, rtol, w)
@@ -465,8 +476,7 @@ def dopri5(
             if out_inputs:
                 eval_inputs(t_out[k_out], skind, spar, soff, slen, stt, stv, scur, u, du, rates)
             output(t_out[k_out], xd, u, du, th, mem, aux, y)
-            X[k_out, :] = xd
-            Y[k_out, :ny] = y[:ny]
+            store_sample(X, Y, k_out, xd, y, ny)
             k_out += 1
         if nv:
             if hit:  # follow the input up to the jump, then across it

@@ -469,7 +469,7 @@ class Simulator:
     ) -> dict:
         """One chunk on the compiled implicit integrator; returns its counts."""
         p = sparse.program
-        st = implicit.radau5(
+        st = implicit.compiled_radau5()(
             *self.compiled.integrator_functions,
             sparse.compiled.jac,
             input_values,
