@@ -85,7 +85,7 @@ class Candidate(ABC):
     #: where it acts: an element site's name (:mod:`bondgraph.diagnosis.sites`), "output" for
     #: the sensor, "" for the drive
     site_name: str = ""
-    #: whether it may be named again once named (a structure may lack several modes)
+    #: whether it is tried again once its cause is named (at any site): a structure may lack several modes
     repeatable: bool = False
     #: a short description of the extension
     label: str = ""
@@ -222,16 +222,3 @@ class Candidate(ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.cause}: {self.label})"
-
-    def identity(self) -> tuple[str, str]:
-        """(cause, site): once named, candidates of the same identity are not tried again on
-        the extended model unless :attr:`repeatable`.
-
-        Returns
-        -------
-        cause : str
-            The cause it stands for.
-        site : str
-            Where it acts (:attr:`site_name`).
-        """
-        return self.cause, self.site_name
