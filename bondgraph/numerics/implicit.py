@@ -22,7 +22,7 @@ failure, reversal) never touch it.
 The sparse LU lives in this file with the integrator that calls it (numba's on-disk cache is
 keyed by the source file); the input signals and the memory contract's reversal test come
 from :mod:`~bondgraph.numerics.integrators` as compiled function values
-(:func:`~bondgraph.numerics.integrators.input_values`,
+(:func:`~bondgraph.numerics.integrators.compiled_input_values`,
 :func:`~bondgraph.numerics.integrators.reversal_at`), so a change there reaches this file's
 cached machine code.
 """

@@ -19,6 +19,7 @@ Error weight per state: ``atol_i + rtol·max(|x_i|, peak_i)``, where ``peak_i`` 
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -109,11 +110,24 @@ _i1 = types.int64[::1]
 INPUTS_TYPE = types.FunctionType(types.void(types.float64, _i1, _f2, _i1, _i1, _f1, _f1, _i1, _f1, _f1, types.boolean))
 
 
-@njit(INPUTS_TYPE.signature, cache=True)
 def input_values(t, kind, par, off, ln, tt, tv, cur, u, du, with_du):
-    """:func:`eval_inputs` as a compiled function value, for kernels in other files (numba's
-    disk cache would not see a change to this file in a kernel that inlined it)."""
+    """:func:`eval_inputs` as a function value for kernels in other files (numba's disk cache
+    would not see a change to this file in a kernel that inlined it); compiled by
+    :func:`compiled_input_values`."""
     eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du)
+
+
+@functools.cache
+def compiled_input_values():
+    """:func:`input_values` compiled as a first-class function value, on first use (by the
+    implicit integrator only: a non-stiff run never builds it).
+
+    Returns
+    -------
+    numba.core.registry.CPUDispatcher
+        The compiled function, of type :data:`INPUTS_TYPE`.
+    """
+    return njit(INPUTS_TYPE.signature, cache=True)(input_values)
 
 
 #: type of :func:`reversal_at` as a first-class function value

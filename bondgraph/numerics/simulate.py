@@ -40,10 +40,10 @@ from .codegen import compile_equations, parameter_vector
 from .model_functions import ModelFunctions
 from .stiffness import DENSE_EIGEN, SparseJacobian, spectral_radius, stiffness
 
-# numba compiles the integrator as its module is imported (tens of seconds the first time after
+# numba compiles the explicit integrator as its module is imported (seconds the first time after
 # an install, a fraction of a second from its cache after): said on stderr while it lasts
 with waiting("compiling the integrator", status="the first run only: numba keeps it for later runs"):
-    from .integrators import STATUS, Flags, dopri5, eval_inputs, input_values, reversal_at
+    from .integrators import STATUS, Flags, compiled_input_values, dopri5, eval_inputs, reversal_at
     from .signal_bank import SignalBank
 
 METHODS = ("auto", "dopri5", "radau5", "radau", "bdf", "lsoda")
@@ -469,10 +469,12 @@ class Simulator:
     ) -> dict:
         """One chunk on the compiled implicit integrator; returns its counts."""
         p = sparse.program
-        st = implicit.compiled_radau5()(
+        with waiting("compiling the implicit integrator", status="the first stiff run only: numba keeps it"):
+            kernel, inputs = implicit.compiled_radau5(), compiled_input_values()
+        st = kernel(
             *self.compiled.integrator_functions,
             sparse.compiled.jac,
-            input_values,
+            inputs,
             reversal_at,
             x,
             th,
