@@ -202,7 +202,7 @@ def loops_and_compensation(load):
     return Figure(
         "APA-120ML (Rodriguez-Fortun et al. 2010): hysteresis loops and feedforward compensation",
         [
-            Panel(loops, "x(V) at 5 Hz, 0-120 V (second period)", "V (V)", "x (um)"),
+            Panel(loops, "x(V) at 5 Hz, 0-120 V (second period)", "V (V)", "x (µm)"),
             Panel(
                 [
                     Curve(t, 1e6 * ref["x"], "reference (the linear model's response)", "k", 2.0),
@@ -211,7 +211,7 @@ def loops_and_compensation(load):
                 ],
                 "tracking the reference",
                 "t (s)",
-                "x (um)",
+                "x (µm)",
             ),
             Panel(
                 [
@@ -220,7 +220,7 @@ def loops_and_compensation(load):
                 ],
                 "tracking error (predicted by the model)",
                 "t (s)",
-                "x error (um)",
+                "x error (µm)",
             ),
             Panel(
                 [Curve(t, comp.linear_drive, "linear inverse"), Curve(t, comp.drive, "compensated")],

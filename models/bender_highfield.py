@@ -334,7 +334,7 @@ def response_family(load):
                 curves,
                 "Fig. 17: tip deflection amplitude, full swing V_b/2 +- V_b/2",
                 "drive frequency (kHz)",
-                "tip deflection (um)",
+                "tip deflection (µm)",
                 note="Fig. 17's axis ends at 350 um",
             ),
             Panel([Curve(fields, Q, "model", "o-")], "Fig. 18a: quality factor", "peak field V_b/t_p (V/um)", "Q"),

@@ -188,7 +188,7 @@ def resonance_curves(load):
                 curves,
                 "tip amplitude at x_t = 23.46 mm against drive frequency",
                 "drive frequency (rad/s)",
-                "amplitude (um)",
+                "amplitude (µm)",
                 note="dotted: the measured band 2512-2736 rad/s",
             )
         ],

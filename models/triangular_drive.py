@@ -297,7 +297,7 @@ def ellipses(load):
     return Figure(
         "triangular drive (Hassani & Tjahjowidodo 2013): 90 deg ellipses, 50 V on a 50 V bias",
         [
-            Panel(paths + [rest], "Fig. 11: tip path from rest", "x (um)", "y (um)", equal=True),
+            Panel(paths + [rest], "Fig. 11: tip path from rest", "x (µm)", "y (µm)", equal=True),
             Panel(
                 [Curve(f, xs, "model x", "b-o"), Curve(f, ys, "model y", "r-o")] + paper,
                 "Tables 5-6: maximum deformation (bias included)",

@@ -5,7 +5,7 @@ A model file's ``FIGURES`` maps a figure's name to a function that returns a :cl
 so a model file builds them without the ``plot`` extra and a test reads ``Figure.numbers``.
 
     Figure("response against field", [
-        Panel([Curve(f, amp, "50 V"), Curve(f, amp2, "100 V")], xlabel="f (Hz)", ylabel="x (um)"),
+        Panel([Curve(f, amp, "50 V"), Curve(f, amp2, "100 V")], xlabel="f (Hz)", ylabel="x (µm)"),
     ], numbers={"peak at 50 V (um)": 221.0})
 """
 
