@@ -143,6 +143,15 @@ def test_a_slow_drift_is_named_when_nothing_else_explains_the_record():
         assert isinstance(out[key], float) and out[key] >= 0
 
 
+def test_a_small_drift_is_said_to_be_a_nuisance_not_named():
+    """A drift of 4.5 % of the output's RMS (below ``diagnosis.drift_share``) is not named, but
+    the report says what it would have explained."""
+    rep = diagnose(oscillator(), linear_record(drift=0.15), workers=1, equations=False)
+    assert rep.as_json()["causes"] == [], rep.text()
+    said = [n for n in rep.notes if "treated as a nuisance" in n]
+    assert said and "4.5% of its RMS" in said[0] and "note: " + said[0] in rep.text()
+
+
 def test_an_effect_free_record_says_what_is_left():
     rep = diagnose(oscillator(), linear_record(), workers=1, equations=False)
     out = rep.as_json()

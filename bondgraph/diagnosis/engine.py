@@ -984,6 +984,13 @@ def drift_step(ctx: Context, state: State, solved: float | None) -> tuple[Step, 
         )
     res.passed, res.verdict, res.rule = verdict.passed, verdict.reason, verdict.rule
     if not res.passed:
+        if res.rule == "drift-size":
+            ctx.notes.append(
+                f"a slow drift of the output ({'with the sensor drift the calibration removed, ' if solved else ''}"
+                f"{size:.1%} of its RMS) lowers the validation RMS {cmp.gain:.3g}× (z = {cmp.z:.1f}); it is "
+                f"below diagnosis.drift_share ({config.get('diagnosis.drift_share'):.0%}) of the output's RMS, so "
+                f"it is treated as a nuisance, not named a cause"
+            )
         return None
     why = (
         f"named: nothing else explains the record, and a slow drift of the output, {size:.0%} of its RMS, "
