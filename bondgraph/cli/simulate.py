@@ -59,7 +59,8 @@ _CSV_FILE = re.compile(r"^\s*csv\s*\(.*?\bfile\s*=\s*([^,)]+)", re.S)
         arg(
             "--plot",
             metavar="FILE" + PLOT_SUFFIXES[0],
-            help="plot the inputs and outputs that vary, with units (needs matplotlib; .png, .pdf or .svg)",
+            help="plot the inputs and outputs that vary, with units, and the outputs against a drive "
+            "that revisits its values (loops; needs matplotlib; .png, .pdf or .svg)",
         ),
         arg("--states", action="store_true", help="include the states in the CSV"),
         QUIET_ARG,
@@ -120,7 +121,8 @@ def run(args):
             units = {n: v.unit for n, v in lm.model.inputs.items()}
             units.update({n: v.unit for n, v in lm.model.outputs.items()})
             with out.path(args.plot) as tmp:
-                plot_signals(res.t, {n: cols[n] for n in [*res.inputs, *res.outputs]}, units, tmp, title=lm.model.name)
+                signals = {n: cols[n] for n in [*res.inputs, *res.outputs]}
+                plot_signals(res.t, signals, units, tmp, title=lm.model.name, inputs=list(res.inputs))
     if not args.quiet:
         wrote = [p for p in (args.out, args.plot) if p]
         total = time.time() - started
