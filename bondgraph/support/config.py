@@ -54,7 +54,8 @@ DEFAULTS: dict[str, Default] = {
     ),
     "record.start": Default(
         "steady",
-        "where a model run against a measured record (fit, diagnose, compensate) starts: "
+        "where a model run against a measured record (fit, diagnose, compensate, simulate "
+        "with a csv drive) starts: "
         "'steady', the equilibrium with the drive held at the record's first value (memory "
         "operators at rest), or 'rest', the model's declared initial state x0",
     ),
