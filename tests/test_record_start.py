@@ -182,3 +182,20 @@ def test_simulate_driven_by_a_record_starts_where_fit_does(tmp_path):
     assert main([*args, "--rtol", "1e-9", "--out", str(tmp_path / "sim.csv"), "--quiet"]) == 0
     x = read_csv(tmp_path / "sim.csv").column("x")
     assert x == pytest.approx(data.column("x"), abs=1e-6 * F0 / K)  # no start-up transient
+
+
+def test_a_declared_start_is_kept_and_both_routes_agree_on_it():
+    g = msd()
+    g.add(bg.J1("cell"), bg.C("cell.C", 1.0, q0=0.5), bg.R("cell.R", 0.2))  # a lag that starts at 0.5
+    g.bond("cell", "cell.C")
+    g.bond("cell", "cell.R")
+    g.output("lag", "cell.C.q", "C")
+    sim = bg.Simulator(g)
+    x = dict(zip(sim.state_names, steady_state(sim, sim.theta(), {"F": F0})))
+    assert x["q_cell.C"] == 0.5 and x["q_spring"] == pytest.approx(F0 / K, rel=1e-12)
+    data = steady_record()
+    for output, truth in (("x", data.column("x")), ("lag", 0.5 * np.exp(-data.t / 0.2))):
+        ident = Identification(g, data, output=output, data_output="x", rtol=1e-10)
+        assert ident.predict() == pytest.approx(truth, abs=1e-7 * np.max(np.abs(truth)))  # exact route
+        ident.lti = None
+        assert ident.predict() == pytest.approx(truth, abs=1e-7 * np.max(np.abs(truth)))  # integrator

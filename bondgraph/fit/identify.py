@@ -38,7 +38,7 @@ from ..linear.sensitivity import sensitivity
 from ..model.graph import Model
 from ..model.signals import PiecewiseLinear
 from ..numerics.simulate import SimulationError, Simulator
-from ..numerics.steady import record_start, starts_steady
+from ..numerics.steady import free_states, linear_start, record_start, starts_steady
 from ..support.errors import DataError, ParameterError, UsageError, did_you_mean
 
 
@@ -405,7 +405,8 @@ class Identification:
         """Model output at every data time, without offset (exact LTI recursion when the model
         is linear and the data uniformly sampled, with the modes faster than ``cut``
         residualised; else the compiled integrator), from the start setting ``record.start``
-        says (:func:`~bondgraph.numerics.steady.record_start`).  ``drive``: other input samples
+        says (:func:`~bondgraph.numerics.steady.record_start`; with modes residualised, the
+        steady state of every state, a declared non-zero start included).  ``drive``: other input samples
         for the exact route (one per data time, units of the input); ``deadline``: the
         integrator's (see :meth:`Simulator.run`).
 
@@ -435,9 +436,13 @@ class Identification:
         if self.lti is not None and not inputs:
             ss = self.lti.state_space(th, self.cut)
             u = self.u if drive is None else np.asarray(drive, float)
+            x_d = self.sim.initial_state(th)
             if starts_steady():
-                return ss.response(self.dt, u, steady=True)[:, 0]
-            return ss.response(self.dt, u, None if ss.fast else self.sim.initial_state(th))[:, 0]
+                if ss.fast or not np.any(x_d):  # every state at its steady state (superposition)
+                    return ss.response(self.dt, u, steady=True)[:, 0]
+                x0 = linear_start(ss.A, ss.B, float(u[0]), x_d, free_states(self.sim, x_d))
+                return ss.response(self.dt, u, x0)[:, 0]
+            return ss.response(self.dt, u, None if ss.fast else x_d)[:, 0]
         run_inputs = {self.input: self.signal, **(inputs or {})}
         res = self.sim.run(
             self.t,
@@ -462,8 +467,8 @@ class Identification:
         parameters ``names``, at the sample indices ``rows`` (every sample for None): (Y (rows,
         columns), dY (names, rows, columns)), from the output sensitivities of
         :mod:`bondgraph.linear.sensitivity` (from the start :meth:`predict` uses), or None off
-        the exact linear route, from a declared state other than rest (``record.start =
-        "rest"``), or for a model without a well-conditioned modal form.
+        the exact linear route, for a model that declares a state other than rest, or for a
+        model without a well-conditioned modal form.
 
         Parameters
         ----------
@@ -485,7 +490,7 @@ class Identification:
             return None
         th = self.sim.theta(values)
         steady = starts_steady()
-        if not steady and np.any(self.sim.initial_state(th)):
+        if np.any(self.sim.initial_state(th)):
             return None
         modal = sensitivity(self.lti, th, names, self.cut)
         if modal is None:

@@ -6,9 +6,12 @@ voltage); a model started from rest then shows a start-up transient the record d
 With ``record.start = "steady"`` (the default) the run starts at the equilibrium of the state
 equations with every input held at its value at the first sample (input rates zero):
 
-- the energy states (kind ``q`` and ``p``) solve f(x, u(t0)) = 0: one Newton step from the
-  declared state on a finite-difference Jacobian (exact for a linear model, A·x + B·u0 = 0),
-  then, when the rates are not yet zero, :func:`scipy.optimize.root` from that linear estimate;
+- the energy states (kind ``q`` and ``p``) declared at rest (x0 = 0) solve their rows of
+  f(x, u(t0)) = 0: one Newton step from the declared state on a finite-difference Jacobian
+  (exact for a linear model, A·x + B·u0 = 0), then, when the rates are not yet zero,
+  :func:`scipy.optimize.root` from that linear estimate;
+- a state declared with a non-zero initial value keeps it (a start the model means: a fitted
+  history, like the level a creep chain's cells start from);
 - the internal states (kind ``z``: a Bouc–Wen variable, say) and the sensor integrals (kind
   ``x``) keep their declared values, and the memory operators (hysteresis, creep) are at rest
   at their input values (:meth:`~bondgraph.numerics.simulate.Simulator.initial_memory`): at an
@@ -19,7 +22,8 @@ When the declared state is already an equilibrium (the usual model with a drive 
 zero) it is returned as it is, so such records give exactly the results of ``"rest"``.  A model
 without an equilibrium at that drive (a free mass under a constant force, a singular Jacobian)
 starts from its declared state.  The exact linear routes (:mod:`bondgraph.linear.lti`) start at
-the same point by superposition: the response from rest to u − u(t0) plus the DC gain times u(t0).
+the same point: by superposition (the response from rest to u − u(t0) plus the DC gain times
+u(t0)) when every state is declared at rest, else from :func:`linear_start`.
 """
 
 from __future__ import annotations
@@ -77,7 +81,7 @@ def steady_state(sim, th: np.ndarray, inputs: Mapping | None = None, t0: float =
         The state, in the order of ``sim.state_names`` (states' units).
     """
     x_d = sim.initial_state(th)
-    solve = np.array([s.kind in ("q", "p") for s in sim.eqs.states], bool)
+    solve = free_states(sim, x_d)
     if not solve.any():
         return x_d
     bank = sim.signal_bank(inputs)
@@ -123,6 +127,59 @@ def steady_state(sim, th: np.ndarray, inputs: Mapping | None = None, t0: float =
     x = x_d.copy()
     x[idx] = y_best
     return x
+
+
+def free_states(sim, x_declared: np.ndarray) -> np.ndarray:
+    """Which states the steady start solves: energy states (kind ``q``, ``p``) declared at rest.
+
+    Parameters
+    ----------
+    sim : Simulator
+        The compiled model.
+    x_declared : numpy.ndarray
+        The declared initial state (:meth:`~bondgraph.numerics.simulate.Simulator.initial_state`).
+
+    Returns
+    -------
+    numpy.ndarray
+        One bool per state, in the order of ``sim.state_names``.
+    """
+    kinds = np.array([s.kind in ("q", "p") for s in sim.eqs.states], bool)
+    return kinds & (np.asarray(x_declared) == 0)
+
+
+def linear_start(A: np.ndarray, B: np.ndarray, u0: float, x_declared: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """The steady start of a linear model x' = A·x + B·u: the ``free`` states solve their rows
+    of A·x + B·u0 = 0 with the others at their declared values (:func:`steady_state`'s rule).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        n × n state matrix, in the order of ``x_declared``.
+    B : numpy.ndarray
+        n × 1 input matrix.
+    u0 : float
+        The input at the first sample.
+    x_declared : numpy.ndarray
+        The declared initial state.
+    free : numpy.ndarray
+        The states to solve (:func:`free_states`).
+
+    Returns
+    -------
+    numpy.ndarray
+        The initial state; the declared one when the free block of A is singular.
+    """
+    x = np.array(x_declared, float)
+    f = np.nonzero(free)[0]
+    if f.size == 0:
+        return x
+    rhs = -(A[f] @ np.where(free, 0.0, x) + B[f, 0] * u0)
+    try:
+        x[f] = np.linalg.solve(A[np.ix_(f, f)], rhs)
+    except np.linalg.LinAlgError:
+        return np.array(x_declared, float)
+    return x if np.all(np.isfinite(x)) else np.array(x_declared, float)
 
 
 def record_start(sim, th: np.ndarray, inputs: Mapping | None = None, t0: float = 0.0) -> np.ndarray:
