@@ -21,7 +21,6 @@ from __future__ import annotations
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
-import scipy.linalg
 import scipy.optimize
 import sympy as sp
 from numba import njit
@@ -352,14 +351,14 @@ class Lure:
         if not starts_steady() or (u0 == 0.0 and not constant):
             return rest
         try:
-            lu = scipy.linalg.lu_factor(A, check_finite=True)
-        except (ValueError, np.linalg.LinAlgError):
+            A_inv = np.linalg.inv(A)
+        except np.linalg.LinAlgError:
             return rest
-        if not np.all(np.isfinite(lu[0])) or np.min(np.abs(np.diag(lu[0]))) == 0.0:
+        if not np.all(np.isfinite(A_inv)):
             return rest
 
         def state(w):
-            return -scipy.linalg.lu_solve(lu, B[:, 0] * u0 + B[:, 1:] @ w)
+            return -A_inv @ (B[:, 0] * u0 + B[:, 1:] @ w)
 
         if not active:
             return state(rest[1]), rest[1]
