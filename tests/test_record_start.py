@@ -199,3 +199,31 @@ def test_a_declared_start_is_kept_and_both_routes_agree_on_it():
         assert ident.predict() == pytest.approx(truth, abs=1e-7 * np.max(np.abs(truth)))  # exact route
         ident.lti = None
         assert ident.predict() == pytest.approx(truth, abs=1e-7 * np.max(np.abs(truth)))  # integrator
+
+
+def test_lure_route_starts_at_the_nonlinear_equilibrium():
+    """The diagnosis' Lur'e stepping (a softening term on the spring) against the rewritten
+    bond graph integrated from its steady state (the root solve), on a drive that starts at
+    half its amplitude; as tests/test_lure.py, but not from rest."""
+    from test_lure import resonator, softening
+
+    from bondgraph.diagnosis.lure import Lure
+    from bondgraph.diagnosis.rewrite import modify_law
+
+    t = np.arange(2000) / 2000.0
+    u = 0.5 + np.sin(2 * np.pi * (10 * t + 15 * t**2))
+    lure = Lure(resonator(), "F", "x", ["k"], {"k": None}, t[1] - t[0])
+    q = lure.linear_responses({}, u, softening)["diag.x:k"]
+    coef, r2 = 0.3 * (2 * np.pi * 40.0) ** 2 / float(np.max(np.abs(q))) ** 2, 0.5 * float(np.mean(q**2))
+    y = lure.simulate({}, u, softening, [(coef, r2)])
+    rewritten = resonator()
+    modify_law(rewritten, "k", lambda x, old: old + softening(coef, r2, x, None))
+    sim = bg.Simulator(rewritten)
+    drive = {"F": bg.PiecewiseLinear(t, u)}
+    x0 = steady_state(sim, sim.theta(), drive)
+    ref = sim.run(t, drive, x0=x0, rtol=1e-10, atol=1e-14)["x"]
+    rest = sim.run(t, drive, rtol=1e-10, atol=1e-14)["x"]
+    early = slice(0, 200)  # the first 0.1 s: the transient from rest, the resonance not yet reached
+    assert np.max(np.abs(rest - ref)[early]) > 0.5 * abs(ref[0])  # the start matters
+    assert np.max(np.abs(y - ref)[early]) < 1e-3 * abs(ref[0])  # both routes start at one equilibrium
+    assert np.std(y - ref) < 5e-3 * np.std(ref)  # and agree through the resonance
