@@ -215,7 +215,7 @@ def test_a_run_failing_at_its_last_step_keeps_the_existing_file(work, capsys, mo
 
     (work / "precious.csv").write_text("keep me\n")
 
-    def broken_plot(t, signals, units, path, title=""):
+    def broken_plot(t, signals, units, path, title="", inputs=()):
         raise OSError(f"disk full while writing {path}")
 
     monkeypatch.setattr(plotting, "plot_signals", broken_plot)
@@ -267,10 +267,13 @@ def test_plots_carry_units_skip_constants_and_label_shared_axes(work, capsys, mo
         capsys,
     )
     assert rc == 0, err
-    axes = figs[0].axes
+    # the time panels (the first column; the sine drive also gets loops beside them)
+    axes = [a for a in figs[0].axes if a.get_subplotspec().colspan.start == 0]
     labels = [a.get_ylabel() for a in axes]
     # F (unused, constant) is left out; a 1 mN drive and its µm response read in SI-prefixed units
     assert labels == ["V (mN)", "x, x2 (µm)", "v (m/s)"], labels
+    loops = [a for a in figs[0].axes if a.get_subplotspec().colspan.start == 1 and a.lines]
+    assert [a.get_ylabel() for a in loops] == ["x, x2 (µm)", "v (m/s)"] and loops[-1].get_xlabel() == "V (mN)"
     assert "constant F = 0 N" in axes[0].get_title()
     assert axes[-1].get_xlabel() == "t (s)"
     assert axes[0].get_legend() is None and axes[2].get_legend() is None

@@ -128,10 +128,20 @@ def test_command_page_lists_every_command():
     assert COMMANDS and all(re.search(rf"^\| `{name}[ `]", text, re.M) for name in COMMANDS), sorted(COMMANDS)
 
 
+def test_record_start_example_sets_the_declared_start():
+    block = next(b for b in python_blocks("fitting.md") if "record.start" in b)
+    try:
+        exec(block, {})
+        assert config.get("record.start") == "rest"
+    finally:
+        config.reset("record.start")
+    assert config.get("record.start") == "steady"
+
+
 def test_settings_page_lists_the_framework_settings():
     page = (DOCS / "settings.md").read_text()
     for name in config.DEFAULTS:
-        if name.split(".")[0] in ("simulate", "causality", "codegen", "data", "diagnosis"):
+        if name.split(".")[0] in ("simulate", "causality", "codegen", "data", "diagnosis", "record"):
             assert f"`{name}`" in page, name
 
 

@@ -130,3 +130,40 @@ def test_sweep_plot_labels_metrics_with_units(caught):
     assert hist_x.get_xlabel() == "p2p(x) (µm)" and tornado_x.get_xlabel() == "p2p(x) (µm)"
     assert hist_f.get_xlabel() == "resonance (Hz)" and tornado_f.get_xlabel() == "resonance (Hz)"
     assert 80 < tornado_x.lines[0].get_xdata()[0] < 110  # the baseline, in µm
+
+
+def test_a_drive_revisits_its_values_when_it_reverses_over_its_range_twice():
+    t = np.linspace(0.0, 0.4, 4001)
+    noise = np.random.default_rng(0).normal(0.0, 0.005, t.size)
+    assert figures.revisits(60 - 60 * np.cos(2 * np.pi * 5 * t))  # two periods from 0 V
+    assert figures.revisits(np.sin(2 * np.pi * 2.5 * t))  # one period from the middle
+    assert figures.revisits(np.interp(t, [0, 0.2, 0.4], [0, 1, 0]))  # up and back down
+    assert not figures.revisits(np.interp(t, [0, 0.2, 0.4], [0, 1, 0.5]))  # back over half only
+    assert not figures.revisits(t)  # a ramp
+    assert not figures.revisits(np.where(t > 0.1, 1.0, 0.0) + noise)  # a noisy step
+    assert not figures.revisits(np.full(t.size, 3.0))
+
+
+def test_simulation_plot_draws_the_loop_against_a_periodic_drive(caught):
+    from bondgraph.plotting import plot_signals
+
+    t = np.linspace(0.0, 0.4, 4001)
+    V = 60 - 60 * np.cos(2 * np.pi * 5 * t)
+    x = 100e-6 * (V / 120 + 0.08 * np.sin(2 * np.pi * 5 * t))  # lags the drive: a loop
+    plot_signals(t, {"V": V, "x": x, "F": 0 * t}, {"V": "V", "x": "m", "F": "N"}, "s.png", inputs=["V", "F"])
+    tv, empty, tx, loop = caught[0].axes  # time panels left, the loop beside x(t); F is constant
+    assert (tv.get_ylabel(), tx.get_ylabel(), tx.get_xlabel()) == ("V (V)", "x (µm)", "t (s)")
+    assert not empty.axison and not empty.lines
+    assert loop.get_xlabel() == "V (V)" and loop.get_ylabel() == "x (µm)"
+    xs, ys = loop.lines[0].get_data()
+    assert np.allclose(xs, V) and np.allclose(ys, 1e6 * x)
+
+
+def test_simulation_plot_has_no_loop_under_a_step(caught):
+    from bondgraph.plotting import plot_signals
+
+    t = np.linspace(0.0, 0.4, 4001)
+    V = np.where(t > 0.1, 120.0, 0.0)
+    x = 100e-6 * V / 120 * (1 - np.exp(-np.maximum(t - 0.1, 0) / 0.01))
+    plot_signals(t, {"V": V, "x": x}, {"V": "V", "x": "m"}, "s.png", inputs=["V"])
+    assert len(caught[0].axes) == 2 and caught[0].axes[-1].get_xlabel() == "t (s)"

@@ -59,7 +59,8 @@ _CSV_FILE = re.compile(r"^\s*csv\s*\(.*?\bfile\s*=\s*([^,)]+)", re.S)
         arg(
             "--plot",
             metavar="FILE" + PLOT_SUFFIXES[0],
-            help="plot the inputs and outputs that vary, with units (needs matplotlib; .png, .pdf or .svg)",
+            help="plot the inputs and outputs that vary, with units, and the outputs against a drive "
+            "that revisits its values (loops; needs matplotlib; .png, .pdf or .svg)",
         ),
         arg("--states", action="store_true", help="include the states in the CSV"),
         QUIET_ARG,
@@ -67,10 +68,13 @@ _CSV_FILE = re.compile(r"^\s*csv\s*\(.*?\bfile\s*=\s*([^,)]+)", re.S)
 )
 def run(args):
     started = time.time()  # the summary's time includes compiling (the first run's most of it)
+    import numpy as np
+
     from ..data import write_csv
     from ..model.signals import parse_signal
     from ..numerics.checks import check_start
     from ..numerics.simulate import Simulator
+    from ..numerics.steady import record_start
 
     csv_files = [m.group(1).strip() for m in map(_CSV_FILE.match, (i.partition("=")[2] for i in args.input)) if m]
     with outputs(args, "out", "plot", inputs=csv_files) as out:
@@ -94,9 +98,16 @@ def run(args):
         sim = Simulator(lm.model)
         check_start(sim, inputs=inputs, t0=float(t[0]))
         rtol = exp.rtol if args.rtol is None else args.rtol
+        notes = []
+        x0 = None
+        if tables:  # a measured drive: start as fit and diagnose do on its record (record.start)
+            th = sim.theta()
+            x0 = record_start(sim, th, inputs, float(t[0]))
+            if not np.array_equal(x0, sim.initial_state(th)):
+                notes.append("started at the steady state at the drive's first value (setting record.start)")
         with progress("simulating", quiet=args.quiet) as bar:
             ran = time.time()
-            res = sim.run(t, inputs, method=args.method or exp.method, rtol=rtol, atol=args.atol, progress=bar)
+            res = sim.run(t, inputs, x0=x0, method=args.method or exp.method, rtol=rtol, atol=args.atol, progress=bar)
             ran = time.time() - ran
         cols = res.columns(args.states)
         meta = {"model": str(args.model), "method": res.stats["method"], "rtol": str(rtol)}
@@ -104,7 +115,6 @@ def run(args):
             meta[f"input {name}"] = str(sig)
         for name, value in lm.model.values.items():
             meta[f"param {name}"] = repr(value)
-        notes = []
         for name, offset in output_offsets(lm, res.outputs).items():
             cols[name] = cols[name] + offset
             meta[f"offset {name}"] = repr(offset)
@@ -120,7 +130,8 @@ def run(args):
             units = {n: v.unit for n, v in lm.model.inputs.items()}
             units.update({n: v.unit for n, v in lm.model.outputs.items()})
             with out.path(args.plot) as tmp:
-                plot_signals(res.t, {n: cols[n] for n in [*res.inputs, *res.outputs]}, units, tmp, title=lm.model.name)
+                signals = {n: cols[n] for n in [*res.inputs, *res.outputs]}
+                plot_signals(res.t, signals, units, tmp, title=lm.model.name, inputs=list(res.inputs))
     if not args.quiet:
         wrote = [p for p in (args.out, args.plot) if p]
         total = time.time() - started

@@ -21,13 +21,15 @@ from __future__ import annotations
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
+import scipy.optimize
 import sympy as sp
 from numba import njit
 
 from ..equations.derivation import derive
-from ..linear.lti import foh, linear_matrices, recursion
+from ..linear.lti import StateSpace, foh, linear_matrices
 from ..model.elements import C, I, R
 from ..model.graph import Model, Quantity
+from ..numerics.steady import starts_steady
 from ..support.errors import BondGraphError
 from .rewrite import modify_law
 
@@ -216,7 +218,8 @@ class Lure:
             Parameter values by name.
         w : ndarray
             The series added to the element's law, on the record's samples (the law's units:
-            force for a spring).
+            force for a spring); the response starts where setting ``record.start`` says
+            (its steady state at ``w[0]`` by default, as the model's runs start).
         element : str
             The element.
 
@@ -226,13 +229,8 @@ class Lure:
         """
         k = self.elements.index(element)
         A, B, C, D = self._matrices(self.theta(values))
-        Phi, Gam, G1 = foh(A, B[:, [1 + k]], self.dt)
-        W = np.ascontiguousarray(np.asarray(w, float)[:, None])
-        Y = np.empty_like(W)
-        Dd = np.array([[D[0, 1 + k] + C[0] @ G1[:, 0]]])
-        X0 = -G1 * W[0, 0]  # at rest: x = ξ + Γ1·w = 0 at the first sample
-        recursion(Phi, Gam, np.ascontiguousarray(C[[0]]), Dd, X0, W, np.arange(W.shape[0]), Y)
-        return Y[:, 0]
+        ss = StateSpace(A, B[:, [1 + k]], C[[0]], D[[0]][:, [1 + k]])
+        return ss.response(self.dt, np.asarray(w, float), steady=starts_steady())[:, 0]
 
     def hysteretic(
         self, values: Mapping[str, float], u: np.ndarray, element: str, kh: float, zmax: float
@@ -275,6 +273,10 @@ class Lure:
         u = np.ascontiguousarray(u, float)
         Y = np.empty(u.size)
         row = self.outputs.index(f"diag.x:{element}")
+        # z at rest (0), so w = 0: the start is the linear model's (steady or rest)
+        x_s, _ = self._start(A, B, C, D, float(u[0]), None, None, False)
+        xi0 = x_s - G1[:, 0] * u[0]
+        x_prev = float(C[row] @ x_s + D[row, 0] * u[0]) if starts_steady() else 0.0
         ok = _step_bouc_wen(
             np.ascontiguousarray(Phi),
             np.ascontiguousarray(Gam),
@@ -282,6 +284,8 @@ class Lure:
             np.ascontiguousarray(Dd),
             np.ascontiguousarray(G1),
             u,
+            xi0,
+            x_prev,
             row,
             float(kh),
             float(zmax),
@@ -315,6 +319,8 @@ class Lure:
         for k, m in enumerate(mats):
             P[k, : m.shape[0], : m.shape[1]] = m
         HG = np.array([hg for _, hg in laws], float).reshape(self.n, 2)
+        x_s, w_s = self._start(A, B, C, D, float(u[0]), P, HG, active)
+        xi0 = x_s - G1[:, 0] * u[0] - G1[:, 1:] @ w_s
         ok = _step(
             np.ascontiguousarray(Phi),
             np.ascontiguousarray(Gam),
@@ -322,6 +328,8 @@ class Lure:
             np.ascontiguousarray(Dd),
             np.ascontiguousarray(G1),
             u,
+            xi0,
+            w_s,
             self.n,
             a_rows,
             P,
@@ -330,6 +338,45 @@ class Lure:
             Y,
         )
         return Y, ok
+
+    def _start(self, A, B, C, D, u0: float, P, HG, active: bool) -> tuple[np.ndarray, np.ndarray]:
+        """(x, w) at the start of a run: rest (zeros), or with ``record.start = "steady"`` the
+        equilibrium A·x + B·(u0, w) = 0 with w = term(x) (``active``; else w = 0), w solved by
+        :func:`scipy.optimize.root` from 0; rest when A is singular, the linear equilibrium
+        (w = 0) when the root is not found.  Rest is the equilibrium when u0 = 0 and no term
+        has a constant part, and is returned as it is then."""
+        n, n_el = A.shape[0], B.shape[1] - 1
+        rest = (np.zeros(n), np.zeros(n_el))
+        constant = active and P is not None and bool(np.any(P[:, 0, 0]))
+        if not starts_steady() or (u0 == 0.0 and not constant):
+            return rest
+        try:
+            A_inv = np.linalg.inv(A)
+        except np.linalg.LinAlgError:
+            return rest
+        if not np.all(np.isfinite(A_inv)):
+            return rest
+
+        def state(w):
+            return -A_inv @ (B[:, 0] * u0 + B[:, 1:] @ w)
+
+        if not active:
+            return state(rest[1]), rest[1]
+        a_rows = [self.outputs.index(f"diag.a:{el}") if self.partners[k] else -1 for k, el in enumerate(self.elements)]
+
+        def residual(w):
+            rows = C @ state(w) + D[:, 0] * u0 + D[:, 1:] @ w
+            g = np.empty(n_el)
+            for j in range(n_el):
+                x, a = rows[1 + j], (rows[a_rows[j]] if a_rows[j] >= 0 else 0.0)
+                f = HG[j, 0] * np.tanh(HG[j, 1] * x)
+                f += sum(P[j, i, m] * x**i * a**m for i in range(P.shape[1]) for m in range(P.shape[2]))
+                g[j] = w[j] - f
+            return g
+
+        sol = scipy.optimize.root(residual, np.zeros(n_el), method="hybr")
+        w = sol.x if sol.success and np.all(np.isfinite(sol.x)) else rest[1]
+        return state(w), w
 
 
 _TERMS: dict = {}
@@ -405,12 +452,13 @@ def polynomial_term(term: Callable, partner: bool):
 
 
 @njit(cache=True, nogil=True)
-def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
+def _step(Phi, Gam, C, Dd, G1, u, xi0, w0, n_el, a_rows, P, HG, active, Y):
     """Sample-by-sample first-order-hold stepping of the augmented model (inputs: drive, then
     the n_el nonlinear terms; output rows: output, element variables, partners); at each
     sample Newton's method (with a backtracking line search) on w − term(x(w), a(w)) = 0 from
     the previous sample's w (w = 0 throughout unless ``active``), the term of element j being
-    Σ P[j, i, l]·x^i·a^l + HG[j, 0]·tanh(HG[j, 1]·x).  False when a step does not converge.
+    Σ P[j, i, l]·x^i·a^l + HG[j, 0]·tanh(HG[j, 1]·x), from the discrete state ``xi0`` (ξ = x −
+    Γ1·(u, w) at the first sample) and the terms ``w0``.  False when a step does not converge.
     One function without array-passing helpers: numba's reference counting of the arrays
     handed to inlined helpers cost more than the arithmetic (1.35-1.6x on the whole step)."""
     n = Phi.shape[0]
@@ -419,15 +467,15 @@ def _step(Phi, Gam, C, Dd, G1, u, n_el, a_rows, P, HG, active, Y):
     nx, na = P.shape[1], P.shape[2]  # powers of x and of a in the terms
     xi = np.zeros(n)
     xn = np.zeros(n)
-    w = np.zeros(n_el)
+    w = w0.copy()
     g = np.zeros(n_el)
     J = np.zeros((n_el, n_el))
     step = np.zeros(n_el)
     trial = np.zeros(n_el)
     row = np.zeros(R)
     scale = 1e-300  # largest |w| so far: the convergence test's scale
-    for i in range(n):  # at rest: x[0] = ξ[0] + Γ1·u_all[0] = 0
-        xi[i] = -G1[i, 0] * u[0]
+    for i in range(n):
+        xi[i] = xi0[i]
     for k in range(N):
         for r in range(R):  # every row without the terms' direct part
             acc = Dd[r, 0] * u[k]
@@ -572,15 +620,16 @@ def _bouc_wen_increment(z: float, dx: float, zmax: float) -> float:
 
 
 @njit(cache=True)
-def _step_bouc_wen(Phi, Gam, C, Dd, G1, u, row, kh, zmax, Y):
+def _step_bouc_wen(Phi, Gam, C, Dd, G1, u, xi0, x_prev, row, kh, zmax, Y):
     """The Lur'e stepping of :meth:`Lure.hysteretic`: one term w = k_h·z(x) on input 1, x the
-    output row ``row``; False when a sample's fixed point is not reached."""
+    output row ``row``, from the discrete state ``xi0`` with z at rest (0) at the element
+    variable ``x_prev``; False when a sample's fixed point is not reached."""
     n = Phi.shape[0]
     xi = np.zeros(n)
     xn = np.zeros(n)
     for i in range(n):
-        xi[i] = -G1[i, 0] * u[0]
-    z, xprev, w = 0.0, 0.0, 0.0
+        xi[i] = xi0[i]
+    z, xprev, w = 0.0, x_prev, 0.0
     for k in range(u.shape[0]):
         y0 = Dd[0, 0] * u[k]
         x0 = Dd[row, 0] * u[k]

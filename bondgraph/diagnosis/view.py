@@ -14,6 +14,7 @@ import sympy as sp
 from ..fit.identify import Identification, Spec
 from ..linear.sensitivity import sensitivity
 from ..model.graph import Model
+from ..numerics.steady import record_start, starts_steady
 from ..support import config
 from ..support.errors import BondGraphError
 from .additive import AdditiveDrive, Term
@@ -303,7 +304,9 @@ class View:
     ) -> np.ndarray:
         """Output of the linear core (the calibrated nominal dynamics, fast modes residualised,
         sensor gain 1) driven by each column (a sequence of series, or a 2-D array with one
-        per column), from rest; at the sample indices ``rows`` only, if given.
+        per column), from where setting ``record.start`` says (by default each column's
+        steady state at its first sample, :mod:`bondgraph.numerics.steady`); at the sample
+        indices ``rows`` only, if given.
 
         Parameters
         ----------
@@ -322,7 +325,7 @@ class View:
         ctx = self._ctx
         th = self.theta_values(values)
         U = columns if isinstance(columns, np.ndarray) and columns.ndim == 2 else np.column_stack(columns)
-        return ctx.lti.state_space(th, ctx.cut).response(ctx.dt, U, rows=rows)
+        return ctx.lti.state_space(th, ctx.cut).response(ctx.dt, U, rows=rows, steady=starts_steady())
 
     def respond_sensitivities(
         self,
@@ -354,7 +357,7 @@ class View:
         """
         ctx = self._ctx
         modal = sensitivity(ctx.lti, self.theta_values(values), names, ctx.cut)
-        return None if modal is None else modal.time(ctx.dt, columns, rows)
+        return None if modal is None else modal.time(ctx.dt, columns, rows, steady=starts_steady())
 
     def frequency_response(self, omega: np.ndarray, values: Mapping[str, float] | None = None) -> np.ndarray:
         """The linear core's frequency response at ``omega`` (rad/s), sensor gain 1, with the
@@ -1031,9 +1034,9 @@ class View:
         ident = self.identification(self.model, integrate=True)
         known = {p.name for p in ident.sim.eqs.params}
         vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
-        res = ident.sim.run(
-            self._ctx.t, {self.input: ident.signal}, params=vals, rtol=1e-5, deadline=simulation_deadline()
-        )
+        run_inputs = {self.input: ident.signal}
+        x0 = record_start(ident.sim, ident.sim.theta(vals), run_inputs, float(self._ctx.t[0]))
+        res = ident.sim.run(self._ctx.t, run_inputs, params=vals, x0=x0, rtol=1e-5, deadline=simulation_deadline())
         out = dict(res.states)
         out["output rate"] = np.gradient(res.outputs[self.output], self._ctx.t)
         return out

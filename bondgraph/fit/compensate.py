@@ -30,6 +30,7 @@ from scipy.optimize import brentq
 from ..model.memory import MemoryOperator
 from ..model.signals import PiecewiseLinear
 from ..numerics.simulate import Simulator
+from ..numerics.steady import record_start
 from ..support.errors import ModelError, UsageError, did_you_mean
 
 
@@ -218,7 +219,10 @@ def feedforward(
     ``tol`` times the reference's range. ``progress(k)`` is called after each simulation.
     ``drive_range``: (lowest, highest) drive the device accepts (default: the range the model
     declares for ``input``, if any); a drive beyond it is clipped to it, with a note, and the
-    predicted output is the clipped drive's.
+    predicted output is the clipped drive's.  Every simulation starts where setting
+    ``record.start`` says (:func:`~bondgraph.numerics.steady.record_start`): by default at
+    the steady state at the drive's first value, so a reference that starts away from zero
+    is followed without a start-up transient.
 
     Parameters
     ----------
@@ -281,7 +285,9 @@ def feedforward(
             notes.append(f"operator {ob.symbol}: {why}; the drive below is the best the iteration found")
 
     def respond(drive):
-        res = sim.run(t, {**others, input: PiecewiseLinear(t, drive)}, params=named, rtol=rtol)
+        run_inputs = {**others, input: PiecewiseLinear(t, drive)}
+        x0 = record_start(sim, theta, run_inputs, float(t[0]))
+        res = sim.run(t, run_inputs, params=named, x0=x0, rtol=rtol)
         if progress:
             progress(len(history) + 1)
         return np.asarray(res[output], float)

@@ -4,7 +4,8 @@ One input signal (the data column driving the model, linearly interpolated) and 
 are compared at the data's time stamps.  The data is split into a *fit* part and a
 *validation* part: by default interleaved time blocks (a share of thirty blocks, spread evenly,
 is held out), so every regime of a composite experiment appears in both, while the simulation
-runs open loop over the whole record from rest.  An output offset (sensor zero) is always
+runs open loop over the whole record from the model's steady state at the record's first drive
+value (setting ``record.start``, :mod:`bondgraph.numerics.steady`).  An output offset (sensor zero) is always
 solved by linear least squares.  The model's first declared input and output are used unless
 others are named.
 
@@ -37,6 +38,7 @@ from ..linear.sensitivity import sensitivity
 from ..model.graph import Model
 from ..model.signals import PiecewiseLinear
 from ..numerics.simulate import SimulationError, Simulator
+from ..numerics.steady import free_states, linear_start, record_start, starts_steady
 from ..support.errors import DataError, ParameterError, UsageError, did_you_mean
 
 
@@ -402,7 +404,9 @@ class Identification:
     ) -> np.ndarray:
         """Model output at every data time, without offset (exact LTI recursion when the model
         is linear and the data uniformly sampled, with the modes faster than ``cut``
-        residualised, from rest; else the compiled integrator).  ``drive``: other input samples
+        residualised; else the compiled integrator), from the start setting ``record.start``
+        says (:func:`~bondgraph.numerics.steady.record_start`; with modes residualised, the
+        steady state of every state, a declared non-zero start included).  ``drive``: other input samples
         for the exact route (one per data time, units of the input); ``deadline``: the
         integrator's (see :meth:`Simulator.run`).
 
@@ -428,15 +432,23 @@ class Identification:
             The integrator failed or passed ``deadline``.
         """
         self.nfev += 1
+        th = self.sim.theta(values)
         if self.lti is not None and not inputs:
-            th = self.sim.theta(values)
             ss = self.lti.state_space(th, self.cut)
             u = self.u if drive is None else np.asarray(drive, float)
-            return ss.response(self.dt, u, None if ss.fast else self.sim.initial_state(th))[:, 0]
+            x_d = self.sim.initial_state(th)
+            if starts_steady():
+                if ss.fast or not np.any(x_d):  # every state at its steady state (superposition)
+                    return ss.response(self.dt, u, steady=True)[:, 0]
+                x0 = linear_start(ss.A, ss.B, float(u[0]), x_d, free_states(self.sim, x_d))
+                return ss.response(self.dt, u, x0)[:, 0]
+            return ss.response(self.dt, u, None if ss.fast else x_d)[:, 0]
+        run_inputs = {self.input: self.signal, **(inputs or {})}
         res = self.sim.run(
             self.t,
-            {self.input: self.signal, **(inputs or {})},
+            run_inputs,
             params=values,
+            x0=record_start(self.sim, th, run_inputs, float(self.t[0])),
             rtol=self.rtol,
             method=self.method,
             deadline=deadline,
@@ -454,8 +466,9 @@ class Identification:
         per data time; default the record's input) and its derivatives with respect to the
         parameters ``names``, at the sample indices ``rows`` (every sample for None): (Y (rows,
         columns), dY (names, rows, columns)), from the output sensitivities of
-        :mod:`bondgraph.linear.sensitivity`, or None off the exact linear route, from a state
-        other than rest, or for a model without a well-conditioned modal form.
+        :mod:`bondgraph.linear.sensitivity` (from the start :meth:`predict` uses), or None off
+        the exact linear route, for a model that declares a state other than rest, or for a
+        model without a well-conditioned modal form.
 
         Parameters
         ----------
@@ -476,12 +489,13 @@ class Identification:
         if self.lti is None:
             return None
         th = self.sim.theta(values)
+        steady = starts_steady()
         if np.any(self.sim.initial_state(th)):
             return None
         modal = sensitivity(self.lti, th, names, self.cut)
         if modal is None:
             return None
-        return modal.time(self.dt, self.u if inputs is None else inputs, rows)
+        return modal.time(self.dt, self.u if inputs is None else inputs, rows, steady=steady)
 
     def offset(self, pred: np.ndarray) -> float:
         """The output offset that fits a prediction best on the fit part.

@@ -188,12 +188,34 @@ class StateSpace:
         H = frequency_response(self.A, self.B, self.C, self.D, omega)
         return H + 1j * np.atleast_1d(np.asarray(omega, float)) * self.D1 if self.D1 else H
 
+    def dc_gain(self) -> float:
+        """H(0) = D − C A⁻¹ B, the output per unit constant input at equilibrium.
+
+        Returns
+        -------
+        float
+            Output units per input unit; nan when A is singular (no equilibrium).
+        """
+        if self.n == 0:
+            return float(self.D[0, 0])
+        try:
+            return float(self.D[0, 0] - (self.C @ np.linalg.solve(self.A, self.B))[0, 0])
+        except np.linalg.LinAlgError:
+            return float("nan")
+
     def response(
-        self, dt: float, U: np.ndarray, x0: np.ndarray | None = None, rows: np.ndarray | None = None
+        self,
+        dt: float,
+        U: np.ndarray,
+        x0: np.ndarray | None = None,
+        rows: np.ndarray | None = None,
+        steady: bool = False,
     ) -> np.ndarray:
         """Output for each column of ``U`` (inputs sampled every ``dt`` s, linear in between),
-        from the state ``x0`` (default rest); at the sample indices ``rows`` (ascending) only,
-        if given.
+        from the state ``x0`` (default rest), or with ``steady`` from each column's steady
+        state at its first sample (the response from rest to U − U[0] plus H(0)·U[0]: the same
+        by superposition, and defined with fast modes residualised; from rest when A is
+        singular); at the sample indices ``rows`` (ascending) only, if given.
 
         Parameters
         ----------
@@ -205,6 +227,8 @@ class StateSpace:
             Initial state (default: rest).
         rows : numpy.ndarray, optional
             Sample indices to return, ascending.
+        steady : bool, optional
+            Start at the steady state of each column's first sample instead (``x0`` unused).
 
         Returns
         -------
@@ -213,6 +237,10 @@ class StateSpace:
         """
         U = np.asarray(U, float)
         U = np.ascontiguousarray(U.reshape(-1, 1) if U.ndim == 1 else U)
+        if steady and np.any(U[0]):
+            h0 = self.dc_gain()
+            if np.isfinite(h0):
+                return self.response(dt, U - U[0], None, rows) + h0 * U[0]
         if self.n == 0:
             Y = self.D[0, 0] * (U if rows is None else U[rows])
         else:

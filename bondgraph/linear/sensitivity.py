@@ -108,11 +108,15 @@ class ModalSensitivity:
         dH = self.alpha @ g.T + self.kappa @ (g * g).T + self.dd[:, None] + jw[None, :] * self.dd1[:, None]
         return H, dH
 
-    def time(self, dt: float, U: np.ndarray, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """(Y, dY) from rest for each column of ``U`` (inputs sampled every ``dt`` s, linear in
-        between), at the sample indices ``rows`` (ascending; every sample for None): Y[r, j]
-        as :meth:`bondgraph.linear.lti.StateSpace.response` gives it, dY[i, r, j] its
-        derivative with respect to parameter i.
+    def time(
+        self, dt: float, U: np.ndarray, rows: np.ndarray | None = None, steady: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(Y, dY) from rest (with ``steady``: from each column's steady state at its first
+        sample, as :meth:`bondgraph.linear.lti.StateSpace.response` starts it) for each column
+        of ``U`` (inputs sampled every ``dt`` s, linear in between), at the sample indices
+        ``rows`` (ascending; every sample for None): Y[r, j] as
+        :meth:`bondgraph.linear.lti.StateSpace.response` gives it, dY[i, r, j] its derivative
+        with respect to parameter i.
 
         Parameters
         ----------
@@ -122,6 +126,9 @@ class ModalSensitivity:
             Input samples, one column per series (a 1-D array is one column).
         rows : numpy.ndarray, optional
             Sample indices to return, ascending.
+        steady : bool, optional
+            Start at the steady state of each column's first sample (from rest when a kept
+            eigenvalue is zero).
 
         Returns
         -------
@@ -132,6 +139,10 @@ class ModalSensitivity:
         """
         U = np.asarray(U, float)
         U = np.ascontiguousarray(U.reshape(-1, 1) if U.ndim == 1 else U)
+        if steady and np.any(U[0]) and not np.any(self.lam == 0):
+            H0, dH0 = self.frequency(np.zeros(1))
+            Y, dY = self.time(dt, U - U[0], rows)
+            return Y + H0[0].real * U[0], dY + dH0[:, 0].real[:, None, None] * U[0][None, None, :]
         N, m = U.shape
         rows = np.arange(N) if rows is None else np.ascontiguousarray(rows, np.int64)
         P = self.alpha.shape[0]

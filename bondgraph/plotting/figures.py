@@ -198,6 +198,48 @@ def varies(y) -> bool:
     return peak > 0 and float(np.ptp(y)) > 1e-12 * peak
 
 
+def revisits(u, deadband: float = 0.1) -> bool:
+    """Whether a drive comes back over its values: it reverses at least once and travels its
+    range at least twice (a periodic or back-and-forth drive, whose output against it is a
+    loop; not a step, a ramp or a single rise).  Moves smaller than ``deadband`` times the
+    range are not reversals (noise on a measured step is not a loop).
+
+    Parameters
+    ----------
+    u : array_like
+        The drive's samples.
+    deadband : float, optional
+        Share of the range a move must exceed to count as a reversal.
+
+    Returns
+    -------
+    bool
+        True for a drive whose output is worth drawing against it.
+    """
+    u = np.asarray(u, float)
+    if not varies(u):
+        return False
+    span = float(np.ptp(u))
+    band = deadband * span
+    lo = hi = float(u[0])
+    direction, turns, extreme = 0, [], 0.0
+    for v in u.tolist():
+        if direction == 0:  # the first leg: its direction once the drive has moved a band
+            lo, hi = min(lo, v), max(hi, v)
+            if hi - lo > band:
+                direction = 1 if v == hi else -1
+                turns, extreme = [lo if direction > 0 else hi], v
+        elif direction * (v - extreme) > 0:  # the leg goes on
+            extreme = v
+        elif direction * (extreme - v) > band:  # a reversal
+            turns.append(extreme)
+            direction, extreme = -direction, v
+    if direction == 0:
+        return False
+    turns.append(extreme)
+    return len(turns) >= 3 and float(np.sum(np.abs(np.diff(turns)))) >= 2 * (1 - deadband) * span
+
+
 def envelope(t, y, limit: int = 20000):
     """At most about ``limit`` points that keep every bucket's minimum and maximum (a
     million-sample signal draws as fast as a short one and loses no peak).

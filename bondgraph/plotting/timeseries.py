@@ -1,4 +1,4 @@
-"""Signals against time, fits and Bode diagrams.
+"""Signals against time (and against a periodic drive: loops), fits and Bode diagrams.
 
 Axes carry the quantity and its unit (taken from the model's declared inputs and outputs,
 SI-prefixed to suit the data: µm rather than 0.0001 m);
@@ -13,10 +13,13 @@ import numpy as np
 from . import figures
 
 
-def plot_signals(t, signals: dict, units: dict, path: str, title: str = "") -> None:
+def plot_signals(t, signals: dict, units: dict, path: str, title: str = "", inputs=()) -> None:
     """Signals against time, one panel per unit: signals that share a unit share the panel
     (with a legend), the y axis says the unit; signals that never change are left out and
-    listed in the title.
+    listed in the title.  When one of ``inputs`` comes back over its values (a periodic or
+    reversing drive, :func:`~bondgraph.plotting.figures.revisits`), every other signal is
+    also drawn against it, in a second column beside its time panel: the loop of a
+    hysteretic output, with units on both axes.
 
     Parameters
     ----------
@@ -30,6 +33,9 @@ def plot_signals(t, signals: dict, units: dict, path: str, title: str = "") -> N
         The image to write (png, pdf or svg; written atomically).
     title : str, optional
         The figure's title.
+    inputs : sequence of str, optional
+        The names among ``signals`` that are drives: the first that revisits its values is
+        the loops' x axis (no loops without one).
 
     Raises
     ------
@@ -47,29 +53,67 @@ def plot_signals(t, signals: dict, units: dict, path: str, title: str = "") -> N
             continue
         unit = units.get(name, "")
         panels.setdefault(unit if unit else ("", name), []).append(name)  # unitless: a panel each
+    drive = next((n for n in inputs if n in signals and figures.revisits(signals[n])), None)
     n = max(len(panels), 1)
-    fig, axes = plt.subplots(n, 1, figsize=(8, 1.9 * n + 0.8), sharex=True, squeeze=False)
-    for ax, names in zip(axes[:, 0], panels.values()):
+    if drive is None:
+        fig, axes = plt.subplots(n, 1, figsize=(8, 1.9 * n + 0.8), sharex=True, squeeze=False)
+    else:
+        fig, axes = plt.subplots(
+            n, 2, figsize=(11.5, 2.1 * n + 0.8), sharex="col", squeeze=False, gridspec_kw={"width_ratios": [2.2, 1]}
+        )
+    labels = {}
+    for ax, (key, names) in zip(axes[:, 0], panels.items()):
         factor, unit = figures.si_scale(units.get(names[0], ""), *(signals[n] for n in names))
         for name in names:
             ax.plot(*figures.envelope(np.asarray(t), factor * np.asarray(signals[name], float)), lw=1.0, label=name)
         joined = ", ".join(names)
-        ax.set_ylabel(figures.axis_label(joined if len(joined) <= 24 else "", unit).strip() if unit else joined)
+        labels[key] = (
+            factor,
+            figures.axis_label(joined if len(joined) <= 24 else "", unit).strip() if unit else joined,
+        )
+        ax.set_ylabel(labels[key][1])
         if len(names) > 1:
             ax.legend(fontsize=8, loc="best")
         ax.grid(alpha=0.3)
     if not panels:
         axes[0, 0].text(0.5, 0.5, "every signal is constant", ha="center", va="center", transform=axes[0, 0].transAxes)
     axes[-1, 0].set_xlabel("t (s)")
+    if drive is not None:
+        _loops(axes[:, 1], panels, labels, signals, units, drive)
     head = title + (": " if title and constant else "") + ("constant " + ", ".join(constant) if constant else "")
     if head:
         axes[0, 0].set_title(head, fontsize=9)
     figures.save(fig, path)
 
 
+def _loops(axes, panels: dict, labels: dict, signals: dict, units: dict, drive: str, limit: int = 20000) -> None:
+    """Beside each time panel, its signals (but ``drive``) against ``drive``: the loops; at
+    most about ``limit`` points each (evenly thinned); a panel of drives only stays empty."""
+    u = np.asarray(signals[drive], float)
+    step = max(1, int(np.ceil(u.size / limit)))
+    xlabel, xf = figures.scaled_label(drive, units.get(drive, ""), u)
+    drawn = []
+    for ax, (key, names) in zip(axes, panels.items()):
+        others = [n for n in names if n != drive]
+        if not others:
+            ax.set_axis_off()
+            continue
+        factor, label = labels[key]
+        for name in others:
+            ax.plot(xf * u[::step], factor * np.asarray(signals[name], float)[::step], lw=0.8, label=name)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        drawn.append(ax)
+    for ax in drawn:  # the column shares its x axis: the drive, labelled under the lowest loop
+        ax.tick_params(labelbottom=ax is drawn[-1])
+    if drawn:
+        drawn[-1].set_xlabel(xlabel)
+        drawn[0].set_title(f"against {drive}", fontsize=9)
+
+
 def plot_simulation(res, path: str, title: str = "", units: dict | None = None, columns: dict | None = None) -> None:
-    """Inputs and outputs of a :class:`~bondgraph.numerics.simulate.SimResult` against time (see
-    :func:`plot_signals`); ``units`` name → unit (e.g. from the model's inputs and outputs),
+    """Inputs and outputs of a :class:`~bondgraph.numerics.simulate.SimResult` against time,
+    and against a drive that revisits its values (see :func:`plot_signals`); ``units`` name → unit (e.g. from the model's inputs and outputs),
     ``columns`` replaces the result's signals (e.g. outputs with a fit's offset added).
 
     Parameters
@@ -90,7 +134,8 @@ def plot_simulation(res, path: str, title: str = "", units: dict | None = None, 
     UsageError
         matplotlib is not installed.
     """
-    plot_signals(res.t, columns if columns is not None else {**res.inputs, **res.outputs}, units or {}, path, title)
+    signals = columns if columns is not None else {**res.inputs, **res.outputs}
+    plot_signals(res.t, signals, units or {}, path, title, inputs=list(res.inputs))
 
 
 def plot_fit(t, measured, fitted, path: str, name: str = "y", unit: str = "", title: str = "") -> None:

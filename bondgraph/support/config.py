@@ -52,6 +52,13 @@ DEFAULTS: dict[str, Default] = {
         "... and the explicit method would need more steps than this at its stability limit "
         "(below, the explicit method is quick anyway)",
     ),
+    "record.start": Default(
+        "steady",
+        "where a model run against a measured record (fit, diagnose, compensate, simulate "
+        "with a csv drive) starts: "
+        "'steady', the equilibrium with the drive held at the record's first value (memory "
+        "operators at rest), or 'rest', the model's declared initial state x0",
+    ),
     "jacobian.hub_support": Default(
         16,
         "a program variable whose gradient reaches more states than this (a node shared by many "
