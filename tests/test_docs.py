@@ -128,6 +128,20 @@ def test_command_page_lists_every_command():
     assert COMMANDS and all(re.search(rf"^\| `{name}[ `]", text, re.M) for name in COMMANDS), sorted(COMMANDS)
 
 
+def test_plot_commands_of_the_command_page_draw_their_figures(tmp_path, monkeypatch):
+    """The commands under "Plots" run as written (in a scratch directory) and write their PNGs."""
+    import shlex
+
+    text = (DOCS / "command-line.md").read_text().split("## Plots", 1)[1]
+    block = re.search(r"```sh\n(.*?)```", text, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    for line in block.strip().splitlines():
+        argv = shlex.split(line.replace("models/", f"{ROOT / 'models'}/"))
+        assert argv[0] == "bondgraph" and main(argv[1:]) == 0, line
+        plot = argv[argv.index("--plot") + 1]
+        assert (tmp_path / plot).stat().st_size > 10_000, line
+
+
 def test_record_start_example_sets_the_declared_start():
     block = next(b for b in python_blocks("fitting.md") if "record.start" in b)
     try:

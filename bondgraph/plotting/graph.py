@@ -61,6 +61,7 @@ def plot_bond_graph(causality, path: str) -> None:
             ),
         )
     ax.set_title(caption(lay), fontsize=9)
+    ax.margins(0.12)  # the element labels are text, which the data limits do not include
     ax.set_axis_off()
     ax.set_aspect("equal")
     figures.save(fig, path)
