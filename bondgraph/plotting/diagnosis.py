@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..diagnosis.display import units_of
 from . import figures
 
 
@@ -33,6 +32,8 @@ def plot_diagnosis(report, path: str, model=None) -> None:
     UsageError
         matplotlib is not installed.
     """
+    from ..diagnosis.display import units_of  # here: importing the diagnosis costs every plot ~0.7 s
+
     plt = figures.pyplot()
     p = report.predictions
     t, u, y, base = (np.asarray(p[k], float) for k in ("t", "u", "y", "baseline"))
