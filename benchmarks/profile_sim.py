@@ -127,7 +127,7 @@ def profile_case(case, t_end: float):
     def loop_inputs(n, a, u, du):
         acc = 0.0
         for k in range(n):
-            integ.eval_inputs(k * 1e-7, a[0], a[1], a[2], a[3], a[4], a[5], a[6], u, du)
+            integ.eval_inputs(k * 1e-7, a[0], a[1], a[2], a[3], a[4], a[5], a[6], u, du, True)
             acc += u[0]
         return acc
 

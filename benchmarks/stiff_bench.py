@@ -134,7 +134,7 @@ def scipy_radau(sim, t, inputs, rtol):
     y = np.zeros(max(len(sim.output_names), 1))
 
     def f(tt, xx):
-        eval_inputs(tt, *args, u, du)
+        eval_inputs(tt, *args, u, du, True)
         sim.compiled.rhs(tt, np.ascontiguousarray(xx), u, du, th, mem, aux, dx)
         return dx.copy()
 
@@ -155,12 +155,12 @@ def scipy_radau(sim, t, inputs, rtol):
             dense = s.dense_output()
             while k < t.size and t[k] <= s.t:
                 xx = np.ascontiguousarray(dense(t[k]))
-                eval_inputs(t[k], *args, u, du)
+                eval_inputs(t[k], *args, u, du, True)
                 sim.compiled.output(t[k], xx, u, du, th, mem, aux, y)
                 out[k] = y[sim.output_names.index("x")]
                 k += 1
             if nv:
-                eval_inputs(s.t, *args, u, du)
+                eval_inputs(s.t, *args, u, du, True)
                 sim.compiled.commit(s.t, np.ascontiguousarray(s.y), u, du, th, mem, aux, v)
             counts["steps"] += 1
         x = s.y

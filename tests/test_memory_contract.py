@@ -49,7 +49,7 @@ def reference(model, t, signal, substeps=200):
 
     def f(tt, xx):
         out = np.zeros_like(xx)
-        eval_inputs(tt, *args, u, du)
+        eval_inputs(tt, *args, u, du, True)
         c.rhs(tt, xx, u, du, th, mem, c.aux, out)
         return out
 
@@ -64,7 +64,7 @@ def reference(model, t, signal, substeps=200):
             k3 = f(tt + h / 2, x + h / 2 * k2)
             k4 = f(tt + h, x + h * k3)
             x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            eval_inputs(tt + h, *args, u, du)
+            eval_inputs(tt + h, *args, u, du, True)
             c.commit(tt + h, x, u, du, th, mem, c.aux, v)
         ys.append(x.copy())
     return np.array(ys)

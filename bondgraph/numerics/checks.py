@@ -108,7 +108,7 @@ def _problem(sim, values: Mapping[str, float], inputs, t0: float) -> str | None:
     f0, f1 = np.zeros(max(n, 1)), np.zeros(max(n, 1))
     y = np.zeros(max(len(sim.output_names), 1))
     try:
-        eval_inputs(t0, *bank.args(), u, du)
+        eval_inputs(t0, *bank.args(), u, du, True)
         mem = sim.initial_memory(t0, x, th, bank)
         c = sim.compiled
         aux = c.aux.copy()

@@ -32,8 +32,8 @@ from .model_functions import FUNCTION_TYPE
 
 
 @njit(cache=True)
-def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du=True):
-    """Write every input's value and time derivative at time t into u and du.
+def eval_inputs(t, kind, par, off, ln, tt, tv, cur, u, du, with_du):
+    """Write every input's value and, when ``with_du``, its time derivative at time t into u and du.
 
     ``cur`` holds, per table input, the last table interval used: the integrator's times are
     nearly monotone, so the interval is usually found in O(1) instead of a binary search."""
@@ -150,12 +150,14 @@ def reversal_at(v0, v1, vt, theta, reversal):
 
 
 @njit(cache=True)
-def sample_inputs(t, kind, par, off, ln, tt, tv, cur, out):
-    """Values of all inputs at the times ``t`` into ``out`` (len(t) × n_inputs)."""
+def sample_inputs(t, kind, par, off, ln, tt, tv, cur, with_du, out):
+    """Values of all inputs at the times ``t`` into ``out`` (len(t) × n_inputs); ``with_du``
+    (False from the caller: a run-time flag, so the integrator's compiled :func:`eval_inputs`
+    serves, where a literal would compile another specialisation of it)."""
     u = np.zeros(kind.shape[0])
     du = np.zeros(kind.shape[0])
     for k in range(t.shape[0]):
-        eval_inputs(t[k], kind, par, off, ln, tt, tv, cur, u, du, False)
+        eval_inputs(t[k], kind, par, off, ln, tt, tv, cur, u, du, with_du)
         for i in range(u.shape[0]):  # element by element: see store_sample
             out[k, i] = u[i]
 

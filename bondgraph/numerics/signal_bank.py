@@ -130,5 +130,5 @@ class SignalBank:
         t = np.atleast_1d(np.asarray(t, float))
         out = np.zeros((t.size, len(self.names)))
         if self.names:
-            sample_inputs(t, *self.args(), out)
+            sample_inputs(t, *self.args(), False, out)
         return out

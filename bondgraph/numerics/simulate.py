@@ -270,7 +270,7 @@ class Simulator:
         if not self.eqs.operators:
             return mem
         u, du = np.zeros(max(len(self.input_names), 1)), np.zeros(max(len(self.input_names), 1))
-        eval_inputs(t0, *bank.args(), u, du)
+        eval_inputs(t0, *bank.args(), u, du, True)
         v = np.zeros(len(self.eqs.operators))
         for _ in range(2):  # second pass lets cascaded operators see settled upstream memory
             for k, ob in enumerate(self.eqs.operators):
@@ -567,7 +567,7 @@ class Simulator:
         sj = self.sparse_jacobian()
         nu = max(len(self.input_names), 1)
         u, du = np.zeros(nu), np.zeros(nu)
-        eval_inputs(t0, *bank.args(), u, du)
+        eval_inputs(t0, *bank.args(), u, du, True)
         J = sj.reduced(sj.augmented(t0, np.ascontiguousarray(x, float), u, du, th, mem))
         return J if sparse else J.toarray()
 
@@ -646,7 +646,7 @@ class Simulator:
         n = x.size
         nu = max(len(self.input_names), 1)
         u, du = np.zeros(nu), np.zeros(nu)
-        eval_inputs(t0, *bank.args(), u, du)
+        eval_inputs(t0, *bank.args(), u, du, True)
         f0, f1 = np.zeros(n), np.zeros(n)
         aux = self.compiled.aux.copy()
         self.compiled.rhs(t0, x, u, du, th, mem, aux, f0)
@@ -674,7 +674,7 @@ class Simulator:
         args = bank.args()
 
         def f(tt, xx):
-            eval_inputs(tt, *args, u, du)
+            eval_inputs(tt, *args, u, du, True)
             c.rhs(tt, np.ascontiguousarray(xx), u, du, th, mem, aux, dx)
             return dx.copy()
 
@@ -688,7 +688,7 @@ class Simulator:
         k = 0
 
         def emit(tt, xx):
-            eval_inputs(tt, *args, u, du)
+            eval_inputs(tt, *args, u, du, True)
             c.output(tt, xx, u, du, th, mem, aux, y)
             return y[: len(self.output_names)]
 
@@ -711,7 +711,7 @@ class Simulator:
                     for th_ in np.linspace(0.0, 1.0, 9)[1:]:
                         tt = t_old + th_ * (s.t - t_old)
                         xx = np.ascontiguousarray(dense(tt))
-                        eval_inputs(tt, *args, u, du)
+                        eval_inputs(tt, *args, u, du, True)
                         c.commit(tt, xx, u, du, th, mem, aux, v)
                 stats["steps"] += 1
             x = np.ascontiguousarray(s.y)

@@ -87,7 +87,7 @@ def steady_state(sim, th: np.ndarray, inputs: Mapping | None = None, t0: float =
     bank = sim.signal_bank(inputs)
     nu = max(len(sim.input_names), 1)
     u, du = np.zeros(nu), np.zeros(nu)
-    eval_inputs(t0, *bank.args(), u, du)
+    eval_inputs(t0, *bank.args(), u, du, True)
     du[:] = 0.0  # the inputs held at their first values
     c = sim.compiled
     aux = c.aux.copy()
