@@ -10,6 +10,8 @@ needed.  Noise: white, 0.5 % of the output's spread.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -64,12 +66,19 @@ def multisine(t: np.ndarray, f0: float, f1: float, n: int, rms: float, seed: int
     return rms * u / np.std(u)
 
 
-def measured(t, u, rhs, n_states, out, seed=1, drift=0.0) -> Dataset:
+def integrated(t, u, rhs, n_states, out) -> np.ndarray:
+    """The noise-free output of ``rhs`` driven by ``u`` from rest (scipy's Radau, tight)."""
     sol = solve_ivp(
         lambda tt, s: rhs(np.interp(tt, t, u), s), (t[0], t[-1]), np.zeros(n_states), t_eval=t,
         method="Radau", rtol=1e-9, atol=1e-14, max_step=1 / FS,
     )  # fmt: skip
-    y = out(sol.y)
+    return out(sol.y)
+
+
+def measured(t, u, rhs, n_states, out, seed=1, drift=0.0, clean=None) -> Dataset:
+    """The record: the noise-free output (``clean``, else :func:`integrated`), plus white noise
+    of 0.5 % of its spread and a drift growing as t² to ``drift`` times its spread."""
+    y = integrated(t, u, rhs, n_states, out) if clean is None else clean
     y = y + 0.005 * np.std(y) * np.random.default_rng(seed).standard_normal(t.size)
     y = y + drift * np.std(y) * ((t - t[0]) / (t[-1] - t[0])) ** 2
     return Dataset(t, {"F": u, "x2" if n_states == 4 else "x": y})
@@ -110,10 +119,18 @@ def hysteretic_record() -> Dataset:
 def linear_record(drift: float = 0.0) -> Dataset:
     """The oscillator (1.1 kg, 1.2e4 N/m, 12 N·s/m) without any effect; ``drift``: a sensor
     drift growing as the square of time to that many output standard deviations."""
+    t, u, clean = _linear_response()
+    return measured(t, u, None, 2, None, drift=drift, clean=clean)
+
+
+@functools.cache
+def _linear_response() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """t, the drive and the noise-free output of :func:`linear_record`, integrated once (five
+    tests share them)."""
     t = np.arange(0.0, T, 1 / FS)
     u = multisine(t, 2.0, 60.0, 40, 20.0, seed=5)
     m, k, c = 1.1, 1.2e4, 12.0
-    return measured(t, u, lambda F, s: [s[1], (F - k * s[0] - c * s[1]) / m], 2, lambda y: y[0], drift=drift)
+    return t, u, integrated(t, u, lambda F, s: [s[1], (F - k * s[0] - c * s[1]) / m], 2, lambda y: y[0])
 
 
 def test_a_hardening_coupling_spring_is_named_at_that_spring():
