@@ -67,10 +67,11 @@ def multisine(t: np.ndarray, f0: float, f1: float, n: int, rms: float, seed: int
 
 
 def integrated(t, u, rhs, n_states, out) -> np.ndarray:
-    """The noise-free output of ``rhs`` driven by ``u`` from rest (scipy's Radau, tight)."""
+    """The noise-free output of ``rhs`` driven by ``u`` from rest (scipy's DOP853, tight: within
+    6e-7 of its Radau at the same tolerances, a third of the time)."""
     sol = solve_ivp(
         lambda tt, s: rhs(np.interp(tt, t, u), s), (t[0], t[-1]), np.zeros(n_states), t_eval=t,
-        method="Radau", rtol=1e-9, atol=1e-14, max_step=1 / FS,
+        method="DOP853", rtol=1e-9, atol=1e-14, max_step=1 / FS,
     )  # fmt: skip
     return out(sol.y)
 
