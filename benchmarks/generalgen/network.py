@@ -36,8 +36,8 @@ SPRING_LAWS = {
     "sinh": 2,  # (s,): k s sinh(e/s)
     "saturating": 3,  # (s, rho, e_b, shape): k ((1-rho) e + rho s (g((e+e_b)/s) - g(e_b/s))), g tanh or arctan
     "bouc-wen": 4,  # (alpha, beta, gamma, n): k (alpha e + (1-alpha) z)
-    "prandtl-ishlinskii": 5,  # (w0,) + plays: k (w0 e + sum w_j play_rj(e))
-    "preisach": 6,  # (w_lin, a_r) + relays: k (w_lin e + a_r sum mu_i relay_i(e))
+    "prandtl-ishlinskii": 5,  # (w0,) + plays: k (w0 e + sum w_j (e - play_rj(e))), stops: yield
+    "preisach": 6,  # (w_lin, a_r) + relays: k (w_lin e + (1-w_lin) (e - a_r sum mu_i relay_i(e)))
     "clearance": 7,  # (g, rho, c_contact): k rho e + contact force beyond the gap g, never pulling
 }
 
@@ -231,9 +231,9 @@ def _rk4(y, u_half, h, os, n, node, li, lf, hp, hr, w0, out_link, y_fine, rec_e,
                     az = abs(z) ** (p3 - 1.0)
                     out[zi] = ed - p1 * abs(ed) * az * z - p2 * ed * az * abs(z)
                 elif code == 5:  # Prandtl-Ishlinskii
-                    acc = p0 * e
+                    acc = p0 * e  # stops (e - play): elastic-plastic elements, so the loop dissipates
                     for j in range(li[l, 4], li[l, 5]):
-                        acc += hp[j, 1] * min(max(hp[j, 2], e - hp[j, 0]), e + hp[j, 0])
+                        acc += hp[j, 1] * (e - min(max(hp[j, 2], e - hp[j, 0]), e + hp[j, 0]))
                     fs = kk * acc
                 elif code == 6:  # Preisach
                     acc = 0.0
@@ -244,7 +244,7 @@ def _rk4(y, u_half, h, os, n, node, li, lf, hp, hr, w0, out_link, y_fine, rec_e,
                             acc -= hr[j, 2]
                         else:
                             acc += hr[j, 2] * hr[j, 3]
-                    fs = kk * (p0 * e + p1 * acc)
+                    fs = kk * (e - (1.0 - p0) * p1 * acc)  # the relays slip: the loop dissipates
                 else:  # clearance: a share rho stays engaged, the rest touches beyond the gap
                     fs = kk * p1 * e
                     over = abs(e) - p0
