@@ -62,6 +62,9 @@ class Extension:
         The drive as a sum of effects after an additive drive-side fit
         (:attr:`DriveFit.additive <bondgraph.diagnosis.view.DriveFit>`), so that a later
         additive cause refits its weights.
+    where : str, optional
+        Where the fitted effect acts, when narrower than the candidate's site (the one element
+        of a shared-role site whose term carries the effect); "" for the site itself.
     """
 
     model: Model
@@ -75,6 +78,7 @@ class Extension:
     message: str = ""
     terms: list = field(default_factory=list)
     additive: object | None = None
+    where: str = ""
 
 
 class Candidate(ABC):

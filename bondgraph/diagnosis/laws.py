@@ -63,6 +63,11 @@ def field(view) -> tuple:
     return view.input_symbol, np.asarray(view.u)
 
 
+#: an element whose term alone carries at least this share of a shared-role site's summed
+#: effects names the step's site (the site's name otherwise)
+CARRIER_SHARE = 0.8
+
+
 class LawTerm(Candidate):
     """A term in the laws of a site's elements (see the module docstring).
 
@@ -271,8 +276,8 @@ class LawTerm(Candidate):
         Returns
         -------
         float or None
-            The squared correlation of the residual with the filtered regressor on the fit
-            part, between 0 and 1, or None.
+            What the filtered regressor explains of the residual with the calibration
+            (:meth:`View.first_order_share`), between 0 and 1, or None.
         """
         els = self.elements(view.model)
         partners = {el: self.partner(view.model, el) for el in els}
@@ -288,13 +293,7 @@ class LawTerm(Candidate):
             moved = lure.simulate(dict(view.values), lure.drive, self.term, coefs)
         except NotConverged:
             return None
-        column = (moved - base) * view.gain / self.probe
-        idx = view.fit_idx
-        r = view.residual[idx] - view.residual[idx].mean()
-        q = column[idx] - column[idx].mean()
-        if not np.all(np.isfinite(q)) or float(q @ q) <= 0 or float(r @ r) <= 0:
-            return 0.0
-        return float((q @ r) ** 2 / ((q @ q) * (r @ r)))
+        return view.first_order_share((moved - base) * view.gain / self.probe)
 
     def fit(self, view):
         """Fit the coefficients with the calibration (the scan of the class notes).
@@ -390,6 +389,7 @@ class LawTerm(Candidate):
             )
         kept = [(n, el) for n, el in zip(names, els) if el not in held]
         terms = [(el, partners[el], self.term, values[n], r2s[el]) for n, el in kept]
+        where = self._carrier(view, lure, values, {el: values[n] for n, el in kept}, r2s, els) if len(kept) > 1 else ""
         return Extension(
             self.build(view, {el: values[n] for n, el in kept}, r2s),
             values,
@@ -401,7 +401,31 @@ class LawTerm(Candidate):
             ok,
             msg,
             terms=terms,
+            where=kept[0][1] if len(kept) == 1 and len(els) > 1 else where,
         )
+
+    def _carrier(self, view, lure, values, coefs, r2s, els) -> str:
+        """The element whose fitted term alone moves the output at least
+        :data:`CARRIER_SHARE` of the terms' summed effects (RMS), or "" (the site as a whole),
+        on the exact linear route only."""
+        if lure is None:
+            return ""
+        effect = {}
+        for el in coefs:
+            one = [(coefs[el] if e == el else 0.0, r2s[e]) for e in els]
+            none = [(0.0, r2s[e]) for e in els]
+            try:
+                effect[el] = float(
+                    np.std(
+                        lure.simulate(values, lure.drive, self.term, one)
+                        - lure.simulate(values, lure.drive, self.term, none)
+                    )
+                )
+            except NotConverged:
+                return ""
+        total = sum(effect.values())
+        top = max(effect, key=effect.get)
+        return top if total > 0 and effect[top] >= CARRIER_SHARE * total else ""
 
     def _idle(self, view, lure, els, refs, r2s, base) -> list[str]:
         """Elements whose term, at the top of the scan, moves the output by less than 5 % of the

@@ -124,7 +124,7 @@ class RestoringHysteresis(Candidate):
         Returns
         -------
         float or None
-            The squared correlation on the fit part, between 0 and 1, or None.
+            The largest :meth:`View.first_order_share` over the levels (0-1), or None.
         """
         try:
             out = self._columns(view)
@@ -132,14 +132,7 @@ class RestoringHysteresis(Candidate):
             return None
         if out is None:
             return None
-        idx = view.fit_idx
-        r = view.residual[idx] - view.residual[idx].mean()
-        best = 0.0
-        for col in out[2].values():
-            q = col[idx] - col[idx].mean()
-            if np.all(np.isfinite(q)) and float(q @ q) > 0 and float(r @ r) > 0:
-                best = max(best, float((q @ r) ** 2 / ((q @ q) * (r @ r))))
-        return best
+        return max(view.first_order_share(col) for col in out[2].values())
 
     def build(self, view, kh: float, zmax: float):
         """The current model with the hysteretic term on the site's element.
@@ -325,8 +318,15 @@ class Backbone(LawTerm):
         return abs(slope(view.model, el, view.values)), RestoringHysteresis.levels[1] * _peak(x)
 
 
+#: a site of at most this many elements (springs sharing a role) gets one candidate per
+#: element: a loop is in one spring's law, not in all of them alike
+PER_ELEMENT = 4
+
+
 def restoring_kinds(model) -> list[Candidate]:
-    """A hysteretic restoring force at every generic C site of ``model``.
+    """A hysteretic restoring force at every generic C site of ``model``: at each element of
+    a site of at most :data:`PER_ELEMENT` elements (named by the element), else at the site's
+    first element.
 
     Parameters
     ----------
@@ -336,6 +336,12 @@ def restoring_kinds(model) -> list[Candidate]:
     Returns
     -------
     list of Candidate
-        One :class:`RestoringHysteresis` per generic C site.
+        The :class:`RestoringHysteresis` candidates.
     """
-    return [RestoringHysteresis(site) for site in generic_sites(model, "C")]
+    out = []
+    for site in generic_sites(model, "C"):
+        if 1 < len(site.elements) <= PER_ELEMENT:
+            out += [RestoringHysteresis(Site(el, "C", (el,), site.role)) for el in site.elements]
+        else:
+            out.append(RestoringHysteresis(site))
+    return out

@@ -447,6 +447,62 @@ class View:
         drop = np.maximum(before - after, 0.0)
         return float(drop[coh >= self.resolved_coherence].sum() / drop.sum()) if drop.sum() > 0 else 0.0
 
+    def first_order_share(self, column: np.ndarray) -> float:
+        """The share (0-1) of the residual's energy on the fit part that a column (an
+        effect's output per unit coefficient, sensor gain applied) explains to first order
+        together with the calibration: one Gauss–Newton step of the effect's coefficient and
+        the calibrated linear parameters, sensor gain and offset.  On the linear core the
+        column is regressed beyond the output's sensitivities to those parameters
+        (:meth:`respond_sensitivities`), because every candidate's fit refits them: a
+        column that is partly a stiffness change is judged by what the stiffness cannot
+        do.  Off the core, beyond the offset only.
+
+        Parameters
+        ----------
+        column : numpy.ndarray
+            The column on every sample (output units per unit coefficient).
+
+        Returns
+        -------
+        float
+            The share, between 0 and 1 (0 for a column that is not finite or is explained
+            by the calibration alone).
+        """
+        idx = self.fit_idx
+        q, r = np.asarray(column, float)[idx], np.asarray(self.residual, float)[idx]
+        if not np.all(np.isfinite(q)):
+            return 0.0
+        basis = self._calibration_directions()
+        q, r = (
+            q - basis @ np.linalg.lstsq(basis, q, rcond=None)[0],
+            r - basis @ np.linalg.lstsq(basis, r, rcond=None)[0],
+        )
+        rr = float(np.sum((np.asarray(self.residual, float)[idx] - np.mean(self.residual[idx])) ** 2))
+        qq = float(q @ q)
+        if qq <= 1e-24 * max(float(np.sum(np.asarray(column, float)[idx] ** 2)), 1e-300) or rr <= 0:
+            return 0.0
+        return min(float((q @ r) ** 2 / qq) / rr, 1.0)
+
+    def _calibration_directions(self) -> np.ndarray:
+        """The fit rows' directions the calibration moves the output in (columns): the offset
+        and, on the linear core, the raw prediction (sensor gain) and its derivatives with
+        respect to the logarithms of the calibrated linear parameters (cached)."""
+        if getattr(self, "_directions", None) is not None:
+            return self._directions
+        idx = self.fit_idx
+        cols = [np.ones(idx.size)]
+        if self.on_core and not self.terms:
+            names = [n for n in self.linear if n in self._ctx.core_parameters]
+            out = self.respond_sensitivities(np.asarray(self.drive, float)[:, None], names, rows=idx) if names else None
+            if out is not None:
+                Y, dY = out
+                cols.append(Y[:, 0])
+                cols += [dY[i][:, 0] * self.values[n] * self.gain for i, n in enumerate(names)]
+        basis = np.column_stack(cols)
+        scale = np.sqrt(np.sum(basis**2, axis=0))
+        self._directions = basis[:, scale > 0] / scale[scale > 0]
+        return self._directions
+
     def score(self, raw: np.ndarray) -> tuple[float, float, float, float]:
         """(sensor gain, offset, RMS fit part, RMS validation part) of a raw prediction.
 
