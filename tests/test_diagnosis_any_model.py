@@ -162,14 +162,26 @@ def test_a_slow_drift_is_named_when_nothing_else_explains_the_record():
 
 
 def test_a_small_drift_is_said_to_be_a_nuisance_not_named():
-    """A drift of 4.5 % of the output's RMS (below ``diagnosis.drift_share``) is not named, but
-    the report says what it would have explained (one linear candidate: a chain step to follow)."""
+    """A drift of 0.5 % of the output's RMS, about the noise's size (below
+    ``diagnosis.drift_noise`` times the noise floor), is not named, but the report says what it
+    would have explained (one linear candidate: a chain step to follow)."""
+    model = oscillator()
+    mode = [c for c in load_candidates(model) if c.cause == "higher-mode" and c.site_name == "output"]
+    rep = diagnose(model, linear_record(drift=0.017), candidates=mode, workers=1, equations=False)
+    assert rep.as_json()["causes"] == [], rep.text()
+    said = [n for n in rep.notes if "treated as a nuisance" in n]
+    assert said and "0.5% of its RMS" in said[0] and "note: " + said[0] in rep.text()
+
+
+def test_a_drift_of_a_few_percent_is_named():
+    """A drift of 4.5 % of the output's RMS, nine times the noise, stands out of the noise: it
+    is named, though small beside the output."""
     model = oscillator()
     mode = [c for c in load_candidates(model) if c.cause == "higher-mode" and c.site_name == "output"]
     rep = diagnose(model, linear_record(drift=0.15), candidates=mode, workers=1, equations=False)
-    assert rep.as_json()["causes"] == [], rep.text()
-    said = [n for n in rep.notes if "treated as a nuisance" in n]
-    assert said and "4.5% of its RMS" in said[0] and "note: " + said[0] in rep.text()
+    out = rep.as_json()
+    assert out["causes"] == ["drift"] and out["site"] == "output", rep.text()
+    assert "'drift-when-nothing'" in rep.text() and out["steps"][0]["gain"] > 2.0
 
 
 def test_an_effect_free_record_says_what_is_left():

@@ -21,7 +21,8 @@ from .account import account
 from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State, residual_floor
-from .decision import BASIC, Comparison, Verdict, compare, judge, reference_prediction, regress
+from .decision import Comparison, compare, judge, reference_prediction, regress
+from .drift import drift_explains, drift_step
 from .laws import law_kinds
 from .modes import mode_kinds
 from .pool import Pool, single_threaded_blas
@@ -121,6 +122,7 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
     if not np.all(np.isfinite(raw)):
         raise FloatingPointError("the extended model's prediction is not finite")
     res.params = {k: float(ext.values[k]) for k in ext.new}
+    res.site = ext.where or res.site
     res.n_params = len(ext.new)
     res.at_bounds = list(ext.at_bounds)
     res.success, res.message = ext.success, ext.message
@@ -859,7 +861,7 @@ def _diagnose(
                 of = {id(outcomes[i]): cands[i] for i in pending}
                 efforts = {id(outcomes[i]): effort for i in redo}
                 step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
-            if k == 0 and winner is not None and not drift and _drift_explains(ctx, state, winner):
+            if k == 0 and winner is not None and not drift and drift_explains(ctx, state, winner.result.rms_validation):
                 say("a linear drift explains the record as well as the best candidate: solved as a sensor drift")
                 return (
                     f"a linear drift of the output explained the record as well as {winner.result.cause} "
@@ -877,7 +879,7 @@ def _diagnose(
             step_predictions.append(state.prediction)
     final_prediction = state.prediction
     if steps and not any(s.cause != "none" for s in steps):
-        drift = drift_step(ctx, state, cal.drift)
+        drift = drift_step(ctx, state, cal.drift, floor)
         if drift is not None:
             step, final_prediction = drift
             say(f"step {len(steps) + 1}: {step.why}")
@@ -935,83 +937,6 @@ def _diagnose(
             report.extended_rms_integrated = _integrated(ctx, ext_model, state)
     report.seconds = time.time() - started
     return report
-
-
-def drift_step(ctx: Context, state: State, solved: float | None) -> tuple[Step, np.ndarray] | None:
-    """When nothing else was named: a slow drift of the output named ``drift`` at the output
-    (rule ``drift-when-nothing``), or None.
-
-    The drift is a quadratic in time fitted to the residual on the fit part, plus the linear
-    sensor drift the calibration solved and removed from the record (``solved``, output units
-    per second), if any.  It is named when, put back into the record, it passes the rules every
-    cause must (``on-bound``, ``useful-gain``, ``significant``) and its RMS is at least
-    ``diagnosis.drift_share`` of the output's: a drift that large is a finding about the
-    measurement, where a smaller one is removed as a nuisance (and said in a note).
-
-    Parameters
-    ----------
-    ctx : Context
-        The prepared record.
-    state : State
-        The chain's current state.
-    solved : float or None
-        The linear sensor drift the calibration removed, output units per second.
-
-    Returns
-    -------
-    (Step, ndarray) or None
-        The step and the prediction of the record as it was measured, drift included.
-    """
-    idx, val = ctx.ident.fit_idx, ctx.ident.val_mask
-    removed = 0.0 if solved is None else solved * 0.5 * (ctx.t[-1] - ctx.t[0]) * ctx.trend
-    y = ctx.y + removed  # the record as measured
-    e_state = y - state.prediction
-    t = (ctx.t - ctx.t[0]) / max(ctx.t[-1] - ctx.t[0], 1e-300)
-    drift = regress(np.column_stack([t, t**2]), e_state, idx)
-    e_drift = e_state - drift
-    cmp = compare(e_state, e_drift, ctx.blocks)
-    before, after = rms(e_state[val]), rms(e_drift[val])
-    size = float(np.std(drift)) / max(float(np.std(y)), 1e-300)
-    res = CandidateResult("drift", "a slow drift of the output (quadratic in time)", site="output")
-    res.gain, res.z, res.n_eff, res.rms_validation, res.n_params = cmp.gain, cmp.z, cmp.n_eff, after, 3
-    res.params = {"drift.rms_share": size}
-    verdict = judge("nonlinear", cmp, None, None, [], "", rules=BASIC)
-    if verdict.passed and size < config.get("diagnosis.drift_share"):
-        verdict = Verdict(
-            False,
-            f"its RMS is {size:.1%} of the output's (< {config.get('diagnosis.drift_share'):.0%}): a nuisance, not a finding",
-            "drift-size",
-        )
-    res.passed, res.verdict, res.rule = verdict.passed, verdict.reason, verdict.rule
-    if not res.passed:
-        if res.rule == "drift-size":
-            ctx.notes.append(
-                f"a slow drift of the output ({'with the sensor drift the calibration removed, ' if solved else ''}"
-                f"{size:.1%} of its RMS) lowers the validation RMS {cmp.gain:.3g}× (z = {cmp.z:.1f}); it is "
-                f"below diagnosis.drift_share ({config.get('diagnosis.drift_share'):.0%}) of the output's RMS, so "
-                f"it is treated as a nuisance, not named a cause"
-            )
-        return None
-    why = (
-        f"named: nothing else explains the record, and a slow drift of the output, {size:.0%} of its RMS, "
-        f"lowers the validation RMS {cmp.gain:.3g}× (z = {cmp.z:.1f})"
-    )
-    step = Step("drift", cmp.gain, before, after, before, [res], why, "output", res.label, "drift-when-nothing", res)
-    return step, state.prediction + drift - removed
-
-
-def _drift_explains(ctx: Context, state: State, winner: Outcome) -> bool:
-    """Whether a straight line added to the calibrated model (a sensor drift) passes the rules
-    a cause must (``diagnosis.min_gain``, ``diagnosis.min_z``) and explains the validation part
-    as well as the first step's winner (within ``diagnosis.equivalent``): then the winner may
-    be a drift passing for an effect, and the diagnosis starts again with the drift solved."""
-    idx, val, y = ctx.ident.fit_idx, ctx.ident.val_mask, ctx.y
-    e_state = y - state.prediction
-    e_drift = y - regress(np.column_stack([state.raw, ctx.trend]), y, idx)
-    base = compare(e_state, e_drift, ctx.blocks)
-    if base.gain < config.get("diagnosis.min_gain") or base.z < config.get("diagnosis.min_z"):
-        return False
-    return rms(e_drift[val]) <= config.get("diagnosis.equivalent") * winner.result.rms_validation
 
 
 def _integrated(ctx: Context, model: Model, state: State) -> float | None:

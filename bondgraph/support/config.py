@@ -212,11 +212,11 @@ DEFAULTS: dict[str, Default] = {
         "when more candidates than this can say what they explain to first order (a "
         "law term at a site), only this many, those explaining most, are fitted in full",
     ),
-    "diagnosis.drift_share": Default(
-        0.1,
-        "when no cause is named, a slow drift of the output (a quadratic in time, with the "
-        "sensor drift the calibration solved) is named when it passes the rules a cause "
-        "must and its RMS is at least this share of the output's",
+    "diagnosis.drift_noise": Default(
+        3.0,
+        "when no cause is named, a slow drift of the output (a smooth curve in time, with "
+        "the sensor drift the calibration solved) is named when it passes the rules a cause "
+        "must and its RMS is at least this many times the noise floor",
     ),
     "diagnosis.screen_effort": Default(
         0.3,
