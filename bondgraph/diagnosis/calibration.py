@@ -45,6 +45,7 @@ from ..linear.sensitivity import sensitivity
 from ..support import config
 from ..support.errors import UsageError
 from .context import SENSOR_GAIN, Context, State, welch, welch_length
+from .gauge import fix_scales
 from .pool import fork_map
 from .projection import Param, forward_differences, projected_fit
 
@@ -935,12 +936,19 @@ def calibrate(
         values, _, raw, sol, route = _fit(
             ctx, specs, nominal, z1, starts=[np.array([s.to_z(s.start) for s in specs])], drift=drift, workers=workers
         )
+    factors = tolerances(free, tolerance)
+    values, raw, symmetric = fix_scales(ctx, free, values, raw, nominal, factors, bounds)
+    if symmetric:
+        say(
+            "the output cannot tell "
+            + "; ".join(_scaled_together(free, e) for e in symmetric)
+            + " scaled together: kept nearest the model file's values"
+        )
     if drift:
         rate = float(sol.coef[2]) / max(0.5 * ctx.span, 1e-300)
         ctx.remove_drift(rate)
         say(f"sensor drift {rate:.4g} per s solved with the calibration and removed from the record")
     gain, offset, rf, rv = score(ctx, raw)
-    factors = tolerances(free, tolerance)
     plausible = {n: param_bounds(ctx, n, nominal[n], factors[n]) for n in free}
     ctx.plausible = plausible
     outside = {
@@ -954,7 +962,11 @@ def calibrate(
         free,
         held,
         {k: tuple(v) for k, v in bounds.items()},
-        [(specs[i].name if i < len(specs) else "delay") for i in sol.at_bounds],
+        [
+            name
+            for name in ((specs[i].name if i < len(specs) else "delay") for i in sol.at_bounds)
+            if name == "delay" or not bounds[name][0] * (1 + 1e-6) < abs(values[name]) < bounds[name][1] * (1 - 1e-6)
+        ],
         gain,
         offset,
         rf,
@@ -1000,10 +1012,18 @@ def calibrate(
         starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])],
         workers=workers,
     )
+    pvalues, praw, _ = fix_scales(ctx, free, pvalues, praw, nominal, factors, plausible)
     pgain, poffset, _, prv = score(ctx, praw)
     cal.rms_plausible = prv
     pstate = State(ctx.model, pvalues, praw, pgain, poffset, state.drive, state.drive_expr, [], state.linear)
     return state, cal, pstate
+
+
+def _scaled_together(names: Sequence[str], e: np.ndarray) -> str:
+    """A scale symmetry's exponents as text: ``k1, c1 and m1`` or ``R, L and C^-1``."""
+    e = e if np.sum(e > 0) >= np.sum(e < 0) else -e
+    parts = [n if e[i] == 1 else f"{n}^{int(e[i])}" for i, n in enumerate(names) if e[i]]
+    return ", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else parts[0]
 
 
 def score(ctx: Context, raw: np.ndarray) -> tuple[float, float, float, float]:
