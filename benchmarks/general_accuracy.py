@@ -45,6 +45,21 @@ def _bondgraph() -> list[str]:
     return [found]
 
 
+def _installed_package(cli: list[str]) -> Path | None:
+    """The directory of the ``bondgraph`` package the installed CLI imports (asked from a
+    neutral working directory, so that no checkout on the path shadows the installation)."""
+    python = Path(cli[0]).with_name("python")
+    if not python.exists():
+        return None
+    out = subprocess.run(
+        [str(python), "-c", "import bondgraph, os; print(os.path.dirname(bondgraph.__file__))"],
+        capture_output=True,
+        text=True,
+        cwd=os.path.expanduser("~") if os.path.isdir(os.path.expanduser("~")) else "/",
+    )
+    return Path(out.stdout.strip()).resolve() if out.returncode == 0 and out.stdout.strip() else None
+
+
 def _last_line(text: str) -> str:
     lines = [ln for ln in (text or "").strip().splitlines() if ln.strip()]
     return lines[-1][:300] if lines else ""
@@ -151,6 +166,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--records", type=Path, default=DATA / "generalgen", help="where the records are written")
     ap.add_argument("--held-out", action="store_true", help="allow the held-out seeds 1000-1199: the final evaluation")
     ap.add_argument("--diagnose-arg", action="append", default=[], help="an extra argument for bondgraph diagnose")
+    ap.add_argument(
+        "--any-install", action="store_true", help="measure the installed bondgraph even if not from this checkout"
+    )
     args = ap.parse_args(argv)
     try:
         seeds = parse_seeds(args.seeds)
@@ -162,6 +180,14 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"error: seeds {held[0]}..{held[-1]} are held out until the final evaluation (PROTOCOL.md); "
             "pass --held-out only for it",
+            file=sys.stderr,
+        )
+        return 2
+    installed = _installed_package(_bondgraph())
+    if installed is not None and installed != (ROOT / "bondgraph").resolve() and not args.any_install:
+        print(
+            f"error: the installed bondgraph command runs {installed}, not this checkout's "
+            f"({ROOT / 'bondgraph'}): pip install -e . here, or pass --any-install",
             file=sys.stderr,
         )
         return 2
