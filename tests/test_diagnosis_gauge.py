@@ -88,6 +88,8 @@ def test_the_scale_symmetry_is_found_and_the_nominal_point_kept(case):
 def test_no_symmetry_when_a_mass_is_held():
     """With the mass not calibrated, scaling k and c alone moves the resonance: no symmetry."""
     model = msd()
-    ctx = Context(model, record([1.0], [0.6, 3.0, 2.6e4], "F", "x"), "F", "x", None, None, 0.3, lambda s: None, "linear")
+    ctx = Context(
+        model, record([1.0], [0.6, 3.0, 2.6e4], "F", "x"), "F", "x", None, None, 0.3, lambda s: None, "linear"
+    )
     values = {"k1": 2.6e4, "c1": 3.0}
     assert scale_symmetries(ctx, ["k1", "c1"], values, ctx.ident.predict(values)) == []
