@@ -164,7 +164,8 @@ class RestoringHysteresis(Candidate):
 
     def fit(self, view):
         """Fit k_h and z_max from the two best first-order trials, from the calibration and
-        from the model file's values, keeping the best.
+        from the model file's values, keeping the best (off the Lur'e route, where every
+        evaluation integrates the model, from the best trial and the calibration only).
 
         Parameters
         ----------
@@ -198,15 +199,19 @@ class RestoringHysteresis(Candidate):
                     trials.append((float(np.sum((r - c * q) ** 2)), share, max(c, 1e-3 * stiffness)))
             trials.sort()
         # from the calibration, and from the model file's values: a calibration that took the
-        # loop's loss for viscous damping has moved away from the device
-        starts = [None, view.model_file_values()]
+        # loop's loss for viscous damping has moved away from the device.  Off the Lur'e route
+        # (terms named before are held: every evaluation integrates the model) from the
+        # calibration only, which the chain's earlier steps have refitted, and the best first-order
+        # trial only
         lure = out[0] if out is not None else None
+        fast = lure is not None and not lure.fixed
+        starts = [None, view.model_file_values()] if fast else [None]
         best = None
-        for _, share, kh in trials[:2]:
+        for _, share, kh in trials[: 2 if fast else 1]:
             for start in starts:
                 model = self.build(view, kh, share * peak)
                 predict = None
-                if lure is not None and not lure.fixed:
+                if fast:
 
                     def predict(values, model=model):
                         try:
