@@ -411,18 +411,13 @@ class LawTerm(Candidate):
         if lure is None:
             return ""
         effect = {}
-        for el in coefs:
-            one = [(coefs[el] if e == el else 0.0, r2s[e]) for e in els]
-            none = [(0.0, r2s[e]) for e in els]
-            try:
-                effect[el] = float(
-                    np.std(
-                        lure.simulate(values, lure.drive, self.term, one)
-                        - lure.simulate(values, lure.drive, self.term, none)
-                    )
-                )
-            except NotConverged:
-                return ""
+        try:
+            without = lure.simulate(values, lure.drive, self.term, [(0.0, r2s[e]) for e in els])
+            for el in coefs:
+                one = [(coefs[el] if e == el else 0.0, r2s[e]) for e in els]
+                effect[el] = float(np.std(lure.simulate(values, lure.drive, self.term, one) - without))
+        except NotConverged:
+            return ""
         total = sum(effect.values())
         top = max(effect, key=effect.get)
         return top if total > 0 and effect[top] >= CARRIER_SHARE * total else ""
