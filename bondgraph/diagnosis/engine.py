@@ -948,8 +948,10 @@ def _integrated(ctx: Context, model: Model, state: State) -> float | None:
         ident = ctx.ident.like(model, rtol=1e-7, method="dopri5")
         ident.lti = None
         known = {p.name for p in ident.sim.eqs.params}
-        with config.override({"simulate.max_steps": config.get("diagnosis.check_max_steps")}):
-            raw = ident.predict({k: v for k, v in state.values.items() if k in known and k != SENSOR_GAIN})
+        raw = ident.predict(
+            {k: v for k, v in state.values.items() if k in known and k != SENSOR_GAIN},
+            max_steps=int(config.get("diagnosis.check_max_steps")),
+        )
     except (BondGraphError, SimulationError, ZeroDivisionError):
         return None
     return score(ctx, raw)[3]

@@ -15,7 +15,6 @@ from ..fit.identify import Identification, Spec
 from ..linear.sensitivity import sensitivity
 from ..model.graph import Model
 from ..numerics.steady import record_start, starts_steady
-from ..support import config
 from ..support.errors import BondGraphError
 from .additive import AdditiveDrive, Term
 from .calibration import RESOLVED_COHERENCE, coherence_spectrum, cross_spectra, empirical_frf, param_bounds, score
@@ -883,8 +882,9 @@ class View:
         ident = self._ctx.ident.like(model, rtol=1e-6, method="dopri5")
         ident.lti = None
         known = {p.name for p in ident.sim.eqs.params}
-        with config.override({"simulate.max_steps": int(max_steps)}):
-            return ident.predict({k: v for k, v in values.items() if k in known}, deadline=simulation_deadline())
+        return ident.predict(
+            {k: v for k, v in values.items() if k in known}, deadline=simulation_deadline(), max_steps=int(max_steps)
+        )
 
     def predictor(self, model: Model, drive: np.ndarray | None = None):
         """(values -> raw prediction of ``model`` on every sample, the parameter names it

@@ -401,6 +401,7 @@ class Identification:
         inputs=None,
         drive: np.ndarray | None = None,
         deadline: float | None = None,
+        max_steps: int | None = None,
     ) -> np.ndarray:
         """Model output at every data time, without offset (exact LTI recursion when the model
         is linear and the data uniformly sampled, with the modes faster than ``cut``
@@ -420,6 +421,8 @@ class Identification:
             Other drive samples for the exact route.
         deadline : float, optional
             A ``time.monotonic()`` value past which the integrator stops.
+        max_steps : int, optional
+            Most integrator steps (default: the setting ``simulate.max_steps``).
 
         Returns
         -------
@@ -452,6 +455,7 @@ class Identification:
             rtol=self.rtol,
             method=self.method,
             deadline=deadline,
+            max_steps=max_steps,
         )
         return res.outputs[self.output]
 
