@@ -676,8 +676,9 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     state, cal, _ = calibrate(ctx)
     view = View(ctx, state, cal.free)
     high = 0.3 * view.fs  # the record may be decimated: well inside its band
-    assert high > 20.0 and view.coherence_near(2 * np.pi * 3.1) > 0.99
-    assert view.coherence_near(2 * np.pi * high) < view.resolved_coherence
+    assert high > 20.0 and view.resolution_near(2 * np.pi * 3.1) > (0.99, True)
+    coh, resolved = view.resolution_near(2 * np.pi * high)
+    assert coh < view.resolved_coherence and not resolved
     assert "does not resolve the response near" in mode_implausible(view, 2 * np.pi * high, 0.02)
     assert "resolve" not in mode_implausible(view, 2 * np.pi * 3.1, 0.02)
     # a mode up there is still named when what it explains lies where the record resolves the

@@ -412,6 +412,10 @@ def _delay_identifiable(
 #: a frequency whose output is at most this coherent with the input (magnitude-squared: as much
 #: noise as response) is not resolved by the record
 RESOLVED_COHERENCE = 0.5
+#: ... unless the output's spectral density there is at least this many times the noise floor's
+#: (the H1 coherence also dips at a resonance narrower than the Welch bins, with no noise at all:
+#: a bias of the estimate, not a lack of information)
+RESOLVED_SNR = 100.0
 
 
 def cross_spectra(u: np.ndarray, y: np.ndarray, fs: float):
@@ -459,6 +463,40 @@ def coherence_spectrum(u: np.ndarray, y: np.ndarray, fs: float):
     """
     f, Puu, Pyy, Puy = cross_spectra(u, y, fs)
     return 2 * np.pi * f[1:], _coherence(Puu, Pyy, Puy)[1:]
+
+
+def resolved_spectrum(u: np.ndarray, y: np.ndarray, fs: float, noise_psd: float | None):
+    """(ω rad/s, coherence, resolved) at every frequency above 0: the record resolves the
+    response at a frequency whose coherence is above :data:`RESOLVED_COHERENCE` or whose
+    output density is at least :data:`RESOLVED_SNR` times the noise floor's ``noise_psd``
+    (white-noise equivalent, output units² per Hz; None: by the coherence alone).
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The drive's samples.
+    y : numpy.ndarray
+        The measured output.
+    fs : float
+        Sample rate, Hz.
+    noise_psd : float or None
+        The noise floor's density, output units² per Hz.
+
+    Returns
+    -------
+    omega : numpy.ndarray
+        Angular frequencies, rad/s.
+    coherence : numpy.ndarray
+        Magnitude-squared coherence, between 0 and 1.
+    resolved : numpy.ndarray of bool
+        Whether the record resolves the response there.
+    """
+    f, Puu, Pyy, Puy = cross_spectra(u, y, fs)
+    coh = _coherence(Puu, Pyy, Puy)[1:]
+    resolved = coh >= RESOLVED_COHERENCE
+    if noise_psd:
+        resolved |= Pyy[1:] >= RESOLVED_SNR * noise_psd
+    return 2 * np.pi * f[1:], coh, resolved
 
 
 def _coherence(Puu, Pyy, Puy):

@@ -36,8 +36,8 @@ def lowpass(u: np.ndarray, tau: float, dt: float) -> np.ndarray:
     return signal.lfilter([b1, b0], [1.0, -a], u, zi=zi)[0]
 
 
-def resonator(u: np.ndarray, dt: float, omega: float, zeta: float) -> np.ndarray:
-    """Displacement q of q̈ + 2ζω·q̇ + ω²·q = u, from rest (units of u·s²).
+def resonator(u: np.ndarray, dt: float, omega: float, zeta: float, velocity: bool = False) -> np.ndarray:
+    """Displacement q of q̈ + 2ζω·q̇ + ω²·q = u, from rest (units of u·s²), or (q, q̇).
 
     ``u`` is taken as linear between samples (exact first-order-hold discretisation).
 
@@ -51,16 +51,18 @@ def resonator(u: np.ndarray, dt: float, omega: float, zeta: float) -> np.ndarray
         Natural angular frequency ω, rad/s.
     zeta : float
         Damping ratio ζ (dimensionless).
+    velocity : bool, optional
+        Return the velocity q̇ too (units of u·s), as a second column.
 
     Returns
     -------
     numpy.ndarray
-        q at the samples, units of u·s² (static gain 1/ω²).
+        q at the samples, units of u·s² (static gain 1/ω²); with ``velocity``, an
+        (samples, 2) array of q and q̇.
     """
-    ss = StateSpace(
-        np.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]]),
-        np.array([[0.0], [1.0]]),
-        np.array([[1.0, 0.0]]),
-        np.zeros((1, 1)),
-    )
-    return ss.response(dt, u)[:, 0]
+    A = np.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]])
+    B, D = np.array([[0.0], [1.0]]), np.zeros((1, 1))
+    q = StateSpace(A, B, np.array([[1.0, 0.0]]), D).response(dt, u)[:, 0]
+    if not velocity:
+        return q
+    return np.column_stack([q, StateSpace(A, B, np.array([[0.0, 1.0]]), D).response(dt, u)[:, 0]])

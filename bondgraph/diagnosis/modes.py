@@ -14,9 +14,11 @@ import numpy as np
 import sympy as sp
 from scipy import signal
 
+from ..equations.derivation import derive
 from ..fit.identify import Spec
 from ..model.elements import J0, J1, C, I, R, Se
 from ..model.graph import Quantity
+from ..support.errors import ModelError
 from .candidate import LINEAR, NOT_A_DRIVE, Candidate, Extension
 from .context import welch
 from .filters import resonator
@@ -149,9 +151,9 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
     if not near.any() or P[near].max() < 1e-6 * P.max():
         return f"the drive does not excite {f:.4g} Hz"
-    coh = view.coherence_near(omega)
-    share = None if raw is None or coh >= view.resolved_coherence else view.resolved_share(raw)
-    if coh < view.resolved_coherence and (share is None or share < 0.5):
+    coh, resolved = view.resolution_near(omega)
+    share = None if raw is None or resolved else view.resolved_share(raw)
+    if not resolved and (share is None or share < 0.5):
         return (
             f"the record does not resolve the response near {f:.4g} Hz (coherence {coh:.2g} < "
             f"{view.resolved_coherence:g}: as much noise as response there)"
@@ -222,8 +224,10 @@ def free_prefix(model, base: str) -> str:
 
 
 class ParallelMode(Candidate):
-    """A mode the model lacks: a resonator q̈ + 2ζω·q̇ + ω²·q = g·d driven by the drive d, whose
-    displacement adds to the output (modal superposition).  Its site is the sensor.
+    """A mode the model lacks: a resonator q̈ + 2ζω·q̇ + ω²·q = d driven by the drive d, whose
+    displacement and velocity add to the output as g·q + h·q̇ (modal superposition; the two
+    coefficients are the real and imaginary parts of the pole pair's residue, which a mode
+    seen through the rest of the structure has in general).  Its site is the sensor.
 
     Parameters
     ----------
@@ -272,8 +276,8 @@ class ParallelMode(Candidate):
         return {"frf_mismatch": float(mis[k]) if mis.size else 0.0, "omega_peak": float(w[k]) if w.size else 0.0}
 
     def fit(self, view):
-        """Fit ω, ζ and the gain g of the resonator by variable projection, from the best
-        trials of :func:`resonance_trials`.
+        """Fit ω, ζ and the output coefficients g, h of the resonator by variable projection,
+        from the best trials of :func:`resonance_trials`.
 
         Parameters
         ----------
@@ -283,7 +287,8 @@ class ParallelMode(Candidate):
         Returns
         -------
         Extension
-            The model with the mode (parameters ``hm.omega`` rad/s, ``hm.zeta``, ``hm.g``).
+            The model with the mode (parameters ``hm.omega`` rad/s, ``hm.zeta``, ``hm.g``,
+            ``hm.h``).
         """
         p = free_prefix(view.model, "hm")
         d = np.asarray(view.drive)
@@ -291,19 +296,21 @@ class ParallelMode(Candidate):
         _, om, ze = trials[0]
         starts = [[math.log(t[1]), math.log(t[2])] for t in trials[1:3]]
         fit = view.fit_drive(
-            direct=lambda z: [resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]))],
+            direct=lambda z: list(resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]), velocity=True).T),
             z0=[math.log(om), math.log(ze)],
             z_bounds=[(math.log(om / 2), math.log(om * 2)), (math.log(1e-4), math.log(0.5))],
             z_names=[f"{p}.omega", f"{p}.zeta"],
             starts=starts,
         )
-        om, ze, g = math.exp(fit.z[0]), math.exp(fit.z[1]), float(fit.direct[0])
+        om, ze = math.exp(fit.z[0]), math.exp(fit.z[1])
+        g, h = (float(c) for c in fit.direct)
         model = view.rewrite()
         o = model.parameter(f"{p}.omega", om, "rad/s", "natural frequency of the added mode")
         z = model.parameter(f"{p}.zeta", ze, "1", "damping ratio of the added mode")
-        gg = model.parameter(f"{p}.g", g, "", "input gain of the added mode (unit modal mass)")
+        gg = model.parameter(f"{p}.g", g, "", "output coefficient of the added mode's displacement (unit modal mass)")
+        hh = model.parameter(f"{p}.h", h, "", "output coefficient of the added mode's velocity (unit modal mass)")
         model.add(
-            Se(f"{p}.force", gg * view.drive_expr),
+            Se(f"{p}.force", view.drive_expr),
             J1(f"{p}.mode"),
             I(f"{p}.mass", 1),
             C(f"{p}.spring", 1 / o**2),
@@ -312,8 +319,8 @@ class ParallelMode(Candidate):
         model.bond(f"{p}.force", f"{p}.mode")
         for e in ("mass", "spring", "damper"):
             model.bond(f"{p}.mode", f"{p}.{e}")
-        view.add_to_output(model, Quantity("q", f"{p}.spring"))
-        new = {f"{p}.omega": om, f"{p}.zeta": ze, f"{p}.g": g}
+        view.add_to_output(model, gg * Quantity("q", f"{p}.spring") + hh * Quantity("p", f"{p}.mass"))
+        new = {f"{p}.omega": om, f"{p}.zeta": ze, f"{p}.g": g, f"{p}.h": h}
         return Extension(
             model,
             {**fit.values, **new},
@@ -403,7 +410,9 @@ class OutputMode(Candidate):
         return next(iter(model.with_role(self.role)), None)
 
     def applies(self, view):
-        """True, or why not: no mass, fast dynamics, no drive transform, or a nonlinear model.
+        """True, or why not: no mass, fast dynamics, no drive transform, a nonlinear model, or
+        an output that is not a displacement the plate's can be added to (a voltage read across
+        a capacitor while the split element is an inductor: the units say so).
 
         Parameters
         ----------
@@ -425,7 +434,19 @@ class OutputMode(Candidate):
             return "the mass's dynamics are faster than the data resolve"
         if view.drive is None:
             return NOT_A_DRIVE
-        return unresolved(view) or True if view.exact else "needs a model linear in its states"
+        if not view.exact:
+            return "needs a model linear in its states"
+        return unresolved(view) or self._sensor_on_plate(view) or True
+
+    def _sensor_on_plate(self, view) -> str:
+        """Why the sensor cannot sit on the split mass's plate ('' if it can): the extended
+        model's equations do not derive, its output plus the plate's displacement mixing units."""
+        el = self.element(view.model)
+        try:
+            derive(self.build(view, view.rewrite(), 1.0, 0.1, 0.5, free_prefix(view.model, "om")))
+        except ModelError as exc:
+            return f"the output ({view.output}) is not a displacement of {el}: a plate's cannot be added to it ({type(exc).__name__})"
+        return ""
 
     def build(self, view, model, omega, zeta, mu, p: str = "om"):
         """``model`` (the current model or its linear core) with the mass split.

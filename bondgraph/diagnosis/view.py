@@ -17,7 +17,7 @@ from ..model.graph import Model
 from ..numerics.steady import record_start, starts_steady
 from ..support.errors import BondGraphError
 from .additive import AdditiveDrive, Term
-from .calibration import RESOLVED_COHERENCE, coherence_spectrum, cross_spectra, empirical_frf, param_bounds, score
+from .calibration import RESOLVED_COHERENCE, cross_spectra, empirical_frf, param_bounds, resolved_spectrum, score
 from .context import SENSOR_GAIN, Context, State, drive_held_share
 from .lure import Lure
 from .projection import Param, forward_step, projected_fit, simulation_deadline
@@ -401,11 +401,14 @@ class View:
     #: coherence above which the record resolves the response (the empirical FRF's bins)
     resolved_coherence = RESOLVED_COHERENCE
 
-    def coherence_near(self, omega: float, width: float = 0.03) -> float:
-        """Median magnitude-squared coherence of the measured output with the input within
-        ±``width`` (relative) of ``omega`` (rad/s; the nearest Welch bin if none is that
-        close): above :attr:`resolved_coherence` the record resolves the response there,
-        below it the noise is as large as the response.
+    def resolution_near(self, omega: float, width: float = 0.03) -> tuple[float, bool]:
+        """(median magnitude-squared coherence, whether the record resolves the response) of
+        the measured output with the input within ±``width`` (relative) of ``omega`` (rad/s;
+        the nearest Welch bin if none is that close).  Resolved: the coherence is above
+        :attr:`resolved_coherence`, or the output's spectral density is at least
+        :data:`~bondgraph.diagnosis.calibration.RESOLVED_SNR` times the noise floor's on most
+        of those bins (:func:`~bondgraph.diagnosis.calibration.resolved_spectrum`); below, the
+        noise is as large as the response.
 
         Parameters
         ----------
@@ -416,17 +419,21 @@ class View:
 
         Returns
         -------
-        float
-            The coherence, between 0 and 1.
+        coherence : float
+            The median coherence, between 0 and 1.
+        resolved : bool
+            Whether the record resolves the response there.
         """
-        w, coh = coherence_spectrum(self._ctx.u_recorded, self._ctx.y, self._ctx.fs)
+        w, coh, ok = resolved_spectrum(self._ctx.u_recorded, self._ctx.y, self._ctx.fs, self._ctx.noise_psd)
         near = np.abs(w - omega) <= width * omega
-        return float(np.median(coh[near])) if near.any() else float(coh[int(np.argmin(np.abs(w - omega)))])
+        if not near.any():
+            near = np.arange(w.size) == int(np.argmin(np.abs(w - omega)))
+        return float(np.median(coh[near])), bool(np.mean(ok[near]) > 0.5)
 
     def resolved_share(self, raw: np.ndarray) -> float:
         """The share (0-1) of the residual power a raw prediction removes (its sensor gain and
-        offset solved) that lies where the record resolves the response (coherence of output
-        and drive at least :attr:`resolved_coherence`); 0 when it removes none.
+        offset solved) that lies where the record resolves the response (:meth:`resolution_near`'s
+        rule, bin by bin); 0 when it removes none.
 
         Parameters
         ----------
@@ -440,11 +447,11 @@ class View:
         """
         g, b = self.score(raw)[:2]
         u, y, fs = self._ctx.u_recorded, self._ctx.y, self._ctx.fs
-        _, coh = coherence_spectrum(u, y, fs)
+        ok = resolved_spectrum(u, y, fs, self._ctx.noise_psd)[2]
         before = cross_spectra(u, self.residual, fs)[2][1:]
         after = cross_spectra(u, y - (g * np.asarray(raw) + b), fs)[2][1:]
         drop = np.maximum(before - after, 0.0)
-        return float(drop[coh >= self.resolved_coherence].sum() / drop.sum()) if drop.sum() > 0 else 0.0
+        return float(drop[ok].sum() / drop.sum()) if drop.sum() > 0 else 0.0
 
     def first_order_share(self, column: np.ndarray) -> float:
         """The share (0-1) of the residual's energy on the fit part that a column (an
