@@ -88,3 +88,32 @@ def test_a_term_named_after_the_split_is_held_on_the_split_model():
     integrated = view.simulate(state.model, dict(view.values))
     assert np.max(np.abs(stepped - integrated)) < 1e-3 * np.ptp(integrated)
     assert np.max(np.abs(stepped - state.raw)) < 1e-3 * np.ptp(state.raw)
+
+
+def test_a_sharp_resonance_is_resolved_by_its_signal_to_noise_ratio():
+    """Force steps into a structure with a lightly damped mode (ζ = 0.004 at 56 Hz, narrower
+    than the 3 Hz bins of the spectrum): the coherence of output and drive dips below 0.5 at
+    the mode even without any noise (a bias of the H1 estimate), while the output's density
+    there is orders of magnitude above the noise floor's.  The record resolves the response
+    there; with noise as large as the response it does not."""
+    from scipy import signal
+
+    from bondgraph.diagnosis.calibration import RESOLVED_COHERENCE, resolved_spectrum
+
+    fs, n = 1666.67, 5311
+    t = np.arange(n) / fs
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-1, 1, 9), n // 9 + 1)[:n]
+    w1, w2 = 2 * np.pi * 27.0, 2 * np.pi * 56.0
+    y = signal.lsim(signal.lti([1.0], [1, 2 * 0.05 * w1, w1**2]), u, t)[1]
+    y = y + 0.3 * signal.lsim(signal.lti([1.0], [1, 2 * 0.004 * w2, w2**2]), u, t)[1]
+    near = lambda w: np.abs(w - w2) < 0.03 * w2  # noqa: E731
+    w, coh, ok = resolved_spectrum(u, y, fs, 1e-30)
+    assert np.all(coh[near(w)] < RESOLVED_COHERENCE) and np.all(ok[near(w)])
+    noise = 1e-4 * np.std(y)
+    w, coh, ok = resolved_spectrum(u, y + rng.normal(0, noise, n), fs, noise**2 / (fs / 2))
+    assert np.all(coh[near(w)] < RESOLVED_COHERENCE) and np.all(ok[near(w)])
+    assert not np.any(resolved_spectrum(u, y + rng.normal(0, noise, n), fs, None)[2][near(w)])
+    loud = 3 * np.std(y)
+    w, coh, ok = resolved_spectrum(u, y + rng.normal(0, loud, n), fs, loud**2 / (fs / 2))
+    assert not np.any(ok[near(w)])
