@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from bondgraph.diagnosis.calibration import coherence_spectrum, empirical_frf
+from bondgraph.diagnosis.calibration import empirical_frf, resolved_spectrum
 from bondgraph.diagnosis.context import drive_band, welch, welch_length
 from bondgraph.diagnosis.filters import lowpass
 
@@ -51,7 +51,7 @@ def test_a_sweep_is_resolved_up_to_its_last_frequencies():
     f, coh_single = signal.coherence(u, y, FS, nperseg=welch_length(N, 8, 15), detrend="linear")
     near = np.abs(f - f_top) <= 0.03 * f_top
     assert np.median(coh_single[near]) < 0.5  # one segmentation: noise there
-    w, coh = coherence_spectrum(u, y, FS)
+    w, coh, _ = resolved_spectrum(u, y, FS, None)
     near = np.abs(w - 2 * np.pi * f_top) <= 0.03 * 2 * np.pi * f_top
     assert np.median(coh[near]) > 0.9
     w, H, _ = empirical_frf(u, y, FS)

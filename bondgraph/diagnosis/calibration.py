@@ -441,30 +441,6 @@ def cross_spectra(u: np.ndarray, y: np.ndarray, fs: float):
     return f, Puu, welch(y, fs, nper)[1], welch(u, fs, nper, y)[1]
 
 
-def coherence_spectrum(u: np.ndarray, y: np.ndarray, fs: float):
-    """(ω rad/s, magnitude-squared coherence of output and input) from :func:`cross_spectra`, at
-    every frequency above 0.
-
-    Parameters
-    ----------
-    u : numpy.ndarray
-        The drive's samples.
-    y : numpy.ndarray
-        The measured output.
-    fs : float
-        Sample rate, Hz.
-
-    Returns
-    -------
-    omega : numpy.ndarray
-        Angular frequencies, rad/s.
-    coherence : numpy.ndarray
-        Between 0 and 1.
-    """
-    f, Puu, Pyy, Puy = cross_spectra(u, y, fs)
-    return 2 * np.pi * f[1:], _coherence(Puu, Pyy, Puy)[1:]
-
-
 def resolved_spectrum(u: np.ndarray, y: np.ndarray, fs: float, noise_psd: float | None):
     """(ω rad/s, coherence, resolved) at every frequency above 0: the record resolves the
     response at a frequency whose coherence is above :data:`RESOLVED_COHERENCE` or whose
