@@ -3,11 +3,11 @@ extend the model with it and try the others again on the extended model, until n
 
 from __future__ import annotations
 
-import functools
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Generator, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -650,71 +650,90 @@ def diagnose(
         A bad input or output name, or a model that cannot be derived or simulated.
     """
     drift = bool(config.get("diagnosis.drift")) if drift is None else bool(drift)
-
-    def run(reading: str, drift: bool, chain: bool = chain, decide=None):
-        return _diagnose(
-            model,
-            data,
-            candidates,
-            calibrate_first,
-            input,
-            output,
-            data_input,
-            data_output,
-            validation,
-            workers,
-            chain,
-            progress,
-            source,
-            equations,
-            tolerance,
-            reading,
-            drift,
-            decide,
-            started,
-        )
-
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     started = time.time()
-    chosen = {}
+    args = (model, data, candidates, calibrate_first, input, output, data_input, data_output, validation, workers)
+    rest = (chain, progress, source, equations, tolerance)
 
-    def decide(gap: float, floor: float, step: tuple[str, str, float]) -> bool:
-        """After the band-limited reading's first step: whether its chain goes on.  When the two
-        readings change the calibrated output beyond the noise, the linear reading is tried
-        too, and its chain goes on instead when its first step is the better one."""
-        if gap <= config.get("diagnosis.reading_gap") * floor:
-            return True
-        say(
-            f"the two readings of the drive between its samples change the calibrated model's output by "
-            f"{gap / floor:.2g}× the noise floor: its first step with the drive read as linear between samples"
-        )
-
-        def linear_goes_on(_gap, _floor, linear_step) -> bool:
-            chosen["keep"], chosen["why"] = _better_reading(step, linear_step)
-            return chosen["keep"] == 1
-
-        chosen["probe"] = _with_drift(functools.partial(run, decide=linear_goes_on), "linear", drift)
-        return chosen["keep"] == 0
+    def start(reading: str) -> tuple[Iterator, FirstStep]:
+        """A hypothesis' chain run to its first step; when a straight drift explains that step
+        as well as its cause, the same reading with the drift solved instead."""
+        run = _chain(*args, *rest, reading, drift, started)
+        first = next(run)
+        if first.drift:
+            run.close()
+            run = _chain(*args, *rest, reading, True, started)
+            first = dataclasses.replace(next(run), notes=[first.drift])
+        return run, first
 
     with single_threaded_blas():
-        first = _with_drift(functools.partial(run, decide=decide), "band-limited", drift)
-        if not chosen:
-            return first
-        rep = first if chosen["keep"] == 0 else chosen["probe"]
-        rep.notes.append(f"drive read as {rep.data['drive_reading']} between its samples: {chosen['why']}")
-        rep.seconds = time.time() - started
-        return rep
+        # the hypotheses in turn: the drive read as band-limited between its samples; when the
+        # two readings change the calibrated output beyond the noise, read as linear too, and
+        # the chain goes on under the reading whose first step is the better one
+        run, first = start("band-limited")
+        notes = list(first.notes)
+        if first.gap > config.get("diagnosis.reading_gap") * first.floor:
+            say(
+                f"the two readings of the drive between its samples change the calibrated model's output by "
+                f"{first.gap / first.floor:.2g}× the noise floor: its first step with the drive read as linear "
+                f"between samples"
+            )
+            other, second = start("linear")
+            keep, why = _better_reading(first.key, second.key)
+            if keep == 1:
+                run, other, first = other, run, second
+            other.close()
+            notes = list(first.notes) + [f"drive read as {first.reading} between its samples: {why}"]
+        report = _finish(run)
+        report.notes += notes
+        report.seconds = time.time() - started
+        return report
 
 
-def _with_drift(run, reading: str, drift: bool) -> Report:
-    """``run(reading, drift)``; when it answers that a sensor drift explains the record as well
-    as its first cause (a note), run again with the drift solved (the second hypothesis)."""
-    out = run(reading, drift)
-    if isinstance(out, str):
-        rep = run(reading, True)
-        rep.notes.append(out)
-        return rep
-    return out
+@dataclass
+class FirstStep:
+    """What a hypothesis' chain says after its first step, for :func:`diagnose` to choose on.
+
+    Attributes
+    ----------
+    reading : str
+        How the drive is read between its samples ("band-limited" or "linear").
+    cause : str
+        The cause the first step names, or "none".
+    rms : float
+        The validation RMS after the first step (output units).
+    gap : float
+        RMS change of the calibrated model's output between the two readings (output units).
+    floor : float
+        The noise floor (RMS, output units).
+    drift : str
+        When a straight drift explains the record as well as the first step's winner: the note
+        to add (the hypothesis is then run with the drift solved), else "".
+    notes : list of str
+        Notes the hypothesis adds to its report when it is the one chosen.
+    """
+
+    reading: str
+    cause: str
+    rms: float
+    gap: float
+    floor: float
+    drift: str = ""
+    notes: list = dataclasses.field(default_factory=list)
+
+    @property
+    def key(self) -> tuple[str, str, float]:
+        """(reading, cause, validation RMS), as :func:`_better_reading` compares them."""
+        return self.reading, self.cause, self.rms
+
+
+def _finish(run: Iterator) -> Report:
+    """Run a hypothesis' chain past its first step to the end: its report."""
+    try:
+        run.send(True)
+    except StopIteration as stop:
+        return stop.value
+    raise RuntimeError("a diagnosis chain yields once, after its first step")
 
 
 def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float]) -> tuple[int, str]:
@@ -750,7 +769,7 @@ def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float]) -> tup
     )
 
 
-def _diagnose(
+def _chain(
     model,
     data,
     candidates,
@@ -768,15 +787,14 @@ def _diagnose(
     tolerance,
     reading,
     drift: bool = False,
-    decide=None,
     since: float | None = None,
-) -> Report | str:
-    """The diagnosis (see :func:`diagnose`) with the drive read as ``reading`` between its
-    samples, or the note to add when a sensor drift explains the record as well as the first
-    cause found (the caller then runs it with the drift solved).  ``decide(gap, floor,
-    first_step)``, when given, is asked after the first step whether the chain goes on
-    (``first_step``: the reading, the cause named or "none", the validation RMS after it).
-    ``since``: when the whole diagnosis started (``time.time()``), for ``diagnosis.chain_seconds``."""
+) -> Generator[FirstStep, bool, Report | None]:
+    """One hypothesis of the diagnosis (see :func:`diagnose`): the drive read as ``reading``
+    between its samples, with a linear sensor drift solved by the calibration or not.  A
+    generator: it yields a :class:`FirstStep` after the first step and, sent True, goes on to
+    the end and returns the report.  A first step with ``drift`` set ends it: the same
+    hypothesis with the drift solved replaces it.  ``since``: when the whole diagnosis started
+    (``time.time()``), for ``diagnosis.chain_seconds``."""
     started = time.time()
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     tick = getattr(progress, "advance", None)
@@ -791,6 +809,7 @@ def _diagnose(
     step_predictions: list[np.ndarray] = []  # the model's prediction after each named step
     folds: list[Context] = []  # the second fold's context, made when first needed
     baseline, from_plausible = state, False
+    asked = False  # whether the first step was put to the caller
     with Pool(run_candidate, ctx, cal.free, cands, workers) as pool:
         for k in range(int(config.get("diagnosis.max_chain")) if chain else 1):
             spent = time.time() - (started if since is None else since)
@@ -863,20 +882,26 @@ def _diagnose(
                 step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
             if k == 0 and winner is not None and not drift and drift_explains(ctx, state, winner.result.rms_validation):
                 say("a linear drift explains the record as well as the best candidate: solved as a sensor drift")
-                return (
+                note = (
                     f"a linear drift of the output explained the record as well as {winner.result.cause} "
                     f"(gain {winner.result.gain:.3g}): solved with the calibration as a sensor drift"
                 )
+                yield FirstStep(ctx.reading, step.cause, step.rms, gap, floor, drift=note)
+                return None
             steps.append(step)
             if k == 0 and winner is not None and winner.result.against == "plausible":
                 baseline, from_plausible = pstate, True  # a linear structural cause fitted on it
             say(f"step {k + 1}: {step.why}")
-            if k == 0 and decide is not None and not decide(gap, floor, (ctx.reading, step.cause, step.rms)):
-                break
+            if k == 0:
+                asked = True
+                if not (yield FirstStep(ctx.reading, step.cause, step.rms, gap, floor)):
+                    return None
             if winner is None:
                 break
             state = advance(ctx, state, winner, view)
             step_predictions.append(state.prediction)
+    if not asked and not (yield FirstStep(ctx.reading, "none", cal.rms_validation, gap, floor)):
+        return None  # no candidate to try: the first step is the calibration's
     final_prediction = state.prediction
     if steps and not any(s.cause != "none" for s in steps):
         drift = drift_step(ctx, state, cal.drift, floor)
