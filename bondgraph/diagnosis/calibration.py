@@ -469,19 +469,25 @@ def resolved_spectrum(u: np.ndarray, y: np.ndarray, fs: float, noise_psd: float 
     """
     f, Puu, Pyy, Puy = cross_spectra(u, y, fs)
     coh = _coherence(Puu, Pyy, Puy)[1:]
-    resolved = coh >= RESOLVED_COHERENCE
-    if noise_psd:
-        resolved |= Pyy[1:] >= RESOLVED_SNR * noise_psd
-    return 2 * np.pi * f[1:], coh, resolved
+    return 2 * np.pi * f[1:], coh, _resolved(coh, Pyy[1:], noise_psd)
+
+
+def _resolved(coh: np.ndarray, Pyy: np.ndarray, noise_psd: float | None, strict: bool = False) -> np.ndarray:
+    """Whether each bin is resolved: coherence at (``strict``: above) :data:`RESOLVED_COHERENCE`,
+    or output density at least :data:`RESOLVED_SNR` times ``noise_psd``."""
+    resolved = coh > RESOLVED_COHERENCE if strict else coh >= RESOLVED_COHERENCE
+    return resolved | (Pyy >= RESOLVED_SNR * noise_psd) if noise_psd else resolved
 
 
 def _coherence(Puu, Pyy, Puy):
     return np.abs(Puy) ** 2 / np.maximum(Puu * Pyy, 1e-300)
 
 
-def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
+def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float, noise_psd: float | None = None):
     """(ω rad/s, H, coherence) of output/input from :func:`cross_spectra`, at the frequencies the
-    record resolves (coherence above :data:`RESOLVED_COHERENCE`).
+    record resolves (coherence above :data:`RESOLVED_COHERENCE`, or with ``noise_psd`` the
+    output's density :data:`RESOLVED_SNR` times the noise floor's, as :func:`resolved_spectrum`
+    says) and the drive excites.
 
     Parameters
     ----------
@@ -491,6 +497,8 @@ def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
         The measured output.
     fs : float
         Sample rate, Hz.
+    noise_psd : float, optional
+        The noise floor's density, output units² per Hz (None: by the coherence alone).
 
     Returns
     -------
@@ -503,7 +511,7 @@ def empirical_frf(u: np.ndarray, y: np.ndarray, fs: float):
     """
     f, Puu, Pyy, Puy = cross_spectra(u, y, fs)
     coh = _coherence(Puu, Pyy, Puy)[1:]
-    keep = (Puu[1:] > 1e-8 * Puu.max()) & (coh > RESOLVED_COHERENCE)
+    keep = (Puu[1:] > 1e-8 * Puu.max()) & _resolved(coh, Pyy[1:], noise_psd, strict=True)
     return 2 * np.pi * f[1:][keep], (Puy[1:] / np.maximum(Puu[1:], 1e-300))[keep], coh[keep]
 
 

@@ -31,7 +31,7 @@ from .candidate import Candidate, Extension
 from .laws import LawTerm, _peak
 from .lure import NotConverged, _bouc_wen_increment
 from .rewrite import modify_law, slope
-from .sites import Site, generic_sites
+from .sites import Site, each_element, generic_sites
 
 
 @njit(cache=True)
@@ -323,15 +323,9 @@ class Backbone(LawTerm):
         return abs(slope(view.model, el, view.values)), RestoringHysteresis.levels[1] * _peak(x)
 
 
-#: a site of at most this many elements (springs sharing a role) gets one candidate per
-#: element: a loop is in one spring's law, not in all of them alike
-PER_ELEMENT = 4
-
-
 def restoring_kinds(model) -> list[Candidate]:
     """A hysteretic restoring force at every generic C site of ``model``: at each element of
-    a site of at most :data:`PER_ELEMENT` elements (named by the element), else at the site's
-    first element.
+    a site shared by a few (:func:`~bondgraph.diagnosis.sites.each_element`).
 
     Parameters
     ----------
@@ -343,10 +337,4 @@ def restoring_kinds(model) -> list[Candidate]:
     list of Candidate
         The :class:`RestoringHysteresis` candidates.
     """
-    out = []
-    for site in generic_sites(model, "C"):
-        if 1 < len(site.elements) <= PER_ELEMENT:
-            out += [RestoringHysteresis(Site(el, "C", (el,), site.role)) for el in site.elements]
-        else:
-            out.append(RestoringHysteresis(site))
-    return out
+    return [RestoringHysteresis(s) for site in generic_sites(model, "C") for s in each_element(site)]

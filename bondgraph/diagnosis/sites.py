@@ -131,3 +131,28 @@ def generic_sites(model: Model, kind: str) -> list[Site]:
         The sites, in the order their first element was added.
     """
     return [s for s in element_sites(model, (kind,)) if s.role in GENERIC_ROLES]
+
+
+#: a site of at most this many elements (springs or masses sharing a role) gets one candidate
+#: per element for effects that sit in one element (a loop in one spring's law, a mode in one
+#: mass), not in all of them alike
+PER_ELEMENT = 4
+
+
+def each_element(site: Site) -> list[Site]:
+    """One site per element of ``site`` (named by the element) when it shares a role among at
+    most :data:`PER_ELEMENT` elements, else ``site`` itself (its first element stands for it).
+
+    Parameters
+    ----------
+    site : Site
+        A site of one or more elements.
+
+    Returns
+    -------
+    list of Site
+        The sites to try an effect of one element at.
+    """
+    if 1 < len(site.elements) <= PER_ELEMENT:
+        return [Site(el, site.kind, (el,), site.role) for el in site.elements]
+    return [site]

@@ -385,7 +385,8 @@ class View:
         )
 
     def empirical_frf(self):
-        """(ω rad/s, H, coherence) of the measured output over the input (Welch).
+        """(ω rad/s, H, coherence) of the measured output over the input (Welch), at the bins the
+        record resolves (:meth:`resolution_near`'s rule).
 
         Returns
         -------
@@ -396,7 +397,7 @@ class View:
         coherence : numpy.ndarray
             Magnitude-squared coherence, between 0 and 1.
         """
-        return empirical_frf(self._ctx.u_recorded, self._ctx.y, self._ctx.fs)
+        return empirical_frf(self._ctx.u_recorded, self._ctx.y, self._ctx.fs, self._ctx.noise_psd)
 
     #: coherence above which the record resolves the response (the empirical FRF's bins)
     resolved_coherence = RESOLVED_COHERENCE
