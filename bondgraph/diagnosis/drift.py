@@ -9,10 +9,13 @@ fit part at both sides of a validation block and judged on what it predicts ther
 that only follows the fit part's detail predicts nothing between them).  Drifts that bend
 more often than that are not told from the dynamics and are not sought.
 
-Two rules use it: ``drift-when-nothing`` (:func:`drift_step`) names a drift when nothing else
-explains the record, and the first step asks whether a straight line explains the record as
-well as the best candidate (:func:`drift_explains`; the diagnosis then restarts with the
-drift solved).
+Three rules use it: ``drift-when-nothing`` (:func:`drift_step`) names a drift when nothing else
+explains the record; ``effect-or-drift`` sets a step's winner aside when its effect is such a
+curve and the drive is not (:func:`smooth_share` of the effect at least :data:`SMOOTH`, of the
+drive below :data:`SLOW_DRIVE`: the record cannot tell the effect from a drift, which needs no
+drive, so the drift is tried when nothing else is named); and the first step asks
+whether a straight line explains the record as well as the best candidate
+(:func:`drift_explains`; the diagnosis then restarts with the drift solved).
 """
 
 from __future__ import annotations
@@ -32,6 +35,14 @@ PERIODS = 10.0
 BLOCKS = 3.0
 #: at most this many spline pieces over the record
 MAX_PIECES = 16
+#: an effect whose contribution to the output the drift curve reproduces to this share of its
+#: variance on the validation blocks, under a drive the curve does not follow, is not told from
+#: a drift by the record (on the blind generator's creep records, which follow their drive's
+#: bursts and steps, the share is at most 0.94)
+SMOOTH = 0.98
+#: a drive the drift curve reproduces to this share of its variance is slow enough for an
+#: effect that follows it to be a slow curve too: the rule above does not apply
+SLOW_DRIVE = 0.5
 
 
 def drift_basis(ctx: Context) -> np.ndarray:
@@ -56,6 +67,29 @@ def drift_basis(ctx: Context) -> np.ndarray:
     knots = np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, pieces + 1), [1.0] * 3])
     x = np.clip((t - t[0]) / span, 0.0, 1.0)
     return BSpline.design_matrix(x, knots, 3).toarray()
+
+
+def smooth_share(ctx: Context, effect: np.ndarray) -> float:
+    """The share (R², at most 1) of an effect's variance on the validation blocks that the drift
+    curve (:func:`drift_basis`) fitted to it on the fit part reproduces: 1 for an effect that is
+    a slow curve in time whatever the drive does, low for one that follows the drive.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    effect : numpy.ndarray
+        What the effect adds to the output on every sample (output units).
+
+    Returns
+    -------
+    float
+        The share; 0 for an effect without variance.
+    """
+    idx, val = ctx.ident.fit_idx, ctx.ident.val_mask
+    left = effect - regress(drift_basis(ctx), effect, idx)
+    spread = float(np.sum((effect[val] - effect[val].mean()) ** 2))
+    return 1.0 - float(np.sum(left[val] ** 2)) / spread if spread > 0 else 0.0
 
 
 def drift_step(ctx: Context, state: State, solved: float | None, floor: float) -> tuple[Step, np.ndarray] | None:

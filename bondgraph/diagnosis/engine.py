@@ -22,7 +22,7 @@ from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State, residual_floor
 from .decision import Comparison, compare, judge, reference_prediction, regress
-from .drift import drift_explains, drift_step
+from .drift import SLOW_DRIVE, SMOOTH, drift_explains, drift_step, smooth_share
 from .laws import law_kinds
 from .modes import mode_kinds
 from .pool import Pool, single_threaded_blas
@@ -810,6 +810,7 @@ def _chain(
     folds: list[Context] = []  # the second fold's context, made when first needed
     baseline, from_plausible = state, False
     asked = False  # whether the first step was put to the caller
+    slow_drive = smooth_share(ctx, np.asarray(ctx.u, float)) >= SLOW_DRIVE  # see rule 'effect-or-drift'
     with Pool(run_candidate, ctx, cal.free, cands, workers) as pool:
         for k in range(int(config.get("diagnosis.max_chain")) if chain else 1):
             spent = time.time() - (started if since is None else since)
@@ -880,6 +881,26 @@ def _chain(
                 of = {id(outcomes[i]): cands[i] for i in pending}
                 efforts = {id(outcomes[i]): effort for i in redo}
                 step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
+            asides = []  # winners set aside by rule 'effect-or-drift', listed with the step
+            while winner is not None and not slow_drive:
+                g, b = score(ctx, winner.raw)[:2]
+                share = smooth_share(ctx, g * winner.raw + b - state.prediction)
+                if share < SMOOTH:
+                    break
+                note = (
+                    f"step {k + 1}: {winner.result.cause} ({winner.result.label}, gain {winner.result.gain:.3g}) set "
+                    f"aside (rule 'effect-or-drift'): {share:.1%} of its effect is a slow curve in time that the drive "
+                    f"does not follow, which the record cannot tell from a drift of the output"
+                )
+                say(note)
+                ctx.notes.append(note)
+                aside = winner.result
+                ordered = [oc for oc in ordered if oc is not winner]
+                step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
+                aside.passed, aside.rule = False, "effect-or-drift"
+                aside.verdict = f"{share:.0%} of its effect is a slow curve in time: not told from a drift"
+                asides.append(aside)
+            step.candidates += asides
             if k == 0 and winner is not None and not drift and drift_explains(ctx, state, winner.result.rms_validation):
                 say("a linear drift explains the record as well as the best candidate: solved as a sensor drift")
                 note = (
