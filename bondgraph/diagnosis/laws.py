@@ -356,7 +356,7 @@ class LawTerm(Candidate):
         best = None
         # from the calibration; when it left a parameter on its search bound, from the model
         # file's values too (the calibration may have bent the linear device to mimic this term)
-        for start in [None] + ([view.model_file_values()] if view.strained() or view.implausible() else []):
+        for start in view.fit_starts():
             worse = 0
             for f in self.grid:
                 try:

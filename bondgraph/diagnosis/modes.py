@@ -296,11 +296,10 @@ class ParallelMode(Candidate):
         trials = resonance_trials(view)
         _, om, ze = trials[0]
         starts = [[math.log(t[1]), math.log(t[2])] for t in trials[1:3]]
-        fit = None
-        # from the calibration; when it went outside the tolerance or to a search bound, from the
-        # model file's values too (a device bent to mimic the missing mode keeps the added one
-        # from fitting: the refit only moves it locally)
-        for start in [None] + ([view.model_file_values()] if view.strained() or view.implausible() else []):
+        fit, best = None, np.inf
+        # a device bent to mimic the missing mode keeps the added one from fitting (the refit
+        # only moves it locally): from the model file's values too, then
+        for start in view.fit_starts():
             trial = view.fit_drive(
                 direct=lambda z: list(resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]), velocity=True).T),
                 z0=[math.log(om), math.log(ze)],
@@ -309,8 +308,9 @@ class ParallelMode(Candidate):
                 starts=starts,
                 start=start,
             )
-            if fit is None or view.score(trial.prediction)[2] < view.score(fit.prediction)[2]:
-                fit = trial
+            rms_fit = view.score(trial.prediction)[2]
+            if fit is None or rms_fit < best:
+                fit, best = trial, rms_fit
         om, ze = math.exp(fit.z[0]), math.exp(fit.z[1])
         g, h = (float(c) for c in fit.direct)
         model = view.rewrite()
@@ -421,9 +421,7 @@ class OutputMode(Candidate):
         return next(iter(model.with_role(self.role)), None)
 
     def applies(self, view):
-        """True, or why not: no mass, fast dynamics, no drive transform, a nonlinear model, or
-        an output that is not a displacement the plate's can be added to (a voltage read across
-        a capacitor while the split element is an inductor: the units say so).
+        """True, or why not: no mass, fast dynamics, no drive transform, or a nonlinear model.
 
         Parameters
         ----------

@@ -573,6 +573,18 @@ class View:
             and not plausible[n][0] * (1 - 1e-9) <= abs(self.values[n]) <= plausible[n][1] * (1 + 1e-9)
         ]
 
+    def fit_starts(self) -> list[dict[str, float] | None]:
+        """Where a fit inside the dynamics starts its linear parameters: the calibration (None)
+        and, when the calibration ended on a search bound (:meth:`strained`) or outside the
+        plausible device (:meth:`implausible`), the model file's values too.
+
+        Returns
+        -------
+        list of dict or None
+            ``[None]`` or ``[None, model_file_values()]``.
+        """
+        return [None] + ([self.model_file_values()] if self.strained() or self.implausible() else [])
+
     def model_file_values(self) -> dict[str, float]:
         """The model file's values of the calibrated linear parameters.
 
