@@ -70,19 +70,22 @@ def test_operator_example_lags_by_its_half_width():
     assert "gap.r" in g.parameters
 
 
-def bilinear_spring_record(seed: int = 3) -> Dataset:
-    """A 1 kg mass on a spring of 1.0e4 N/m in compression and 1.6e4 N/m in extension, with a
-    12 N·s/m damper, driven by a two-tone force below its resonance; integrated by scipy
-    (Radau, rtol 1e-9), output noise 0.5 % of its spread."""
+def end_stop_record(seed: int = 3) -> Dataset:
+    """A 1 kg mass on a spring of 1.2e4 N/m and a 12 N·s/m damper, the spring meeting stops at
+    60 % of its peak travel (a cubic contact force k_s·(|q| − g)³, 0.3× the spring's force at
+    the peak), driven by a two-tone force below its resonance; integrated by scipy (Radau,
+    rtol 1e-9), output noise 0.5 % of its spread."""
     from scipy.integrate import solve_ivp
 
     t = np.arange(0.0, 4.0, 1e-3)
     u = 40.0 * np.sin(2 * np.pi * 3.0 * t) + 25.0 * np.sin(2 * np.pi * 7.3 * t + 1.0)
+    peak = 65.0 / 1.2e4
+    gap, ks = 0.6 * peak, 0.5e4 / (0.3 * peak) ** 2
 
     def rhs(tt, s):
         q, v = s
-        k = 1.6e4 if q > 0 else 1.0e4
-        return [v, np.interp(tt, t, u) - k * q - 12.0 * v]
+        contact = ks * max(abs(q) - gap, 0.0) ** 3 * np.sign(q)
+        return [v, np.interp(tt, t, u) - 1.2e4 * q - contact - 12.0 * v]
 
     sol = solve_ivp(rhs, (t[0], t[-1]), [0.0, 0.0], t_eval=t, method="Radau", rtol=1e-9, atol=1e-14, max_step=1e-3)
     y = sol.y[0] + 0.005 * np.std(sol.y[0]) * np.random.default_rng(seed).standard_normal(t.size)
@@ -90,13 +93,13 @@ def bilinear_spring_record(seed: int = 3) -> Dataset:
 
 
 def test_effect_kind_example_is_named_at_its_spring():
-    """The docs' own law term, beside the built-in symmetric kinds of the same spring, names a
-    bilinear spring's asymmetry (a truth of another form: two slopes, no quadratic)."""
+    """The docs' own law term, beside the built-in kinds of the same spring, names end stops
+    (a truth of another form: a cubic contact beyond a gap, no quintic)."""
     from bondgraph.diagnosis import diagnose
-    from bondgraph.diagnosis.laws import Hardening, Softening
+    from bondgraph.diagnosis.laws import Clearance, Hardening, Softening
     from bondgraph.diagnosis.sites import element_sites
 
-    mod = module_of(next(b for b in python_blocks("extending.md") if "class QuadraticStiffness" in b), "extending_law")
+    mod = module_of(next(b for b in python_blocks("extending.md") if "class EndStops" in b), "extending_law")
     g = bg.Model("mass on a spring")
     F = g.input("F", "N")
     k = g.parameter("k", 1.25e4, "N/m")
@@ -107,10 +110,10 @@ def test_effect_kind_example_is_named_at_its_spring():
         g.bond("v", e)
     g.output("x", g.displacement("spring"), "m")
     (site,) = element_sites(g, ("C",))
-    kinds = [Softening(site), Hardening(site), mod.QuadraticStiffness(site)]
-    rep = diagnose(g, bilinear_spring_record(), candidates=kinds)
-    assert rep.causes[:1] == ["asymmetric-stiffness"], rep.text()
-    assert rep.steps[0].site == "spring"
+    kinds = [Softening(site), Hardening(site), Clearance(site), mod.EndStops(site)]
+    rep = diagnose(g, end_stop_record(), candidates=kinds)
+    assert rep.causes[:1] == ["end-stops"], rep.text()
+    assert rep.steps[0].site == "spring" and rep.steps[0].gain > 2.5
 
 
 def test_data_check_example_flags_micrometres():

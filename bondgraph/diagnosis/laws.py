@@ -1,7 +1,8 @@
 """Effects in an element's own law: a term added to the law of the C or R elements at a site.
 
 Each kind adds law(x) + term(c, r², x, a) to every element of its site, one coefficient c per
-element, where x is the element's own variable (the displacement q of a C, the flow f of an R)
+element (a pair (c, d) for a kind with an even part: d, of free sign, weighs an even term, the
+law's asymmetry), where x is the element's own variable (the displacement q of a C, the flow f of an R)
 and a, when the kind has a *partner*, the displacement of another element or the drive.  The
 term is written *centred* where it can be: r² is chosen from the current model's amplitude at
 the element so that the law's describing-function slope at the data's amplitude stays the
@@ -19,7 +20,8 @@ the residual on that filtered regressor says, in the time of two simulations, ho
 kind could explain there; the engine fully fits only the kinds and sites that explain most.
 
 The kinds (:func:`generic_kinds`): at a C site :class:`Softening`, :class:`Hardening` (a cubic
-term of either sign) and :class:`Clearance` (a gap: little stiffness near the rest position);
+term of either sign, each with a quadratic term of free sign for a spring stiffer one way than
+the other) and :class:`Clearance` (a gap: little stiffness near the rest position);
 at an R site :class:`NonlinearDamping` (velocity-cubic, or Stanton: with the displacement of a
 stiffness partner) and :class:`Friction` (Coulomb, smoothed).
 """
@@ -84,9 +86,12 @@ class LawTerm(Candidate):
     calibration), from the calibrated values and, when the calibration left one on its
     search bound or outside the plausible device's tolerance
     (:meth:`~bondgraph.diagnosis.view.View.strained`,
-    :meth:`~bondgraph.diagnosis.view.View.implausible`), from the model file's values too; then fitted with the calibration from the best point.  An element whose
-    coefficient ends on its upper bound (past it the law is no longer plausible) is held at 0
-    and the others are fitted again without it, unless no element would be left.
+    :meth:`~bondgraph.diagnosis.view.View.implausible`), from the model file's values too;
+    then fitted with the calibration from the best point.  An element whose coefficient ends
+    on its upper bound (past it the law is no longer plausible) is held at 0 and the others are
+    fitted again without it, unless no element would be left.  Only the plausibility ends
+    count as search bounds: a coefficient at or near 0 (the optimiser flags values within a
+    thousandth of the bounds' width of either end) is no such effect, not a limit.
     """
 
     #: the element kind the term acts on ("C" or "R")
@@ -102,6 +107,11 @@ class LawTerm(Candidate):
     grid = (0.003, 0.01, 0.03, 0.1, 0.3, 1.0)
     #: the coefficient (in units of its scale) at which the screen evaluates the regressor
     probe = 1e-3
+    #: parameter name prefix of the even part's coefficient d (free sign, the law's
+    #: asymmetry; :meth:`term` then gets the pair (c, d)), or "" for a kind without one
+    even_prefix = ""
+    #: bound of |d|, in units of its scale (:meth:`even_scale`)
+    even_upper = 1.0
 
     def __init__(self, site: Site | None = None):
         self.site = site
@@ -163,8 +173,9 @@ class LawTerm(Candidate):
 
         Parameters
         ----------
-        c : sympy.Expr or float
-            The coefficient (the new parameter; 0 leaves the law as it was).
+        c : sympy.Expr or float or tuple
+            The coefficient (the new parameter; 0 leaves the law as it was); the pair (c, d)
+            for a kind with an :attr:`even_prefix`.
         r2 : sympy.Expr or float
             The centring amplitude², in the square of the variable's unit.
         x : sympy.Expr or numpy.ndarray
@@ -220,6 +231,30 @@ class LawTerm(Candidate):
             The centring amplitude², in the square of the variable's unit.
         """
 
+    def even_scale(self, view, el, x) -> float:
+        """The scale of the even coefficient d of element ``el``: |slope of its law| / peak of
+        ``x``, at which d·x² is the linear law at the peak.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data and the current model.
+        el : str
+            The element.
+        x : numpy.ndarray
+            Its variable's series in the current model.
+
+        Returns
+        -------
+        float
+            Effort per (variable unit)² (N/m² for a spring).
+        """
+        return abs(slope(view.model, el, view.values)) / _peak(x)
+
+    def _pair(self, c, d=0.0):
+        """The coefficient :meth:`term` takes: c, or (c, d) for a kind with an even part."""
+        return (c, d) if self.even_prefix else c
+
     def build(self, view, coefs: dict, r2s: dict):
         """The current model with the term on each element of ``coefs``.
 
@@ -227,20 +262,28 @@ class LawTerm(Candidate):
         ----------
         view : View
             The read-only view of the data, the split and the current model.
-        coefs : dict of str to float
-            Element → coefficient (the new parameter's value).
+        coefs : dict of str to float or tuple
+            Element → coefficient (the new parameter's value), or the pair (c, d) for a kind
+            with an even part.
         r2s : dict of str to float
             Element → centring amplitude².
 
         Returns
         -------
         Model
-            A new model: the current one rewritten, with parameters ``PREFIX_EL`` and
-            ``PREFIX_r2_EL`` and the term added to each element's law.
+            A new model: the current one rewritten, with parameters ``PREFIX_EL``,
+            ``EVEN_PREFIX_EL`` for a kind with an even part, and ``PREFIX_r2_EL``, and the term
+            added to each element's law.
         """
         model = view.rewrite()
         for el in coefs:
-            c = model.parameter(f"{self.prefix}_{el}", coefs[el], "", f"{self.label}: {el}", bounds=(0, 1e40))
+            cv, dv = coefs[el] if isinstance(coefs[el], tuple) else (coefs[el], 0.0)
+            c = model.parameter(f"{self.prefix}_{el}", cv, "", f"{self.label}: {el}", bounds=(0, 1e40))
+            if self.even_prefix:
+                d = model.parameter(
+                    f"{self.even_prefix}_{el}", dv, "", f"{self.label}, even part: {el}", bounds=(-1e40, 1e40)
+                )
+                c = (c, d)
             r2 = model.parameter(f"{self.prefix}_r2_{el}", r2s[el], "", f"centring amplitude² of {el}")
             p = self.partner(model, el)
             a = field(view)[0] if p == DRIVE else Quantity("q", p) if p else None
@@ -276,8 +319,9 @@ class LawTerm(Candidate):
         Returns
         -------
         float or None
-            What the filtered regressor explains of the residual with the calibration
-            (:meth:`View.first_order_share`), between 0 and 1, or None.
+            What the filtered regressor (with an even part, both of them) explains of the
+            residual with the calibration (:meth:`View.first_order_share`), between 0 and 1, or
+            None.
         """
         els = self.elements(view.model)
         partners = {el: self.partner(view.model, el) for el in els}
@@ -288,12 +332,16 @@ class LawTerm(Candidate):
         if lure is None:
             return None
         refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
-        coefs = [(self.probe * refs[el][0], refs[el][1]) for el in els]
+        probes = [[(self._pair(self.probe * refs[el][0]), refs[el][1]) for el in els]]
+        if self.even_prefix:  # the even part's own regressor
+            probes.append(
+                [(self._pair(0.0, self.probe * self.even_scale(view, el, xs[el])), refs[el][1]) for el in els]
+            )
         try:
-            moved = lure.simulate(dict(view.values), lure.drive, self.term, coefs)
+            moved = [lure.simulate(dict(view.values), lure.drive, self.term, coefs) for coefs in probes]
         except NotConverged:
             return None
-        return view.first_order_share((moved - base) * view.gain / self.probe)
+        return view.first_order_share(np.column_stack([(m - base) * view.gain / self.probe for m in moved]))
 
     def fit(self, view):
         """Fit the coefficients with the calibration (the scan of the class notes).
@@ -317,8 +365,10 @@ class LawTerm(Candidate):
         els = self.elements(view.model)
         partners = {el: self.partner(view.model, el) for el in els}
         names = [f"{self.prefix}_{el}" for el in els]
+        evens = [f"{self.even_prefix}_{el}" for el in els] if self.even_prefix else []
         lure, xs, az, base = self._series(view, els, partners)
         refs = {el: self.refs(view, el, xs[el], az[el]) for el in els}
+        escale = {el: self.even_scale(view, el, xs[el]) for el in els} if evens else {}
         r2s = {el: refs[el][1] for el in els}
         held = self._idle(view, lure, els, refs, r2s, base) if lure is not None and len(els) > 1 else []
         model = self.build(view, {el: 0.0 for el in els}, r2s)
@@ -326,7 +376,10 @@ class LawTerm(Candidate):
         if lure is not None:
 
             def predict(values):
-                coefs = [(values[n], r2s[el]) for n, el in zip(names, els)]
+                coefs = [
+                    (self._pair(values[n], values[e] if evens else 0.0), r2s[el])
+                    for n, e, el in zip(names, evens or names, els)
+                ]
                 try:
                     raw = lure.simulate(values, lure.drive, self.term, coefs)
                 except NotConverged:  # integrate the rewritten model for these values instead,
@@ -339,8 +392,8 @@ class LawTerm(Candidate):
         def fitted(specs, nfev, start=None):
             return view.fit_model(model, specs, max_nfev=nfev, start=start, predict=predict)
 
-        def spec(f, free=False):  # elements whose term cannot matter are held at 0
-            return [
+        def spec(f, free=False, even=None):  # elements whose term cannot matter are held at 0
+            odd = [
                 Spec(n, 0.0, 0.0, 0.0, scale=refs[el][0])
                 if el in held
                 else Spec(
@@ -351,6 +404,18 @@ class LawTerm(Candidate):
                     scale=refs[el][0],
                 )
                 for n, el in zip(names, els)
+            ]
+            return odd + [  # the even part is free at every point of the scan
+                Spec(e, 0.0, 0.0, 0.0, scale=escale[el])
+                if el in held
+                else Spec(
+                    e,
+                    (even or {}).get(e, 0.0),
+                    -self.even_upper * escale[el],
+                    self.even_upper * escale[el],
+                    scale=escale[el],
+                )
+                for e, el in zip(evens, els)
             ]
 
         best = None
@@ -372,28 +437,35 @@ class LawTerm(Candidate):
                         break
         if best is None:
             raise SimulationError(f"{self.cause}: the extended model could not be simulated")
+        limit = {n: self.upper * refs[el][0] for n, el in zip(names, els)}
+        limit.update({e: self.even_upper * escale[el] for e, el in zip(evens, els)})
+
+        def plausibility_ends(at):  # a coefficient at or near 0 is no such effect, not a search limit
+            return [n for n in at if n not in limit or abs(values[n]) > 0.5 * limit[n]]
+
         start = {k: v for k, v in best[2].items() if k not in names}
-        values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
-        at = [n for n in at if values[n] > 0]  # a coefficient of 0 is no such effect, not a search limit
+        values, raw, ok, msg, at = fitted(spec(best[1], free=True, even=start), 12, start)
+        at = plausibility_ends(at)
         stuck = [el for n, el in zip(names, els) if n in at]
         if stuck and len(stuck) + len(held) < len(els):
             # beyond the bound the term is no longer plausible (a softening whose tangent
             # stiffness turns negative at the peak): that element's term stands in for something
             # else, so it is held at 0 and the others are refitted without it
             held += stuck
-            values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
-            at = [n for n in at if values[n] > 0]
+            values, raw, ok, msg, at = fitted(spec(best[1], free=True, even=start), 12, start)
+            at = plausibility_ends(at)
             msg = (
                 f"{', '.join(f'{self.prefix}_{el}' for el in stuck)} went to "
                 f"{'its search bound and is' if len(stuck) == 1 else 'their search bounds and are'} held at 0; {msg}"
             )
         kept = [(n, el) for n, el in zip(names, els) if el not in held]
-        terms = [(el, partners[el], self.term, values[n], r2s[el]) for n, el in kept]
-        where = self._carrier(view, lure, values, {el: values[n] for n, el in kept}, r2s, els) if len(kept) > 1 else ""
+        coefs = {el: self._pair(values[n], values.get(f"{self.even_prefix}_{el}", 0.0)) for n, el in kept}
+        terms = [(el, partners[el], self.term, coefs[el], r2s[el]) for _, el in kept]
+        where = self._carrier(view, lure, values, coefs, r2s, els) if len(kept) > 1 else ""
         return Extension(
-            self.build(view, {el: values[n] for n, el in kept}, r2s),
+            self.build(view, coefs, r2s),
             values,
-            [n for n, _ in kept],
+            [n for n, _ in kept] + [f"{self.even_prefix}_{el}" for _, el in kept if evens],
             raw,
             None,
             None,
@@ -412,9 +484,9 @@ class LawTerm(Candidate):
             return ""
         effect = {}
         try:
-            without = lure.simulate(values, lure.drive, self.term, [(0.0, r2s[e]) for e in els])
+            without = lure.simulate(values, lure.drive, self.term, [(self._pair(0.0), r2s[e]) for e in els])
             for el in coefs:
-                one = [(coefs[el] if e == el else 0.0, r2s[e]) for e in els]
+                one = [(coefs[el] if e == el else self._pair(0.0), r2s[e]) for e in els]
                 effect[el] = float(np.std(lure.simulate(values, lure.drive, self.term, one) - without))
         except NotConverged:
             return ""
@@ -429,7 +501,7 @@ class LawTerm(Candidate):
         for el in els:
             effect[el] = np.inf
             for f in (self.grid[-1], 0.1 * self.grid[-1]):
-                coefs = [(f * refs[e][0] if e == el else 0.0, r2s[e]) for e in els]
+                coefs = [(self._pair(f * refs[e][0] if e == el else 0.0), r2s[e]) for e in els]
                 try:
                     raw = lure.simulate(dict(view.values), lure.drive, self.term, coefs)
                 except NotConverged:
@@ -445,9 +517,10 @@ def _peak(x) -> float:
 
 
 class Softening(LawTerm):
-    """A stiffness that falls with amplitude: e = law(q) − k3·q·(q² − r²), r² = 1.5·⟨q²⟩ of the
-    current model, k3 ≥ 0 (a cubic whose describing-function stiffness at the data's amplitude
-    stays the calibrated one).
+    """A stiffness that falls with amplitude: e = law(q) − k3·q·(q² − r²) + k2·q², r² = 1.5·⟨q²⟩
+    of the current model, k3 ≥ 0 (a cubic whose describing-function stiffness at the data's
+    amplitude stays the calibrated one); k2 of either sign, |k2| ≤ k/q_peak, makes the spring
+    stiffer one way than the other (a preloaded or one-sided spring: its even part).
 
     Parameters
     ----------
@@ -458,16 +531,18 @@ class Softening(LawTerm):
     cause = "softening"
     label = "cubic softening of the spring law"
     prefix, upper = "soft.k3", 0.5
+    even_prefix = "soft.k2"
     grid = (0.003, 0.01, 0.03, 0.1, 0.3)
 
     @staticmethod
     def term(c, r2, x, a):
-        """−k3·q·(q² − r²), the softening term.
+        """−k3·q·(q² − r²) + k2·q², the softening term.
 
         Parameters
         ----------
-        c : sympy.Expr or float
-            k3 ≥ 0, effort per displacement³ (N/m³ for a spring).
+        c : tuple or sympy.Expr or float
+            (k3, k2): k3 ≥ 0, effort per displacement³ (N/m³ for a spring); k2 of either sign,
+            effort per displacement² (N/m²).  k3 alone for a subclass without an even part.
         r2 : sympy.Expr or float
             The centring amplitude r², displacement² (m²).
         x : sympy.Expr or numpy.ndarray
@@ -480,7 +555,8 @@ class Softening(LawTerm):
         sympy.Expr or numpy.ndarray
             The term, in effort units (N for a spring).
         """
-        return -c * x * (x**2 - r2)
+        k3, k2 = c if isinstance(c, tuple) else (c, 0)
+        return -k3 * x * (x**2 - r2) + k2 * x**2
 
     def refs(self, view, el, x, a):
         """The coefficient's scale k/q_peak² and r² = 1.5·⟨q²⟩ of the current model.
@@ -507,9 +583,10 @@ class Softening(LawTerm):
 
 
 class Hardening(Softening):
-    """A stiffness that rises with amplitude (a Duffing spring): e = law(q) + k3·q·(q² − r²),
-    centred as :class:`Softening`, k3 ≥ 0; up to many times the linear stiffness at the peak
-    (a hardening spring has no turning point to stop at).
+    """A stiffness that rises with amplitude (a Duffing spring): e = law(q) + k3·q·(q² − r²)
+    + k2·q², centred as :class:`Softening`, k3 ≥ 0; up to many times the linear stiffness at the
+    peak (a hardening spring has no turning point to stop at); |k2| ≤ 2·k/q_peak (the cubic
+    keeps such a spring's tangent stiffness positive where a softening one could not).
 
     Parameters
     ----------
@@ -520,16 +597,18 @@ class Hardening(Softening):
     cause = "hardening"
     label = "cubic hardening of the spring law"
     prefix, upper = "hard.k3", 30.0
+    even_prefix, even_upper = "hard.k2", 2.0
     grid = (0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0)
 
     @staticmethod
     def term(c, r2, x, a):
-        """+k3·q·(q² − r²), the hardening (Duffing) term.
+        """+k3·q·(q² − r²) + k2·q², the hardening (Duffing) term.
 
         Parameters
         ----------
-        c : sympy.Expr or float
-            k3 ≥ 0, effort per displacement³ (N/m³ for a spring).
+        c : tuple or sympy.Expr or float
+            (k3, k2): k3 ≥ 0, effort per displacement³ (N/m³ for a spring); k2 of either sign,
+            effort per displacement² (N/m²).  k3 alone for a subclass without an even part.
         r2 : sympy.Expr or float
             The centring amplitude r², displacement² (m²).
         x : sympy.Expr or numpy.ndarray
@@ -542,7 +621,8 @@ class Hardening(Softening):
         sympy.Expr or numpy.ndarray
             The term, in effort units (N for a spring).
         """
-        return c * x * (x**2 - r2)
+        k3, k2 = c if isinstance(c, tuple) else (c, 0)
+        return k3 * x * (x**2 - r2) + k2 * x**2
 
 
 class Clearance(LawTerm):

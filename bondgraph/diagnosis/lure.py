@@ -2,6 +2,7 @@
 simulated on the exact linear route.
 
 The model's elements ``el_k`` get laws law_k(x) + w_k with w_k = term(c_k, r2_k, x_k, a_k),
+c_k one coefficient or a tuple of them (a term with an even and an odd part, say),
 x_k the element's own variable (q of a C, p of an I, f of an R) and a_k the displacement of a
 partner element, or the drive itself (partner :data:`DRIVE`: a law that moves with the field),
 or None.  The model with the w_k as extra inputs is linear; its
@@ -54,7 +55,8 @@ class Lure:
     ``partners[el]``: an element whose displacement the term of ``el`` uses, :data:`DRIVE`
     for the drive, or None.
     ``fixed``: terms already part of the model being extended, one (element, partner, term,
-    c, r2) each, held as they are while the new elements' terms are fitted.
+    c, r2) each (c a number or a tuple of numbers), held as they are while the new elements'
+    terms are fitted.
 
     Parameters
     ----------
@@ -89,7 +91,7 @@ class Lure:
         dt: float,
         fixed: Sequence[tuple] = (),
     ):
-        self.fixed = [(el, p, term, float(c), float(r2)) for el, p, term, c, r2 in fixed]
+        self.fixed = [(el, p, term, _coefficient(c), float(r2)) for el, p, term, c, r2 in fixed]
         partners = {**{el: p for el, p, *_ in self.fixed}, **partners}
         elements = [el for el, *_ in self.fixed] + list(elements)
         if len(set(elements)) < len(elements):
@@ -168,16 +170,17 @@ class Lure:
             The fixed terms make the model diverge.
         """
         new = self.n - len(self.fixed)
-        Y, ok = self._run(values, u, term, np.zeros((new, 2)), len(self.fixed) > 0, active_new=False)
+        Y, ok = self._run(values, u, term, [(0.0, 0.0)] * new, len(self.fixed) > 0, active_new=False)
         if not ok:
             raise NotConverged("the model's own nonlinear terms make it diverge")
         return {o: Y[:, r] for r, o in enumerate(self.outputs)}
 
     def simulate(
-        self, values: Mapping[str, float], u: np.ndarray, term: Callable, coefs: Sequence[tuple[float, float]]
+        self, values: Mapping[str, float], u: np.ndarray, term: Callable, coefs: Sequence[tuple]
     ) -> np.ndarray:
         """Raw output for the drive samples ``u`` with w_k = term(c_k, r2_k, x_k, a_k),
-        ``coefs[k] = (c_k, r2_k)``; ``term`` is written in arithmetic that works on sympy
+        ``coefs[k] = (c_k, r2_k)`` (c_k a number, or a tuple for a term of several
+        coefficients); ``term`` is written in arithmetic that works on sympy
         symbols and is a polynomial in x and a, plus at most one h·tanh(g·x) (see
         :func:`polynomial_term`).
 
@@ -189,8 +192,8 @@ class Lure:
             The drive's samples (drive units).
         term : callable
             ``term(c, r2, x, a)``.
-        coefs : sequence of tuple of float
-            (c_k, r2_k) per new element.
+        coefs : sequence of tuple
+            (c_k, r2_k) per new element: c_k a float or a tuple of floats, r2_k a float.
 
         Returns
         -------
@@ -202,7 +205,10 @@ class Lure:
         NotConverged
             The terms make the model diverge, or ``term`` is not of the supported form.
         """
-        Y, ok = self._run(values, u, term, np.asarray(coefs, float).reshape(self.n - len(self.fixed), 2), True)
+        coefs = [(_coefficient(c), float(r2)) for c, r2 in coefs]
+        if len(coefs) != self.n - len(self.fixed):
+            raise ValueError(f"{len(coefs)} coefficients for {self.n - len(self.fixed)} new terms")
+        Y, ok = self._run(values, u, term, coefs, True)
         if not ok:
             raise NotConverged("the nonlinear term makes the model diverge (an implicit step did not converge)")
         return Y[:, 0]
@@ -311,9 +317,12 @@ class Lure:
             np.int64,
         )
         terms = [(t, c, r2) for _, _, t, c, r2 in self.fixed] + [
-            (term, (c if active_new else 0.0), r2) for c, r2 in coefs
+            (term if active_new else None, c, r2) for c, r2 in coefs
         ]
-        laws = [polynomial_term(t, self.partners[k])(c, r2) for k, (t, c, r2) in enumerate(terms)]
+        laws = [
+            polynomial_term(t, self.partners[k], _arity(c))(c, r2) if t is not None else (np.zeros((1, 1)), np.zeros(2))
+            for k, (t, c, r2) in enumerate(terms)
+        ]
         mats = [m for m, _ in laws]
         P = np.zeros((self.n, max(m.shape[0] for m in mats), max(m.shape[1] for m in mats)))
         for k, m in enumerate(mats):
@@ -382,8 +391,19 @@ class Lure:
 _TERMS: dict = {}
 
 
-def polynomial_term(term: Callable, partner: bool):
-    """``term(c, r2, x, a)`` (``a`` None without a partner) as a polynomial in x and a plus at
+def _coefficient(c):
+    """A term's coefficient as a float, or a tuple of floats for a term of several."""
+    return tuple(float(v) for v in c) if isinstance(c, (tuple, list, np.ndarray)) else float(c)
+
+
+def _arity(c) -> int:
+    """How many coefficients ``c`` holds."""
+    return len(c) if isinstance(c, tuple) else 1
+
+
+def polynomial_term(term: Callable, partner: bool, arity: int = 1):
+    """``term(c, r2, x, a)`` (``a`` None without a partner; ``c`` a tuple of ``arity``
+    coefficients when ``arity`` > 1) as a polynomial in x and a plus at
     most one smooth saturation h·tanh(g·x) of the element's own variable, the coefficients
     functions of (c, r2): a function (c, r2) → (P, (h, g)) with
     term = Σ P[i, j]·x^i·a^j + h·tanh(g·x), made once per process and formula (and looked up
@@ -396,11 +416,13 @@ def polynomial_term(term: Callable, partner: bool):
         ``term(c, r2, x, a)``.
     partner : bool
         Whether the term has a partner variable a.
+    arity : int, optional
+        How many coefficients ``c`` holds (1: a number).
 
     Returns
     -------
     callable
-        (c, r2) → (P, (h, g)).
+        (c, r2) → (P, (h, g)); a scalar c of 0 is every coefficient at 0.
 
     Raises
     ------
@@ -408,12 +430,13 @@ def polynomial_term(term: Callable, partner: bool):
         The term is not of that form.
     """
     try:
-        return _TERMS[(term, partner)]  # the same function again: no sympy
+        return _TERMS[(term, partner, arity)]  # the same function again: no sympy
     except (KeyError, TypeError):
         pass
-    c, r2, x, a = sp.symbols("c r2 x a", real=True)
-    expr = sp.expand(sp.sympify(term(c, r2, x, a if partner else None)))
-    key = sp.srepr(expr)
+    r2, x, a = sp.symbols("r2 x a", real=True)
+    cs = sp.symbols(f"c0:{arity}", real=True)
+    expr = sp.expand(sp.sympify(term(cs[0] if arity == 1 else cs, r2, x, a if partner else None)))
+    key = (sp.srepr(expr), arity)
     if key not in _TERMS:
         refuse = NotConverged(f"the term {expr} is not a polynomial in the element's variables plus one h·tanh(g·x)")
         h, g = sp.Integer(0), sp.Integer(0)
@@ -435,17 +458,18 @@ def polynomial_term(term: Callable, partner: bool):
         I, J = poly.degree(x) + 1, poly.degree(a) + 1
         I, J = max(I, 1), max(J, 1)
         entries = [[poly.coeff_monomial(x**i * a**j) for j in range(J)] for i in range(I)]
-        f = sp.lambdify((c, r2), [entries, [h, g]], modules="numpy")
+        f = sp.lambdify((*cs, r2), [entries, [h, g]], modules="numpy")
 
         def coefficients(cv, r2v, f=f):
+            cv = np.broadcast_to(np.asarray(cv, np.float64), (arity,))
             with np.errstate(divide="ignore", invalid="ignore"):
-                P, hg = f(np.float64(cv), np.float64(r2v))
+                P, hg = f(*cv, np.float64(r2v))
             hg = np.array(hg, float)
             return np.array(P, float), (hg if hg[0] != 0.0 and np.all(np.isfinite(hg)) else np.zeros(2))
 
         _TERMS[key] = coefficients
     try:
-        _TERMS[(term, partner)] = _TERMS[key]
+        _TERMS[(term, partner, arity)] = _TERMS[key]
     except TypeError:  # an unhashable callable: its formula's key only
         pass
     return _TERMS[key]

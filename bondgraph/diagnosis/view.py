@@ -456,27 +456,29 @@ class View:
 
     def first_order_share(self, column: np.ndarray) -> float:
         """The share (0-1) of the residual's energy on the fit part that a column (an
-        effect's output per unit coefficient, sensor gain applied) explains to first order
-        together with the calibration: one Gauss–Newton step of the effect's coefficient and
-        the calibrated linear parameters, sensor gain and offset.  On the linear core the
-        column is regressed beyond the output's sensitivities to those parameters
-        (:meth:`respond_sensitivities`), because every candidate's fit refits them: a
-        column that is partly a stiffness change is judged by what the stiffness cannot
-        do.  Off the core, beyond the offset only.
+        effect's output per unit coefficient, sensor gain applied), or several together,
+        explain to first order with the calibration: one Gauss–Newton step of the effect's
+        coefficients and the calibrated linear parameters, sensor gain and offset.  On the
+        linear core the columns are regressed beyond the output's sensitivities to those
+        parameters (:meth:`respond_sensitivities`), because every candidate's fit refits them:
+        a column that is partly a stiffness change is judged by what the stiffness cannot do.
+        Off the core, beyond the offset only.
 
         Parameters
         ----------
         column : numpy.ndarray
-            The column on every sample (output units per unit coefficient).
+            The column on every sample (output units per unit coefficient), or one column per
+            coefficient (samples × coefficients).
 
         Returns
         -------
         float
-            The share, between 0 and 1 (0 for a column that is not finite or is explained
+            The share, between 0 and 1 (0 for columns that are not finite or are explained
             by the calibration alone).
         """
         idx = self.fit_idx
-        q, r = np.asarray(column, float)[idx], np.asarray(self.residual, float)[idx]
+        full = np.asarray(column, float).reshape(len(self.residual), -1)
+        q, r = full[idx], np.asarray(self.residual, float)[idx]
         if not np.all(np.isfinite(q)):
             return 0.0
         basis = self._calibration_directions()
@@ -485,10 +487,12 @@ class View:
             r - basis @ np.linalg.lstsq(basis, r, rcond=None)[0],
         )
         rr = float(np.sum((np.asarray(self.residual, float)[idx] - np.mean(self.residual[idx])) ** 2))
-        qq = float(q @ q)
-        if qq <= 1e-24 * max(float(np.sum(np.asarray(column, float)[idx] ** 2)), 1e-300) or rr <= 0:
+        size = np.sqrt(np.sum(full[idx] ** 2, axis=0))
+        keep = np.sqrt(np.sum(q**2, axis=0)) > 1e-12 * np.maximum(size, 1e-150)  # beyond the calibration
+        if not keep.any() or rr <= 0:
             return 0.0
-        return min(float((q @ r) ** 2 / qq) / rr, 1.0)
+        fitted = q[:, keep] @ np.linalg.lstsq(q[:, keep], r, rcond=None)[0]
+        return min(float(fitted @ fitted) / rr, 1.0)
 
     def _calibration_directions(self) -> np.ndarray:
         """The fit rows' directions the calibration moves the output in (columns): the offset

@@ -22,10 +22,13 @@ from bondgraph.diagnosis.rewrite import slope
 
 
 class StiffnessSoftening(laws.Softening):
-    """:class:`~bondgraph.diagnosis.laws.Softening` on every element tagged ``stiffness``."""
+    """:class:`~bondgraph.diagnosis.laws.Softening` on every element tagged ``stiffness``,
+    without the even part: a poled ceramic driven about its poled state softens alike both
+    ways, so k3 alone is fitted (one parameter per element, as the piezo benches measured)."""
 
     role = "stiffness"
     label = "cubic softening of the stiffness elements"
+    even_prefix = ""
 
 
 class NonlinearDamping(laws.NonlinearDamping):
