@@ -33,7 +33,7 @@ import bondgraph as bg
 from bondgraph import config
 from bondgraph.cli import main
 from bondgraph.data import Dataset, read_csv
-from bondgraph.diagnosis import LINEAR, Candidate, Extension, diagnose, model_file_options
+from bondgraph.diagnosis import LINEAR, Candidate, Extension, Settings, diagnose, model_file_options
 from bondgraph.diagnosis.decision import Comparison, _batch_means, compare, judge
 from bondgraph.model.modelfile import load_model
 
@@ -337,10 +337,9 @@ def test_a_close_race_is_decided_by_converged_fits():
     improves, the report says so, and the simpler square law is still the one named."""
     data = lag_record(square=0.4)
     cands = [SquareLaw(), PowerLaw(), SquareLawJudgedLinear()]
-    with config.override({"diagnosis.polish_margin": 1.0}):  # no race: only the best counts
-        rough = diagnose(lag_model(), data, candidates=cands, workers=1, chain=False)
-    with config.override({"diagnosis.polish_margin": 100.0}):
-        polished = diagnose(lag_model(), data, candidates=cands, workers=1, chain=False)
+    narrow, wide = Settings.from_config(polish_margin=1.0), Settings.from_config(polish_margin=100.0)
+    rough = diagnose(lag_model(), data, candidates=cands, workers=1, chain=False, settings=narrow)  # only the best
+    polished = diagnose(lag_model(), data, candidates=cands, workers=1, chain=False, settings=wide)
     # judged again after the race, the candidates not fitted again keep their verdicts
     assert all(c.passed for c in rough.steps[0].candidates if c.cause != "power-law")
     assert [c.verdict for c in polished.steps[0].candidates if c.cause != "power-law"] == [
@@ -492,9 +491,9 @@ def test_a_candidate_whose_simulation_passes_the_limit_is_reported_failed():
             view.states()
             return Extension(view.model, dict(view.values), [], None, None, None, [], True, "")
 
-    ctx = Context(lag_model(), lag_record())
+    ctx = Context(lag_model(), lag_record(), settings=Settings.from_config(candidate_limit=1e-9))
     state, cal, _ = calibrate(ctx)
-    with config.override({"diagnosis.candidate_limit": 1e-9, "simulate.explicit_step_limit": 0}):
+    with config.override({"simulate.explicit_step_limit": 0}):
         oc = run_candidate(ctx, state, cal.free, Integrates())
     assert oc.extension is None and "SimulationTimeout" in oc.result.error
 
@@ -520,18 +519,18 @@ def test_a_sweeping_drive_is_recognised():
     rng = np.random.default_rng(7)
     for f0, f1, how in ((50, 5000, "logarithmic"), (5000, 50, "logarithmic"), (20, 2000, "linear")):
         u = signal.chirp(t, f0, t[-1], f1, method=how)
-        first, last = drive_sweep(u, fs, 30)
+        first, last = drive_sweep(u, fs, 30, 8.0)
         lo, hi = sorted((first, last))
         assert lo < max(f0, f1) / 10 and hi > max(f0, f1) / 2 and (first < last) == (f0 < f1)
-        assert drive_sweep(5.0 - 3.0 * u, fs, 30) == pytest.approx((first, last))  # units, sign, offset
-        assert drive_sweep(u[::-1], fs, 30) == pytest.approx((last, first))
-    assert drive_sweep(np.zeros(t.size), fs, 30) is None
+        assert drive_sweep(5.0 - 3.0 * u, fs, 30, 8.0) == pytest.approx((first, last))  # units, sign, offset
+        assert drive_sweep(u[::-1], fs, 30, 8.0) == pytest.approx((last, first))
+    assert drive_sweep(np.zeros(t.size), fs, 30, 8.0) is None
     steps = np.repeat(rng.uniform(-1, 1, 30), t.size // 30 + 1)[: t.size]
     noise = signal.lfilter(*signal.butter(4, 0.1), rng.standard_normal(t.size))
     bursts = np.sin(2 * np.pi * 300 * t) * (np.sin(2 * np.pi * 0.5 * t) > 0) * np.minimum(t, 1.0)
     triangle = signal.sawtooth(2 * np.pi * 2 * t, 0.5)
     for u in (np.sin(2 * np.pi * 40 * t), triangle, steps, noise, bursts):
-        assert drive_sweep(u, fs, 30) is None
+        assert drive_sweep(u, fs, 30, 8.0) is None
 
 
 def test_a_chirp_through_a_resonance_is_held_out_in_part_only():
@@ -551,7 +550,7 @@ def test_a_chirp_through_a_resonance_is_held_out_in_part_only():
         resonator = signal.bilinear([w**2], [1, w / q, w**2], fs)
         for f0 in range(40, 140, 8):
             u = signal.chirp(t, f0, t[-1], 5000, method="logarithmic")
-            assert drive_sweep(u, fs, config.get("diagnosis.blocks")) is not None
+            assert drive_sweep(u, fs, config.get("diagnosis.blocks"), config.get("diagnosis.sweep_ratio")) is not None
             y = signal.lfilter(*resonator, u)
             for n in (config.get("diagnosis.blocks"), config.get("diagnosis.sweep_blocks")):
                 fit, val = split_masks(t, 0.3, "blocks", n)

@@ -23,7 +23,7 @@ from test_diagnose import lag_model
 import bondgraph as bg
 from bondgraph import config
 from bondgraph.data import Dataset
-from bondgraph.diagnosis import diagnose
+from bondgraph.diagnosis import Settings, diagnose
 from library.extensions import InputCreep, InputHysteresis, InputSaturation
 
 FS, T = 100.0, 60.0
@@ -150,7 +150,7 @@ def test_each_effect_alone(hysteresis, creep, expected):
 def test_no_step_starts_past_the_time_budget(compound):
     """The same compound record with ``diagnosis.chain_seconds`` spent before the second step:
     the first cause is named as before, the chain stops there and the report says why."""
-    with config.override({"diagnosis.chain_seconds": 0.0}):
-        rep = diagnose(lag_model(), record(), candidates=CANDIDATES, workers=1)
+    spent = Settings.from_config(chain_seconds=0.0)
+    rep = diagnose(lag_model(), record(), candidates=CANDIDATES, workers=1, settings=spent)
     assert rep.causes == compound.causes[:1] == ["hysteresis"] and len(rep.steps) == 1
     assert any("diagnosis.chain_seconds" in n for n in rep.notes) and rep.as_json()["stop"] is None

@@ -155,6 +155,12 @@ def test_record_start_example_sets_the_declared_start():
     assert config.get("record.start") == "steady"
 
 
+def test_diagnosis_settings_example_runs():
+    block = next(b for b in python_blocks("diagnosis.md") if "Settings.from_config" in b)
+    mod = module_of(block, "diagnosis_settings")
+    assert mod.strict.min_gain == 1.5 and mod.strict.equivalent == config.get("diagnosis.equivalent")
+
+
 def test_settings_page_lists_the_framework_settings():
     page = (DOCS / "settings.md").read_text()
     for name in config.DEFAULTS:

@@ -30,7 +30,8 @@ The engine, in order:
    residuals' autocorrelation (the effective number of independent batches), against the
    current model refitted from where the candidate left its linear parameters (so that only
    the effect is credited) and against a flexible linear reference, with the thresholds of
-   ``bondgraph.config`` (section ``diagnosis``); of equivalent passing candidates the one
+   the diagnosis's :class:`Settings` (frozen, read once from ``bondgraph.config``, section
+   ``diagnosis``, a keyword beating the default); of equivalent passing candidates the one
    with the fewest parameters is named.
 5. **Chain** (:mod:`.engine`): the named cause extends the model; the others are tried
    again on it until none passes (compound effects: e.g. hysteresis, then creep).  Drive-side
@@ -58,6 +59,7 @@ from .engine import diagnose, load_candidates, model_file_options
 from .laws import LawTerm
 from .lure import DRIVE
 from .report import CandidateResult, Report, Step
+from .settings import Settings
 from .sites import Site
 from .view import DriveFit, View
 
@@ -74,6 +76,7 @@ __all__ = [
     "View",
     "DriveFit",
     "Report",
+    "Settings",
     "Step",
     "CandidateResult",
     "LINEAR",

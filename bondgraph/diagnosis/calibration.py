@@ -42,7 +42,6 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..linear.sensitivity import sensitivity
-from ..support import config
 from ..support.errors import UsageError
 from .context import SENSOR_GAIN, Context, State, welch, welch_length
 from .gauge import fix_scales
@@ -216,7 +215,7 @@ def param_bounds(ctx: Context, name: str, value: float, factor: float | None = N
     upper : float
         Upper bound of |value|.
     """
-    spread = config.get("diagnosis.spread") if factor is None else factor
+    spread = ctx.settings.spread if factor is None else factor
     lo, hi = abs(value) / spread, abs(value) * spread
     decl = ctx.model.all_parameters().get(name)
     if decl is not None and decl.bounds is not None and value > 0:
@@ -343,7 +342,7 @@ def residual_asks(
     dict of str to float
         Held name → the factor one step would move it by.
     """
-    share = config.get("diagnosis.residual_share")
+    share = ctx.settings.residual_share
     cands = [n for n in held if n in names and held[n] != NO_EFFECT]
     if not cands or not share < 1:
         return {}
@@ -360,7 +359,7 @@ def residual_asks(
     C = S[:, len(free) :]
     full = np.linalg.norm(C, axis=0)
     C = C - Q @ (Q.T @ C)
-    limit = math.log(config.get("diagnosis.spread"))
+    limit = math.log(ctx.settings.spread)
     asked: dict[str, float] = {}
     while True:  # ends: each round asks for one more parameter or stops
         nc = np.linalg.norm(C, axis=0)
@@ -406,7 +405,7 @@ def _delay_identifiable(
     nr = float(np.linalg.norm(col))
     # a delay is a nuisance parameter: solved only when clearly apart from the model's own
     # (more than 0.1 rad from their span), else it trades against a time constant
-    return nr >= config.get("diagnosis.identifiable") * ref and nr >= 0.1 * full and nr >= 1e-6 * scale
+    return nr >= ctx.settings.identifiable * ref and nr >= 0.1 * full and nr >= 1e-6 * scale
 
 
 #: a frequency whose output is at most this coherent with the input (magnitude-squared: as much
@@ -803,7 +802,7 @@ def _fit(
             ub,
             [-np.inf] * lin,
             [np.inf] * lin,
-            max_nfev=int(40 * config.get("diagnosis.polish_effort")),
+            max_nfev=int(40 * ctx.settings.polish_effort),
             threads=workers,
             derivatives=exact,
         )
@@ -841,9 +840,9 @@ def _sampled_starts(
     return [z for _, z in scored[:keep]]
 
 
-def tolerances(names: Sequence[str], tolerance: Mapping[str, float] | None) -> dict[str, float]:
+def tolerances(names: Sequence[str], tolerance: Mapping[str, float] | None, default: float) -> dict[str, float]:
     """The plausible factor of each parameter: the first matching pattern of ``tolerance`` (the
-    model file's ``TOLERANCE``), else the setting ``diagnosis.tolerance``.
+    model file's ``TOLERANCE``), else ``default`` (setting ``diagnosis.tolerance``).
 
     Parameters
     ----------
@@ -851,13 +850,15 @@ def tolerances(names: Sequence[str], tolerance: Mapping[str, float] | None) -> d
         The parameters.
     tolerance : mapping of str to float or None
         {glob pattern: factor}.
+    default : float
+        The factor of a parameter no pattern matches.
 
     Returns
     -------
     dict of str to float
         Name → factor (×/÷).
     """
-    default = float(config.get("diagnosis.tolerance"))
+    default = float(default)
     out = {}
     for n in names:
         out[n] = next((float(f) for pat, f in (tolerance or {}).items() if fnmatch.fnmatchcase(n, pat)), default)
@@ -922,7 +923,7 @@ def calibrate(
     idx = ctx.ident.fit_idx
     scale = float(np.linalg.norm(ctx.y[idx] - ctx.y[idx].mean())) or 1.0
     S = sensitivities(ctx, names, nominal, raw0)
-    free, held = select(S, names, patterns(names, priority), config.get("diagnosis.identifiable"), scale)
+    free, held = select(S, names, patterns(names, priority), ctx.settings.identifiable, scale)
     bounds = {n: param_bounds(ctx, n, nominal[n]) for n in free}
     specs = [Param(n, nominal[n], *bounds[n]) for n in free]
     say(
@@ -958,7 +959,7 @@ def calibrate(
         values, _, raw, sol, route = _fit(
             ctx, specs, nominal, z1, starts=[np.array([s.to_z(s.start) for s in specs])], drift=drift, workers=workers
         )
-    factors = tolerances(free, tolerance)
+    factors = tolerances(free, tolerance, ctx.settings.tolerance)
     values, raw, symmetric = fix_scales(ctx, free, values, raw, nominal, factors, bounds)
     if symmetric:
         say(

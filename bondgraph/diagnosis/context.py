@@ -19,8 +19,8 @@ from ..fit.identify import Identification, check_varies
 from ..linear.lti import LTI, first_input, first_output
 from ..model.graph import Model
 from ..numerics.simulate import Simulator
-from ..support import config
 from ..support.errors import DataError
+from .settings import Settings
 
 SENSOR_GAIN = "sensor.gain"
 
@@ -142,8 +142,11 @@ class Context:
         validation: float = 0.3,
         say=None,
         reading: str = "band-limited",
+        settings: Settings | None = None,
     ):
         say = say or (lambda s: None)
+        #: the diagnosis's settings (frozen; :meth:`Settings.from_config` when not given)
+        self.settings = settings if settings is not None else Settings.from_config()
         if reading not in READINGS:
             raise ValueError(f"unknown drive reading {reading!r}: one of {', '.join(READINGS)}")
         #: how the recorded drive is read between its samples (see :data:`READINGS`)
@@ -168,7 +171,7 @@ class Context:
         y = data.column(self.data_output)
         check_varies(u, self.data_input, data.path)
         fs = self.source_rate
-        check_follows(u, y, fs, self.data_input, self.data_output, data.path)
+        check_follows(u, y, fs, self.data_input, self.data_output, data.path, self.settings.min_coherence)
         self.band_hz = drive_band(u, fs)
         self.main_hz = drive_peak(u, fs)
         noise_density = noise_psd(y, u, fs, self.band_hz)
@@ -184,7 +187,7 @@ class Context:
             light = [abs(p) / (2 * math.pi) for p in full if p.imag != 0 and abs(p.real) < 0.5 * abs(p)]
             self.lowest_resonance_hz = min(light) if light else None
             data, fs = self._decimate(lti, th0, data, fs, output_band(y, fs, noise_density))
-            self.cut = config.get("diagnosis.fast_factor") * math.pi * fs
+            self.cut = self.settings.fast_factor * math.pi * fs
             ss = lti.state_space(th0, self.cut)
             self.slow_hz = sorted({round(abs(p) / (2 * math.pi), 6) for p in ss.poles()})
             self.resonance_hz = sorted(
@@ -214,9 +217,9 @@ class Context:
         #: |value| bounds of the plausible device by parameter (set by the calibration)
         self.plausible: dict[str, tuple[float, float]] = {}
         #: equal time blocks of the split (see :func:`drive_sweep`)
-        blocks = int(config.get("diagnosis.blocks"))
-        sweep = drive_sweep(data.column(self.data_input), fs, blocks)
-        self.n_blocks = blocks if sweep is None else int(config.get("diagnosis.sweep_blocks"))
+        blocks = int(self.settings.blocks)
+        sweep = drive_sweep(data.column(self.data_input), fs, blocks, self.settings.sweep_ratio)
+        self.n_blocks = blocks if sweep is None else int(self.settings.sweep_blocks)
         if sweep is not None:
             self.notes.append(
                 f"the drive sweeps from {sweep[0]:.4g} to {sweep[1]:.4g} Hz: the record is split into "
@@ -328,7 +331,7 @@ class Context:
             self.data_input,
             self.data_output,
             self.validation,
-            max_fit_points=config.get("diagnosis.max_fit_points"),
+            max_fit_points=self.settings.max_fit_points,
             lti=self._lti,
             cut=self.cut,
             blocks=self.n_blocks,
@@ -386,12 +389,12 @@ class Context:
         drive's band and 1.25 times above the band where the measured output stands above its
         noise floor (``y_band``: resonances the drive rings, harmonics an effect makes); without
         a noise floor, above every mode of the model the data can resolve instead."""
-        margin = config.get("diagnosis.decimate_margin")
+        margin = self.settings.decimate_margin
         if y_band is not None:
             q = int(min(fs / (2 * margin * max(self.band_hz, 1e-300)), fs / (2 * 1.25 * max(y_band, 1e-300))))
             why = f"the output stands above its noise floor up to {y_band:.4g} Hz"
         else:
-            ss = lti.state_space(th0, config.get("diagnosis.fast_factor") * math.pi * fs)
+            ss = lti.state_space(th0, self.settings.fast_factor * math.pi * fs)
             modes = [abs(p) / (2 * math.pi) for p in ss.poles()]
             q = int(fs / (2 * margin * max([self.band_hz] + modes)))
             why = f"the fastest mode the data resolve is at {max(modes):.4g} Hz" if modes else ""
@@ -579,13 +582,13 @@ def drive_held_share(u: np.ndarray, fs: float, length: float, band: float = 0.01
     return float(ndimage.maximum_filter1d(still.astype(np.uint8), w, mode="constant").mean())
 
 
-def drive_sweep(u: np.ndarray, fs: float, blocks: int) -> tuple[float, float] | None:
+def drive_sweep(u: np.ndarray, fs: float, blocks: int, ratio: float) -> tuple[float, float] | None:
     """(first, last) mean frequency (Hz) of the drive's blocks when it sweeps, else None.
 
     The record is cut into ``blocks`` equal blocks; each block where the drive moves (RMS about
     its mean at least a tenth of the largest block's) has a power-weighted mean frequency.  The
     drive sweeps when these frequencies are ordered in time (Spearman |ρ| ≥ 0.8) and span a
-    factor ``diagnosis.sweep_ratio``: a chirp, never a periodic drive, steps or noise, whose
+    factor ``ratio`` (setting ``diagnosis.sweep_ratio``): a chirp, never a periodic drive, steps or noise, whose
     blocks look alike.  A record of fewer than eight samples per block never sweeps.
 
     Parameters
@@ -596,6 +599,8 @@ def drive_sweep(u: np.ndarray, fs: float, blocks: int) -> tuple[float, float] | 
         Sample rate, Hz.
     blocks : int
         Number of equal blocks.
+    ratio : float
+        The span of block frequencies (last over first, or first over last) that makes a sweep.
 
     Returns
     -------
@@ -616,7 +621,7 @@ def drive_sweep(u: np.ndarray, fs: float, blocks: int) -> tuple[float, float] | 
     if level.max() <= 0:
         return None
     c = np.asarray(centre)[level >= 0.1 * level.max()]
-    if c.size < 5 or c.min() <= 0 or c.max() / c.min() < config.get("diagnosis.sweep_ratio"):
+    if c.size < 5 or c.min() <= 0 or c.max() / c.min() < ratio:
         return None
     if abs(stats.spearmanr(np.arange(c.size), c).statistic) < 0.8:
         return None
@@ -714,7 +719,15 @@ def _blocks(mask: np.ndarray) -> list[slice]:
     return [slice(a, b) for a, b in zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0])]
 
 
-def check_follows(u: np.ndarray, y: np.ndarray, fs: float, drive: str, output: str, path: str | None = None) -> None:
+def check_follows(
+    u: np.ndarray,
+    y: np.ndarray,
+    fs: float,
+    drive: str,
+    output: str,
+    path: str | None,
+    min_coherence: float,
+) -> None:
     """Refuse an output that does not follow the drive: constant (a dead or unplugged
     sensor), or with no coherence with the drive where the drive has power (noise unrelated
     to it: a wrong column, a sensor out of range).  A model can explain nothing in such a
@@ -722,7 +735,7 @@ def check_follows(u: np.ndarray, y: np.ndarray, fs: float, drive: str, output: s
 
     The coherence is Welch's magnitude-squared coherence, less its bias for the averaged
     segments, averaged over the frequencies that hold the drive's power (weighted by it); the
-    record is refused below ``diagnosis.min_coherence``.
+    record is refused below ``min_coherence`` (setting ``diagnosis.min_coherence``).
 
     Parameters
     ----------
@@ -736,8 +749,10 @@ def check_follows(u: np.ndarray, y: np.ndarray, fs: float, drive: str, output: s
         The drive's column name (for the message).
     output : str
         The output's column name (for the message).
-    path : str, optional
+    path : str or None
         The data file (for the message).
+    min_coherence : float
+        The least mean coherence, 0-1.
 
     Raises
     ------
@@ -758,7 +773,7 @@ def check_follows(u: np.ndarray, y: np.ndarray, fs: float, drive: str, output: s
     coh = np.clip((np.abs(Puy) ** 2 / np.maximum(Puu * Pyy, 1e-300) - bias) / (1 - bias), 0.0, 1.0)
     w = np.where(f > 0, Puu, 0.0)
     mean = float(np.sum(coh * w) / np.sum(w)) if np.sum(w) > 0 else 0.0
-    if mean < config.get("diagnosis.min_coherence"):
+    if mean < min_coherence:
         raise DataError(
             f"{where}output column '{output}' does not follow the drive '{drive}' (coherence {mean:.2g} where the "
             f"drive has power): noise unrelated to it; check the sensor, its range and the columns"

@@ -24,7 +24,7 @@ combination of the others, and such a direction, unresolved by the fit part, wou
 carry huge cancelling coefficients that blow up wherever the columns differ slightly (the
 record's ends) and make the reference worse than the model it extends.
 
-**Rules** (:data:`RULES`, thresholds in :mod:`bondgraph.config`, section ``diagnosis``): named
+**Rules** (:data:`RULES`, thresholds in the diagnosis's :class:`~.settings.Settings`): named
 rule objects, checked in order; the first that refuses a candidate is its verdict's ``rule``:
 ``on-bound`` (no new parameter on a search bound), ``useful-gain`` (``min_gain``;
 ``min_gain_chain`` after the first step of a chain, whose residual holds what the named
@@ -50,13 +50,13 @@ chain; of those the data cannot tell from it, the one with the fewest parameters
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 
-from ..support import config
 from .filters import lowpass
+from .settings import Settings
 
 
 @dataclass
@@ -172,7 +172,7 @@ def _z(stat: float, se: float) -> float:
     return stat / se
 
 
-def reference_taus(dt: float, span: float) -> np.ndarray:
+def reference_taus(dt: float, span: float, n: int) -> np.ndarray:
     """Time constants of the flexible linear reference's lags (module docstring).
 
     Parameters
@@ -181,15 +181,16 @@ def reference_taus(dt: float, span: float) -> np.ndarray:
         Sample interval, s.
     span : float
         The record's duration, s.
+    n : int
+        How many (setting ``diagnosis.reference_poles``).
 
     Returns
     -------
     numpy.ndarray
-        ``diagnosis.reference_poles`` time constants, s, spread geometrically from two
-        samples to a third of the record.
+        ``n`` time constants, s, spread geometrically from two samples to a third of the
+        record.
     """
-    n = int(config.get("diagnosis.reference_poles"))
-    return np.geomspace(2 * dt, max(span / 3, 4 * dt), n)
+    return np.geomspace(2 * dt, max(span / 3, 4 * dt), int(n))
 
 
 #: relative singular value below which :func:`regress` leaves a direction out (module docstring)
@@ -265,6 +266,8 @@ class Evidence:
         The candidate's own ``linear_share`` (None: the setting).
     versus_static : Comparison, optional
         A memory effect against its twin without memory.
+    settings : Settings, optional
+        The thresholds (:meth:`Settings.from_config` when not given).
     """
 
     kind: str
@@ -277,6 +280,7 @@ class Evidence:
     recalibration: str = ""
     need_share: float | None = None
     versus_static: Comparison | None = None
+    settings: Settings = field(default_factory=Settings.from_config)
 
 
 @dataclass(frozen=True)
@@ -308,34 +312,30 @@ def _on_bound(e: Evidence) -> str:
 
 
 def _useful(e: Evidence) -> str:
-    need = config.get("diagnosis.min_gain_chain" if e.later else "diagnosis.min_gain")
+    need = e.settings.min_gain_chain if e.later else e.settings.min_gain
     return f"gain {e.base.gain:.3g} < {need:g}" if e.base.gain < need else ""
 
 
 def _significant(e: Evidence) -> str:
-    need = config.get("diagnosis.min_z")
+    need = e.settings.min_z
     if e.base.z < need:
         return f"not significant (z = {e.base.z:.2g} < {need:g}, {e.base.n_eff:.0f} effective samples)"
     return ""
 
 
-def _beyond(vr: Comparison | None) -> bool:
-    return (
-        vr is not None
-        and vr.gain >= config.get("diagnosis.min_gain_reference")
-        and vr.z >= config.get("diagnosis.min_z_reference")
-    )
+def _beyond(vr: Comparison | None, settings: Settings) -> bool:
+    return vr is not None and vr.gain >= settings.min_gain_reference and vr.z >= settings.min_z_reference
 
 
 def _beyond_linear(e: Evidence) -> str:
     vr = e.versus_reference
-    if _beyond(vr):
+    if _beyond(vr, e.settings):
         return ""
     return "does not beat the linear reference" + (f" (gain {vr.gain:.3g}, z = {vr.z:.2g})" if vr is not None else "")
 
 
 def _linear_share(e: Evidence) -> str:
-    need = config.get("diagnosis.linear_share") if e.need_share is None else e.need_share
+    need = e.settings.linear_share if e.need_share is None else e.need_share
     if e.share is not None and e.share < need:
         return f"explains {e.share:.0%} of the linear mismatch (< {need:.0%})"
     return ""
@@ -346,7 +346,7 @@ def _plausible(e: Evidence) -> str:
 
 
 def _not_recalibration(e: Evidence) -> str:
-    if e.recalibration and not _beyond(e.versus_reference):
+    if e.recalibration and not _beyond(e.versus_reference, e.settings):
         vr = e.versus_reference
         return f"{e.recalibration} and does not beat the linear reference" + (
             f" (gain {vr.gain:.3g}, z = {vr.z:.2g})" if vr is not None else ""
@@ -355,7 +355,7 @@ def _not_recalibration(e: Evidence) -> str:
 
 
 def _beyond_static(e: Evidence) -> str:
-    if e.versus_static is None or _beyond(e.versus_static):
+    if e.versus_static is None or _beyond(e.versus_static, e.settings):
         return ""
     vs = e.versus_static
     return f"its loops explain no more than a static curve (gain {vs.gain:.3g}, z = {vs.z:.2g})"
@@ -426,6 +426,7 @@ def judge(
     need_share: float | None = None,
     versus_static: Comparison | None = None,
     rules: tuple[Rule, ...] = RULES,
+    settings: Settings | None = None,
 ) -> Verdict:
     """Apply :data:`RULES` (or ``rules``) to one candidate; the first rule that refuses it
     decides (``later``: a chain step after the first, where ``diagnosis.min_gain_chain``
@@ -457,6 +458,8 @@ def judge(
         A memory effect against its twin without memory.
     rules : tuple of Rule, optional
         The rules, in order.
+    settings : Settings, optional
+        The thresholds (:meth:`Settings.from_config` when not given).
 
     Returns
     -------
@@ -474,6 +477,7 @@ def judge(
         recalibration,
         need_share,
         versus_static,
+        settings if settings is not None else Settings.from_config(),
     )
     for rule in rules:
         if kind in rule.kinds:
@@ -488,7 +492,14 @@ BASIC = tuple(r for r in RULES if r.name in ("on-bound", "useful-gain", "signifi
 
 
 def reference_prediction(
-    view_respond, drive: np.ndarray, raw: np.ndarray, y: np.ndarray, idx: np.ndarray, dt: float, span: float
+    view_respond,
+    drive: np.ndarray,
+    raw: np.ndarray,
+    y: np.ndarray,
+    idx: np.ndarray,
+    dt: float,
+    span: float,
+    poles: int,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(reference columns, the reference's prediction): ``raw`` plus the linear core driven by
     lags of ``drive``, fitted on ``idx``.
@@ -509,6 +520,8 @@ def reference_prediction(
         Sample interval, s.
     span : float
         The record's duration, s.
+    poles : int
+        How many lags (setting ``diagnosis.reference_poles``).
 
     Returns
     -------
@@ -517,6 +530,6 @@ def reference_prediction(
     prediction : numpy.ndarray
         The reference's fitted prediction on every sample.
     """
-    lags = [lowpass(drive, tau, dt) for tau in reference_taus(dt, span)]
+    lags = [lowpass(drive, tau, dt) for tau in reference_taus(dt, span, poles)]
     cols = view_respond(lags)
     return cols, regress(np.column_stack([raw, cols]), y, idx)

@@ -23,7 +23,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import BSpline
 
-from ..support import config
 from .calibration import rms
 from .context import Context, State
 from .decision import BASIC, Verdict, compare, judge, regress
@@ -135,8 +134,8 @@ def drift_step(ctx: Context, state: State, solved: float | None, floor: float) -
     res = CandidateResult("drift", "a slow drift of the output (a smooth curve in time)", site="output")
     res.gain, res.z, res.n_eff, res.rms_validation, res.n_params = cmp.gain, cmp.z, cmp.n_eff, after, basis.shape[1]
     res.params = {"drift.rms_share": size, "drift.noise_ratio": above}
-    verdict = judge("nonlinear", cmp, None, None, [], "", rules=BASIC)
-    least = config.get("diagnosis.drift_noise")
+    verdict = judge("nonlinear", cmp, None, None, [], "", rules=BASIC, settings=ctx.settings)
+    least = ctx.settings.drift_noise
     if verdict.passed and above < least:
         verdict = Verdict(
             False, f"its RMS is {above:.2g}× the noise floor (< {least:g}): a nuisance, not a finding", "drift-size"
@@ -183,6 +182,6 @@ def drift_explains(ctx: Context, state: State, rms_winner: float) -> bool:
     e_state = y - state.prediction
     e_drift = y - regress(np.column_stack([state.raw, ctx.trend]), y, idx)
     base = compare(e_state, e_drift, ctx.blocks)
-    if base.gain < config.get("diagnosis.min_gain") or base.z < config.get("diagnosis.min_z"):
+    if base.gain < ctx.settings.min_gain or base.z < ctx.settings.min_z:
         return False
-    return rms(e_drift[val]) <= config.get("diagnosis.equivalent") * rms_winner
+    return rms(e_drift[val]) <= ctx.settings.equivalent * rms_winner

@@ -15,7 +15,6 @@ from ..data import Dataset
 from ..model.graph import Model
 from ..model.memory import not_monotone
 from ..numerics.simulate import SimulationError
-from ..support import config
 from ..support.errors import BondGraphError
 from .account import account
 from .calibration import calibrate, rms, score
@@ -30,6 +29,7 @@ from .projection import time_budget
 from .report import CandidateResult, Report, Step
 from .restoring import restoring_kinds
 from .screen import screen_out
+from .settings import Settings
 from .view import View
 
 
@@ -102,7 +102,7 @@ def run_candidate(
     else:
         view = View(ctx, state, calibrated, effort=effort)
     try:
-        with time_budget(config.get("diagnosis.candidate_seconds"), config.get("diagnosis.candidate_limit")):
+        with time_budget(ctx.settings.candidate_seconds, ctx.settings.candidate_limit):
             return _fit_candidate(cand, view, res)
     except Exception as exc:  # noqa: BLE001 - one candidate's defect (a third party's too) is its FAILED line
         res.error = f"{type(exc).__name__}: {exc}"
@@ -268,7 +268,9 @@ def assess(
     """
     idx, y = ctx.ident.fit_idx, ctx.y
     drive = state.drive if state.drive is not None else ctx.u
-    ref_cols, ref_pred = reference_prediction(view.respond, drive, state.raw, y, idx, ctx.dt, ctx.span)
+    ref_cols, ref_pred = reference_prediction(
+        view.respond, drive, state.raw, y, idx, ctx.dt, ctx.span, ctx.settings.reference_poles
+    )
     e_state = y - state.prediction
     e_ref = y - ref_pred
     val = ctx.ident.val_mask
@@ -282,7 +284,7 @@ def assess(
             before, e = effect_errors(ctx, oc, e_state, e_plaus)
             scored[id(oc)] = (before, e, compare(before, e, ctx.blocks))
     if confirm is not None:
-        _confirm_borderline(outcomes, scored, confirm, e_plaus, later=bool(state.causes))
+        _confirm_borderline(outcomes, scored, confirm, e_plaus, bool(state.causes), ctx.settings)
     for oc in outcomes:
         r = oc.result
         if oc.raw is None:
@@ -312,11 +314,12 @@ def assess(
             recalibration=r.recalibration,
             need_share=r.need_share,
             versus_static=vs,
+            settings=ctx.settings,
         )
         r.passed, r.verdict, r.rule = v.passed, v.reason, v.rule
         if not r.success and r.passed:
             r.verdict += " (optimiser not converged)"
-    winner, rule = _simplest_of_best([oc for oc in outcomes if oc.result.passed])
+    winner, rule = _simplest_of_best([oc for oc in outcomes if oc.result.passed], ctx.settings.equivalent)
     if winner is None:
         tried = [oc.result for oc in outcomes if oc.raw is not None]
         rule = max(tried, key=lambda r: r.gain).rule if tried else "no-candidate"
@@ -338,13 +341,15 @@ def assess(
     return step, winner
 
 
-def _confirm_borderline(outcomes: list[Outcome], scored: dict, confirm, e_plaus, later: bool) -> None:
+def _confirm_borderline(
+    outcomes: list[Outcome], scored: dict, confirm, e_plaus, later: bool, settings: Settings
+) -> None:
     """Combine the first fold's z with a second fold's (Stouffer: (z1 + z2)/√2) for at most
-    ``diagnosis.confirm_max`` candidates, the best gains first, whose gain passes and whose
-    z falls short of ``diagnosis.min_z`` by less than ``diagnosis.confirm_margin``."""
-    min_z = config.get("diagnosis.min_z")
-    min_gain = config.get("diagnosis.min_gain_chain" if later else "diagnosis.min_gain")
-    margin = config.get("diagnosis.confirm_margin")
+    ``settings.confirm_max`` candidates, the best gains first, whose gain passes and whose
+    z falls short of ``settings.min_z`` by less than ``settings.confirm_margin``."""
+    min_z = settings.min_z
+    min_gain = settings.min_gain_chain if later else settings.min_gain
+    margin = settings.confirm_margin
     near = [
         oc
         for oc in outcomes
@@ -353,7 +358,7 @@ def _confirm_borderline(outcomes: list[Outcome], scored: dict, confirm, e_plaus,
         and min_z - margin <= scored[id(oc)][2].z < min_z
         and not [n for n in oc.result.at_bounds if n in oc.result.params]
     ]
-    for oc in sorted(near, key=lambda oc: -scored[id(oc)][2].gain)[: int(config.get("diagnosis.confirm_max"))]:
+    for oc in sorted(near, key=lambda oc: -scored[id(oc)][2].gain)[: int(settings.confirm_max)]:
         second = confirm(oc, e_plaus)
         if second is None:
             continue
@@ -386,10 +391,10 @@ def near_the_bar(ctx: Context, state: State, oc: Outcome) -> bool:
     bool
         Whether to fit it again.
     """
-    return oc.raw is not None and effect_comparison(ctx, state, oc).gain >= config.get("diagnosis.screen_gain")
+    return oc.raw is not None and effect_comparison(ctx, state, oc).gain >= ctx.settings.screen_gain
 
 
-def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
+def polish_race(outcomes: list[Outcome], margin: float) -> list[Outcome]:
     """The outcomes to fit again with more effort before one is named: when two or more passing
     candidates are within ``diagnosis.polish_margin`` of the best gain over the flexible linear
     reference and one of them stopped before its optimiser converged, those of them that did
@@ -399,6 +404,8 @@ def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
     ----------
     outcomes : list of Outcome
         The assessed outcomes.
+    margin : float
+        The race's width, a factor on the gain over the reference (``diagnosis.polish_margin``).
 
     Returns
     -------
@@ -408,7 +415,6 @@ def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
     passing = [oc for oc in outcomes if oc.result.passed]
     if len(passing) < 2:
         return []
-    margin = config.get("diagnosis.polish_margin")
     top = max(oc.result.gain_reference for oc in passing)
     race = [oc for oc in passing if oc.result.gain_reference * margin >= top]
     if len(race) < 2:
@@ -416,17 +422,16 @@ def polish_race(outcomes: list[Outcome]) -> list[Outcome]:
     return [oc for oc in race if not oc.result.success]
 
 
-def _simplest_of_best(passing: list[Outcome]) -> tuple[Outcome | None, str]:
+def _simplest_of_best(passing: list[Outcome], margin: float) -> tuple[Outcome | None, str]:
     """The passing candidate to name: the best ranks by what it explains when every linear
     correction is allowed too (a linear cause gains little over the reference, an effect beyond
     any linear one more), then by its own gain; of the candidates the data cannot tell from the
-    best (validation RMS within ``diagnosis.equivalent`` of it), the one with the fewest new parameters is named (a saturation curve that a 10-play operator
+    best (validation RMS within ``margin``, setting ``diagnosis.equivalent``, of it), the one with the fewest new parameters is named (a saturation curve that a 10-play operator
     reproduces is a saturation, not hysteresis), provided it also explains about as much as the
     best beyond the flexible linear reference (a lag that mimics a loop at one rate does not)."""
     if not passing:
         return None, ""
     best = max(passing, key=lambda oc: (round(oc.result.gain_reference, 2), oc.result.gain))
-    margin = config.get("diagnosis.equivalent")
     tied = [
         oc
         for oc in passing
@@ -582,6 +587,7 @@ def diagnose(
     equations: bool = True,
     tolerance: Mapping[str, float] | None = None,
     drift: bool | None = None,
+    settings: Settings | None = None,
 ) -> Report:
     """Diagnose what ``model`` misses in ``data`` (see the package docstring).
 
@@ -595,7 +601,9 @@ def diagnose(
     causes on the extended model until none passes; ``progress``: a
     :class:`bondgraph.support.progress.Progress` (one count per candidate fitted, notes for the
     stages) or any callable taking a line of text; ``drift``: solve a linear sensor drift with
-    the calibration and remove it first (default: the setting ``diagnosis.drift``).
+    the calibration and remove it first (default: the setting ``diagnosis.drift``);
+    ``settings``: the thresholds and limits (a keyword of :meth:`Settings.from_config` beats
+    the configured default; the object is frozen and read, never rewritten).
 
     Parameters
     ----------
@@ -633,8 +641,10 @@ def diagnose(
         {pattern: factor} of plausible device-to-device spread of the parameters (the model
         file's ``TOLERANCE``; others ``diagnosis.tolerance``).
     drift : bool, optional
-        Solve a linear sensor drift with the calibration and remove it first (default: the
-        setting ``diagnosis.drift``).
+        Solve a linear sensor drift with the calibration and remove it first (default:
+        ``settings.drift``).
+    settings : Settings, optional
+        The diagnosis's settings (default: :meth:`Settings.from_config`, the configured ones).
 
     Returns
     -------
@@ -649,11 +659,12 @@ def diagnose(
     BondGraphError
         A bad input or output name, or a model that cannot be derived or simulated.
     """
-    drift = bool(config.get("diagnosis.drift")) if drift is None else bool(drift)
+    settings = settings if settings is not None else Settings.from_config()
+    drift = bool(settings.drift) if drift is None else bool(drift)
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     started = time.time()
     args = (model, data, candidates, calibrate_first, input, output, data_input, data_output, validation, workers)
-    rest = (chain, progress, source, equations, tolerance)
+    rest = (chain, progress, source, equations, tolerance, settings)
 
     def start(reading: str) -> tuple[Iterator, FirstStep]:
         """A hypothesis' chain run to its first step; when a straight drift explains that step
@@ -672,14 +683,14 @@ def diagnose(
         # the chain goes on under the reading whose first step is the better one
         run, first = start("band-limited")
         notes = list(first.notes)
-        if first.gap > config.get("diagnosis.reading_gap") * first.floor:
+        if first.gap > settings.reading_gap * first.floor:
             say(
                 f"the two readings of the drive between its samples change the calibrated model's output by "
                 f"{first.gap / first.floor:.2g}× the noise floor: its first step with the drive read as linear "
                 f"between samples"
             )
             other, second = start("linear")
-            keep, why = _better_reading(first.key, second.key)
+            keep, why = _better_reading(first.key, second.key, settings.equivalent)
             if keep == 1:
                 run, other, first = other, run, second
             other.close()
@@ -736,15 +747,15 @@ def _finish(run: Iterator) -> Report:
     raise RuntimeError("a diagnosis chain yields once, after its first step")
 
 
-def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float]) -> tuple[int, str]:
+def _better_reading(a: tuple[str, str, float], b: tuple[str, str, float], equivalent: float) -> tuple[int, str]:
     """Which of two first steps, (reading, cause, validation RMS), under different readings of
     the drive to go on from (0: ``a``, 1: ``b``) and why: the better fit; when the two are within
-    ``diagnosis.equivalent`` of each other and only one names a cause, the one naming none (the
+    a factor ``equivalent`` (setting ``diagnosis.equivalent``) of each other and only one names a cause, the one naming none (the
     data cannot tell the readings apart, and a cause must not be credited with what a reading
     explains).  Two fits within that factor (or equal to the digits shown) are said to fit as
     well, never one better, and an RMS equal to the digits shown is given once."""
     shown = f"{a[2]:.4g}", f"{b[2]:.4g}"
-    alike = max(a[2], b[2]) <= config.get("diagnosis.equivalent") * min(a[2], b[2]) or shown[0] == shown[1]
+    alike = max(a[2], b[2]) <= equivalent * min(a[2], b[2]) or shown[0] == shown[1]
     if alike and (a[1] == "none") != (b[1] == "none"):
         k = 0 if a[1] == "none" else 1
     else:
@@ -785,6 +796,7 @@ def _chain(
     source,
     equations,
     tolerance,
+    settings,
     reading,
     drift: bool = False,
     since: float | None = None,
@@ -799,7 +811,7 @@ def _chain(
     say = getattr(progress, "note", None) or progress or (lambda s: None)
     tick = getattr(progress, "advance", None)
     cands = list(candidates) if candidates is not None else load_candidates(model)
-    ctx = Context(model, data, input, output, data_input, data_output, validation, say, reading)
+    ctx = Context(model, data, input, output, data_input, data_output, validation, say, reading, settings)
     state, cal, pstate = calibrate(ctx, calibrate_first, say, tolerance, workers, drift=drift)
     plausible = (pstate, cal.plausible) if pstate is not state else None
     gap = ctx.reading_gap(state.values, state.gain)
@@ -812,12 +824,12 @@ def _chain(
     asked = False  # whether the first step was put to the caller
     slow_drive = smooth_share(ctx, np.asarray(ctx.u, float)) >= SLOW_DRIVE  # see rule 'effect-or-drift'
     with Pool(run_candidate, ctx, cal.free, cands, workers) as pool:
-        for k in range(int(config.get("diagnosis.max_chain")) if chain else 1):
+        for k in range(int(settings.max_chain) if chain else 1):
             spent = time.time() - (started if since is None else since)
-            if k and spent > config.get("diagnosis.chain_seconds"):
+            if k and spent > settings.chain_seconds:
                 note = (
                     f"the chain stopped after step {k}: {spent:.0f} s spent, past the diagnosis' time budget "
-                    f"(setting diagnosis.chain_seconds, {config.get('diagnosis.chain_seconds'):g} s); "
+                    f"(setting diagnosis.chain_seconds, {settings.chain_seconds:g} s); "
                     f"further causes were not examined"
                 )
                 say(note)
@@ -836,7 +848,7 @@ def _chain(
             fitted = [i for i in pending if i not in left_out]
             if left_out:
                 say(f"step {k + 1}: {len(fitted)} of {len(pending)} candidates fitted in full after the screen")
-            screen = config.get("diagnosis.screen_effort") if k else 1.0
+            screen = settings.screen_effort if k else 1.0
             for n, (i, oc) in enumerate(pool.run(state, fitted, first, screen), 1):
                 if i in shares:
                     oc.result.evidence["first_order_share"] = shares[i]
@@ -868,9 +880,9 @@ def _chain(
                 return seconds[key]
 
             step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
-            again = {id(oc) for oc in polish_race(ordered)}
+            again = {id(oc) for oc in polish_race(ordered, ctx.settings.polish_margin)}
             if again:
-                effort = config.get("diagnosis.polish_effort")
+                effort = settings.polish_effort
                 say(
                     f"step {k + 1}: {len(again)} candidates in the race stopped before converging: "
                     f"fitted again with {effort:g}× the evaluations"
@@ -962,6 +974,7 @@ def _chain(
         noise=ctx.noise,
         baseline="plausible" if from_plausible else "calibrated",
         account=account(ctx.u, ctx.y, final_prediction, ctx.ident.val_mask, ctx.fs, ctx.noise),
+        settings=ctx.settings,
     )
     report.predictions = {"t": ctx.t, "u": ctx.u_recorded, "y": ctx.y, "baseline": baseline.prediction}
     report.predictions["steps"] = step_predictions + ([final_prediction] if causes[-1:] == ["drift"] else [])
@@ -996,7 +1009,7 @@ def _integrated(ctx: Context, model: Model, state: State) -> float | None:
         known = {p.name for p in ident.sim.eqs.params}
         raw = ident.predict(
             {k: v for k, v in state.values.items() if k in known and k != SENSOR_GAIN},
-            max_steps=int(config.get("diagnosis.check_max_steps")),
+            max_steps=int(ctx.settings.check_max_steps),
         )
     except (BondGraphError, SimulationError, ZeroDivisionError):
         return None

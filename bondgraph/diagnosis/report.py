@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..support import config
 from .candidate import LINEAR
+from .settings import Settings
 
 
 @dataclass
@@ -296,6 +296,8 @@ class Report:
         What ``baseline_rms`` and ``gain`` start from.
     account : Account, optional
         What the final model leaves unexplained.
+    settings : Settings, optional
+        The settings the diagnosis ran with (:meth:`Settings.from_config` when not given).
     """
 
     causes: list[str]
@@ -320,6 +322,7 @@ class Report:
     baseline: str = "calibrated"
     #: what the final model leaves unexplained (:class:`~bondgraph.diagnosis.account.Account`)
     account: object = None
+    settings: Settings = field(default_factory=Settings.from_config)
 
     @property
     def cause(self) -> str:
@@ -388,15 +391,15 @@ class Report:
             "data": self.data,
             "notes": self.notes,
             "criterion": {
-                k.split(".", 1)[1]: config.get(k)
+                k: getattr(self.settings, k)
                 for k in (
-                    "diagnosis.min_z",
-                    "diagnosis.min_gain",
-                    "diagnosis.min_gain_chain",
-                    "diagnosis.min_gain_reference",
-                    "diagnosis.min_z_reference",
-                    "diagnosis.linear_share",
-                    "diagnosis.spread",
+                    "min_z",
+                    "min_gain",
+                    "min_gain_chain",
+                    "min_gain_reference",
+                    "min_z_reference",
+                    "linear_share",
+                    "spread",
                 )
             },
             "seconds": round(self.seconds, 1),
@@ -503,7 +506,7 @@ class Report:
         if cal["at_bounds"]:
             lines.append(
                 f"  WARNING: {', '.join(cal['at_bounds'])} ended on the search bound "
-                f"(×/÷{config.get('diagnosis.spread'):g} of the model's value): the device is "
+                f"(×/÷{self.settings.spread:g} of the model's value): the device is "
                 f"further from the model file than calibration allows"
             )
         if not cal["success"]:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from ..support import config
 from .candidate import Candidate
 
 
@@ -34,7 +33,7 @@ def screen_out(
         index → the share (0-1) of the residual's energy on the fit part the candidate
         explains to first order, for every candidate that could say.
     """
-    keep = int(config.get("diagnosis.screen_keep"))
+    keep = int(view.settings.screen_keep)
     shares: dict[int, float] = {}
     for i in pending:
         cand = candidates[i]

@@ -117,6 +117,8 @@ class View:
         self.fit_mask, self.val_mask = _frozen(ctx.ident.fit_mask), _frozen(ctx.ident.val_mask)
         self.input, self.output = ctx.input, ctx.output
         self.input_symbol = ctx.model.inputs[ctx.input].symbol
+        #: the diagnosis's settings (:class:`~bondgraph.diagnosis.settings.Settings`, frozen)
+        self.settings = ctx.settings
         self.noise = ctx.noise
         self.band_hz = ctx.band_hz
         #: where the drive's power spectrum peaks (Hz)

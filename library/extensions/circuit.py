@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph import I, config
+from bondgraph import I
 from bondgraph.diagnosis import LINEAR, NOT_A_DRIVE, Candidate, Extension, Spec
 from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
 
@@ -85,7 +85,7 @@ class LoopInductance(Candidate):
             scores.append(view.score(raw)[2] if np.all(np.isfinite(raw)) else np.inf)
         L0 = float(SCAN_H[int(np.argmin(scores))])
         specs = [Spec("loop.L", L0, float(SCAN_H[0]), float(SCAN_H[-1]), log=True)]
-        spread = float(config.get("diagnosis.tolerance"))
+        spread = float(view.settings.tolerance)
         specs += [Spec(n, view.values[n], view.values[n] / spread, view.values[n] * spread, log=True) for n in rs]
         values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=30, drive=self._core_drive(view))
         model = self.build(view, view.rewrite(), values["loop.L"])
@@ -96,7 +96,7 @@ class LoopInductance(Candidate):
         predict = self._predictor(view, self._base(view))
         with_l = view.score(predict(ext.values))[3]
         without = view.score(predict({**ext.values, "loop.L": float(SCAN_H[0])}))[3]
-        if without <= float(config.get("diagnosis.equivalent")) * with_l:
+        if without <= float(view.settings.equivalent) * with_l:
             return (
                 f"its inductance adds nothing to a refit of the loop's resistance (validation RMS "
                 f"{without:.3g} without it, {with_l:.3g} with it)"
