@@ -171,3 +171,24 @@ def test_a_term_of_two_coefficients_agrees_with_the_integrated_rewrite():
     assert np.std(y - ref) < 5e-3 * np.std(ref)
     held = Lure(resonator(), "F", "x", ["c"], {"c": None}, t[1] - t[0], fixed=[("k", None, asymmetric, *coef)])
     assert np.std(held.linear_responses({}, u, stanton)["x"] - ref) < 5e-3 * np.std(ref)
+
+
+def test_a_new_term_on_an_element_that_holds_one_adds_to_it():
+    """A chain step on the element of an earlier one: a softening of the spring held, a new
+    two-coefficient term (hardening cubic, quadratic) on the same spring; the stepped route
+    against the rewrite carrying both terms."""
+    t, u = drive()
+    first = Lure(resonator(), "F", "x", ["k"], {"k": None}, t[1] - t[0])
+    q = first.linear_responses({}, u, softening)["diag.x:k"]
+    peak = float(np.max(np.abs(q)))
+    soft = (0.2 * K / peak**2, 0.5 * float(np.mean(q**2)))
+    lure = Lure(resonator(), "F", "x", ["k"], {"k": None}, t[1] - t[0], fixed=[("k", None, softening, *soft)])
+    assert lure.elements == ["k"] and lure.new == ["k"]
+    assert np.std(lure.linear_responses({}, u, asymmetric)["x"] - first.simulate({}, u, softening, [soft])) < 1e-9
+    coef = ((0.05 * K / peak**2, 0.3 * K / peak), soft[1])
+    y = lure.simulate({}, u, asymmetric, [coef])
+    rewritten = resonator()
+    modify_law(rewritten, "k", lambda x, old: old + softening(*soft, x, None) + asymmetric(*coef, x, None))
+    ref = integrated(rewritten, t, u)
+    assert np.std(y - ref) < 5e-3 * np.std(ref)
+    assert np.std(first.simulate({}, u, softening, [soft]) - ref) > 0.05 * np.std(ref)  # the new term mattered

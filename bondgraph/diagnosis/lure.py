@@ -56,7 +56,9 @@ class Lure:
     for the drive, or None.
     ``fixed``: terms already part of the model being extended, one (element, partner, term,
     c, r2) each (c a number or a tuple of numbers), held as they are while the new elements'
-    terms are fitted.
+    terms are fitted.  A new term may act on an element that holds one (a hardening after a
+    softening of the same spring, friction beside a nonlinear damping): the terms on an element
+    add up in its law, sharing its partner, with at most one saturation h·tanh(g·x) among them.
 
     Parameters
     ----------
@@ -78,7 +80,8 @@ class Lure:
     Raises
     ------
     BondGraphError
-        An element already carries a term, or the model is not linear in its states.
+        Two new terms on one element, terms on one element with different partners, or a
+        model that is not linear in its states.
     """
 
     def __init__(
@@ -92,10 +95,20 @@ class Lure:
         fixed: Sequence[tuple] = (),
     ):
         self.fixed = [(el, p, term, _coefficient(c), float(r2)) for el, p, term, c, r2 in fixed]
-        partners = {**{el: p for el, p, *_ in self.fixed}, **partners}
-        elements = [el for el, *_ in self.fixed] + list(elements)
-        if len(set(elements)) < len(elements):
-            raise BondGraphError("a nonlinear term is already on one of these elements")
+        #: the elements of the new terms, one term each
+        self.new = list(elements)
+        if len(set(self.new)) < len(self.new):
+            raise BondGraphError("two new nonlinear terms on one element")
+        # one slot per element: the terms on an element (held ones, a new one) add up in its law
+        elements = list(dict.fromkeys([el for el, *_ in self.fixed] + self.new))
+        own = [p for _, p, *_ in self.fixed] + [partners.get(el) for el in self.new]
+        partners = {}
+        for el, p in zip([el for el, *_ in self.fixed] + self.new, own):
+            if p and partners.get(el) and partners[el] != p:
+                raise BondGraphError(f"the nonlinear terms on '{el}' use different partners")
+            partners[el] = partners.get(el) or p
+        self._slot = [elements.index(el) for el, *_ in self.fixed] + [elements.index(el) for el in self.new]
+        self._own_partner = [bool(p) for p in own]
         aug = model.copy()
         self.n = len(elements)
         self.elements = elements
@@ -169,8 +182,7 @@ class Lure:
         NotConverged
             The fixed terms make the model diverge.
         """
-        new = self.n - len(self.fixed)
-        Y, ok = self._run(values, u, term, [(0.0, 0.0)] * new, len(self.fixed) > 0, active_new=False)
+        Y, ok = self._run(values, u, term, [(0.0, 0.0)] * len(self.new), len(self.fixed) > 0, active_new=False)
         if not ok:
             raise NotConverged("the model's own nonlinear terms make it diverge")
         return {o: Y[:, r] for r, o in enumerate(self.outputs)}
@@ -206,8 +218,8 @@ class Lure:
             The terms make the model diverge, or ``term`` is not of the supported form.
         """
         coefs = [(_coefficient(c), float(r2)) for c, r2 in coefs]
-        if len(coefs) != self.n - len(self.fixed):
-            raise ValueError(f"{len(coefs)} coefficients for {self.n - len(self.fixed)} new terms")
+        if len(coefs) != len(self.new):
+            raise ValueError(f"{len(coefs)} coefficients for {len(self.new)} new terms")
         Y, ok = self._run(values, u, term, coefs, True)
         if not ok:
             raise NotConverged("the nonlinear term makes the model diverge (an implicit step did not converge)")
@@ -320,14 +332,20 @@ class Lure:
             (term if active_new else None, c, r2) for c, r2 in coefs
         ]
         laws = [
-            polynomial_term(t, self.partners[k], _arity(c))(c, r2) if t is not None else (np.zeros((1, 1)), np.zeros(2))
+            polynomial_term(t, self._own_partner[k], _arity(c))(c, r2)
+            if t is not None
+            else (np.zeros((1, 1)), np.zeros(2))
             for k, (t, c, r2) in enumerate(terms)
         ]
-        mats = [m for m, _ in laws]
-        P = np.zeros((self.n, max(m.shape[0] for m in mats), max(m.shape[1] for m in mats)))
-        for k, m in enumerate(mats):
-            P[k, : m.shape[0], : m.shape[1]] = m
-        HG = np.array([hg for _, hg in laws], float).reshape(self.n, 2)
+        P = np.zeros((self.n, max(m.shape[0] for m, _ in laws), max(m.shape[1] for m, _ in laws)))
+        HG = np.zeros((self.n, 2))
+        for k, (m, hg) in enumerate(laws):  # the terms on one element add up
+            j = self._slot[k]
+            P[j, : m.shape[0], : m.shape[1]] += m
+            if hg[0] != 0.0:
+                if HG[j, 0] != 0.0:
+                    raise NotConverged(f"two saturations in the law of '{self.elements[j]}'")
+                HG[j] = hg
         x_s, w_s = self._start(A, B, C, D, float(u[0]), P, HG, active)
         xi0 = x_s - G1[:, 0] * u[0] - G1[:, 1:] @ w_s
         ok = _step(
