@@ -405,9 +405,9 @@ class LawTerm(Candidate):
                 )
                 for n, el in zip(names, els)
             ]
-            return odd + [  # the even part is free at every point of the scan
+            return odd + [  # the even part is held at 0 in the scan, free in the fit
                 Spec(e, 0.0, 0.0, 0.0, scale=escale[el])
-                if el in held
+                if el in held or not free
                 else Spec(
                     e,
                     (even or {}).get(e, 0.0),

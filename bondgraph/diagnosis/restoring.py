@@ -237,7 +237,9 @@ class RestoringHysteresis(Candidate):
         if best is None:
             raise SimulationError(f"{self.cause}: the extended model could not be simulated")
         _, values, raw, ok, msg, at, specs = best
-        at = [n for n in at if not (n.startswith("hy.k_") and values[n] == 0)]
+        # k_h at or near 0 (the optimiser flags a thousandth of its range from either end) is
+        # no such effect, not a search limit: only its upper end counts
+        at = [n for n in at if not (n.startswith("hy.k_") and values[n] < 5.0 * stiffness)]
         final = self.build(view, values[f"hy.k_{el}"], values[f"hy.zmax_{el}"])
         return Extension(final, values, [s.name for s in specs], raw, None, None, at, ok, msg)
 
