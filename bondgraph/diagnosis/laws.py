@@ -2,8 +2,8 @@
 
 Each kind adds law(x) + term(c, r², x, a) to every element of its site, one coefficient c per
 element (a pair (c, d) for a kind with an even part: d, of free sign, weighs an even term, the
-law's asymmetry), where x is the element's own variable (the displacement q of a C, the flow f of an R)
-and a, when the kind has a *partner*, the displacement of another element or the drive.  The
+law's asymmetry), where x is the element's own variable (the displacement q of a C, the flow f
+of an R) and a, when the kind has a *partner*, the displacement of another element or the drive.  The
 term is written *centred* where it can be: r² is chosen from the current model's amplitude at
 the element so that the law's describing-function slope at the data's amplitude stays the
 calibrated one, and c only says how the slope moves with amplitude.
@@ -392,7 +392,7 @@ class LawTerm(Candidate):
         def fitted(specs, nfev, start=None):
             return view.fit_model(model, specs, max_nfev=nfev, start=start, predict=predict)
 
-        def spec(f, free=False, even=None):  # elements whose term cannot matter are held at 0
+        def spec(f, free=False):  # elements whose term cannot matter are held at 0
             odd = [
                 Spec(n, 0.0, 0.0, 0.0, scale=refs[el][0])
                 if el in held
@@ -410,7 +410,7 @@ class LawTerm(Candidate):
                 if el in held or not free
                 else Spec(
                     e,
-                    (even or {}).get(e, 0.0),
+                    0.0,
                     -self.even_upper * escale[el],
                     self.even_upper * escale[el],
                     scale=escale[el],
@@ -444,7 +444,7 @@ class LawTerm(Candidate):
             return [n for n in at if n not in limit or abs(values[n]) > 0.5 * limit[n]]
 
         start = {k: v for k, v in best[2].items() if k not in names}
-        values, raw, ok, msg, at = fitted(spec(best[1], free=True, even=start), 12, start)
+        values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
         at = plausibility_ends(at)
         stuck = [el for n, el in zip(names, els) if n in at]
         if stuck and len(stuck) + len(held) < len(els):
@@ -452,7 +452,7 @@ class LawTerm(Candidate):
             # stiffness turns negative at the peak): that element's term stands in for something
             # else, so it is held at 0 and the others are refitted without it
             held += stuck
-            values, raw, ok, msg, at = fitted(spec(best[1], free=True, even=start), 12, start)
+            values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
             at = plausibility_ends(at)
             msg = (
                 f"{', '.join(f'{self.prefix}_{el}' for el in stuck)} went to "
