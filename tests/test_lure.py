@@ -192,3 +192,17 @@ def test_a_new_term_on_an_element_that_holds_one_adds_to_it():
     ref = integrated(rewritten, t, u)
     assert np.std(y - ref) < 5e-3 * np.std(ref)
     assert np.std(first.simulate({}, u, softening, [soft]) - ref) > 0.05 * np.std(ref)  # the new term mattered
+
+
+def test_the_slope_of_a_law_is_taken_at_rest():
+    """A law that holds a partner's displacement (Stanton damping) and the drive (a field
+    stiffness) has its small-signal slope at rest: every variable at 0, parameters at their
+    values (a chain step after such a term asks for it)."""
+    from bondgraph.diagnosis.rewrite import slope
+
+    g = resonator()
+    F = g.inputs["F"].symbol
+    modify_law(g, "c", lambda x, old: old + stanton(2.0, 0.5, x, bg.Quantity("q", "k")))
+    modify_law(g, "k", lambda x, old: old - 3.0 * x * (F**2 - 0.25) + 7.0 * x**2)
+    assert slope(g, "c") == pytest.approx(CD - 1.0)  # c + 2·(0 − 0.5)
+    assert slope(g, "k") == pytest.approx(K + 0.75)  # k − 3·(0 − 0.25)

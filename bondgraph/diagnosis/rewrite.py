@@ -53,7 +53,9 @@ def law(model: Model, element: str) -> Callable[[sp.Expr], sp.Expr]:
 
 
 def slope(model: Model, element: str, values: Mapping[str, float] | None = None) -> float:
-    """d law / d variable at 0, with the model's parameter values (``values`` overriding).
+    """d law / d variable at rest, with the model's parameter values (``values`` overriding):
+    the element's variable, the inputs and any other element's variable in its law (a term
+    with a partner, a law that moves with the drive) at 0.
 
     Parameters
     ----------
@@ -80,7 +82,8 @@ def slope(model: Model, element: str, values: Mapping[str, float] | None = None)
     for k, v in (values or {}).items():
         if k in by_name:
             table[by_name[k]] = v
-    return float(sp.diff(el.law, var).xreplace({var: 0}).xreplace(table))
+    tangent = sp.sympify(sp.diff(el.law, var).xreplace(table))
+    return float(tangent.xreplace({s: 0 for s in tangent.free_symbols}))
 
 
 def modify_law(model: Model, element: str, new: Callable[[sp.Expr, sp.Expr], sp.Expr]) -> None:
