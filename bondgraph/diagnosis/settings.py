@@ -21,8 +21,8 @@ from ..support.errors import UsageError, did_you_mean
 
 @dataclass(frozen=True)
 class Settings:
-    """What counts as evidence, and the diagnosis's limits (the attributes below, each the
-    setting ``diagnosis.<attribute>``; units where a value has one)."""
+    """What counts as evidence, and the diagnosis's limits (the fields below, each the setting
+    ``diagnosis.<field>``; units where a value has one)."""
 
     # calibration
     spread: float
@@ -88,7 +88,7 @@ class Settings:
         return cls(**{n: overrides[n] if n in overrides else config.get(f"diagnosis.{n}") for n in names})
 
 
-Settings.__doc__ += "\n\n    Attributes\n    ----------\n" + "".join(
+Settings.__doc__ += "\n\n    Parameters\n    ----------\n" + "".join(
     f"    {f.name} : {f.type}\n        {config.DEFAULTS[f'diagnosis.{f.name}'].doc}.\n"
     for f in dataclasses.fields(Settings)
 )
