@@ -65,6 +65,9 @@ def field(view) -> tuple:
     return view.input_symbol, np.asarray(view.u)
 
 
+#: the even part's further starts in the final fit, in units of its scale (beside 0)
+EVEN_STARTS = (0.3, -0.3)
+
 #: an element whose term alone carries at least this share of a shared-role site's summed
 #: effects names the step's site (the site's name otherwise)
 CARRIER_SHARE = 0.8
@@ -87,7 +90,8 @@ class LawTerm(Candidate):
     search bound or outside the plausible device's tolerance
     (:meth:`~bondgraph.diagnosis.view.View.strained`,
     :meth:`~bondgraph.diagnosis.view.View.implausible`), from the model file's values too;
-    then fitted with the calibration from the best point.  An element whose coefficient ends
+    then fitted with the calibration from the best point (a kind's even part, held at 0 in
+    the scan, from 0 and from ±:data:`EVEN_STARTS` of its scale).  An element whose coefficient ends
     on its upper bound (past it the law is no longer plausible) is held at 0 and the others are
     fitted again without it, unless no element would be left.  Only the plausibility ends
     count as search bounds: a coefficient at or near 0 (the optimiser flags values within a
@@ -392,7 +396,7 @@ class LawTerm(Candidate):
         def fitted(specs, nfev, start=None):
             return view.fit_model(model, specs, max_nfev=nfev, start=start, predict=predict)
 
-        def spec(f, free=False):  # elements whose term cannot matter are held at 0
+        def spec(f, free=False, d0=0.0):  # elements whose term cannot matter are held at 0
             odd = [
                 Spec(n, 0.0, 0.0, 0.0, scale=refs[el][0])
                 if el in held
@@ -410,7 +414,7 @@ class LawTerm(Candidate):
                 if el in held or not free
                 else Spec(
                     e,
-                    0.0,
+                    d0 * escale[el],
                     -self.even_upper * escale[el],
                     self.even_upper * escale[el],
                     scale=escale[el],
@@ -445,6 +449,12 @@ class LawTerm(Candidate):
 
         start = {k: v for k, v in best[2].items() if k not in names}
         values, raw, ok, msg, at = fitted(spec(best[1], free=True), 12, start)
+        # the even part's sign is not known: the fit also starts from either side of 0 (one
+        # descent from 0 did not reach a one-sided spring's optimum), keeping the best
+        for d0 in EVEN_STARTS if evens else ():
+            other = fitted(spec(best[1], free=True, d0=d0), 12, start)
+            if view.score(other[1])[2] < view.score(raw)[2]:
+                values, raw, ok, msg, at = other
         at = plausibility_ends(at)
         stuck = [el for n, el in zip(names, els) if n in at]
         if stuck and len(stuck) + len(held) < len(els):
