@@ -550,9 +550,9 @@ class Softening(LawTerm):
 
         Parameters
         ----------
-        c : tuple or sympy.Expr or float
+        c : tuple
             (k3, k2): k3 ≥ 0, effort per displacement³ (N/m³ for a spring); k2 of either sign,
-            effort per displacement² (N/m²).  k3 alone for a subclass without an even part.
+            effort per displacement² (N/m²).
         r2 : sympy.Expr or float
             The centring amplitude r², displacement² (m²).
         x : sympy.Expr or numpy.ndarray
@@ -565,7 +565,7 @@ class Softening(LawTerm):
         sympy.Expr or numpy.ndarray
             The term, in effort units (N for a spring).
         """
-        k3, k2 = c if isinstance(c, tuple) else (c, 0)
+        k3, k2 = c
         return -k3 * x * (x**2 - r2) + k2 * x**2
 
     def refs(self, view, el, x, a):
@@ -616,9 +616,9 @@ class Hardening(Softening):
 
         Parameters
         ----------
-        c : tuple or sympy.Expr or float
+        c : tuple
             (k3, k2): k3 ≥ 0, effort per displacement³ (N/m³ for a spring); k2 of either sign,
-            effort per displacement² (N/m²).  k3 alone for a subclass without an even part.
+            effort per displacement² (N/m²).
         r2 : sympy.Expr or float
             The centring amplitude r², displacement² (m²).
         x : sympy.Expr or numpy.ndarray
@@ -631,7 +631,7 @@ class Hardening(Softening):
         sympy.Expr or numpy.ndarray
             The term, in effort units (N for a spring).
         """
-        k3, k2 = c if isinstance(c, tuple) else (c, 0)
+        k3, k2 = c
         return k3 * x * (x**2 - r2) + k2 * x**2
 
 

@@ -30,6 +30,28 @@ class StiffnessSoftening(laws.Softening):
     label = "cubic softening of the stiffness elements"
     even_prefix = ""
 
+    @staticmethod
+    def term(c, r2, x, a):
+        """−k3·q·(q² − r²), the cubic alone.
+
+        Parameters
+        ----------
+        c : sympy.Expr or float
+            k3 ≥ 0, effort per displacement³ (N/m³ for a spring).
+        r2 : sympy.Expr or float
+            The centring amplitude r², displacement² (m²).
+        x : sympy.Expr or numpy.ndarray
+            The displacement q.
+        a : sympy.Expr or numpy.ndarray or None
+            Unused (no partner).
+
+        Returns
+        -------
+        sympy.Expr or numpy.ndarray
+            The term, in effort units (N for a spring).
+        """
+        return laws.Softening.term((c, 0), r2, x, a)
+
 
 class NonlinearDamping(laws.NonlinearDamping):
     """:class:`~bondgraph.diagnosis.laws.NonlinearDamping` on every element tagged ``damping``."""
