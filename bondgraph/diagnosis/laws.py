@@ -281,7 +281,7 @@ class LawTerm(Candidate):
         """
         model = view.rewrite()
         for el in coefs:
-            cv, dv = coefs[el] if isinstance(coefs[el], tuple) else (coefs[el], 0.0)
+            cv, dv = coefs[el] if self.even_prefix else (coefs[el], 0.0)
             c = model.parameter(f"{self.prefix}_{el}", cv, "", f"{self.label}: {el}", bounds=(0, 1e40))
             if self.even_prefix:
                 d = model.parameter(
@@ -375,7 +375,7 @@ class LawTerm(Candidate):
         escale = {el: self.even_scale(view, el, xs[el]) for el in els} if evens else {}
         r2s = {el: refs[el][1] for el in els}
         held = self._idle(view, lure, els, refs, r2s, base) if lure is not None and len(els) > 1 else []
-        model = self.build(view, {el: 0.0 for el in els}, r2s)
+        model = self.build(view, {el: self._pair(0.0) for el in els}, r2s)
         predict = None
         if lure is not None:
 

@@ -9,7 +9,7 @@ from typing import Callable, Mapping
 import sympy as sp
 
 from ..model.elements import J1, C, E, F, I, P, Q, R, Se
-from ..model.graph import Model
+from ..model.graph import Model, Quantity, input_rate_symbol
 from ..support.errors import ModelError
 
 _VAR = {C: Q, I: P}
@@ -74,7 +74,8 @@ def slope(model: Model, element: str, values: Mapping[str, float] | None = None)
     Raises
     ------
     ModelError
-        The element is not a C, I or R element with a law.
+        The element is not a C, I or R element with a law, or its law uses a symbol that is
+        neither a parameter, a port variable nor an input.
     """
     el, var = _variable(model, element)
     table = {s: v for s, v in model.parameter_table().items()}
@@ -83,6 +84,11 @@ def slope(model: Model, element: str, values: Mapping[str, float] | None = None)
         if k in by_name:
             table[by_name[k]] = v
     tangent = sp.sympify(sp.diff(el.law, var).xreplace(table))
+    inputs = {i.symbol for i in model.inputs.values()}
+    at_rest = inputs | {input_rate_symbol(u) for u in inputs} | {var}
+    unknown = sorted(str(s) for s in tangent.free_symbols if not (s in at_rest or isinstance(s, Quantity)))
+    if unknown:
+        raise ModelError(f"{model.name}: the law of '{element}' uses {', '.join(unknown)}, not a parameter")
     return float(tangent.xreplace({s: 0 for s in tangent.free_symbols}))
 
 
