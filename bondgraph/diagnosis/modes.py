@@ -117,9 +117,11 @@ def mode_on_own(view, omega: float) -> str:
 
 def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = None) -> str:
     """Why an added mode at ``omega`` (rad/s) with damping ratio ``zeta`` is not plausible.  A
-    mode where the record does not resolve the response is refused unless what it explains
-    (``raw``, the extended model's prediction) lies mostly where the record does resolve it
-    (its skirt below the drive's band, not noise near its own frequency).
+    mode the drive does not excite, or where the record does not resolve the response, is
+    refused unless what it explains (``raw``, the extended model's prediction) lies mostly
+    where the record does resolve it: a mode above the drive's band shows by its skirt inside
+    the band (a gain and phase that change with frequency), not by noise near its own
+    frequency.
 
     Parameters
     ----------
@@ -150,15 +152,16 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
     d = np.asarray(view.drive if view.drive is not None else view.u)
     fr, P = welch(d, view.fs, 4096)
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
-    if not near.any() or P[near].max() < 1e-6 * P.max():
-        return f"the drive does not excite {f:.4g} Hz"
+    excited = bool(near.any() and P[near].max() >= 1e-6 * P.max())
     coh, resolved = view.resolution_near(omega)
-    share = None if raw is None or resolved else view.resolved_share(raw)
+    share = None if raw is None or (excited and resolved) else view.resolved_share(raw)
+    skirt = "" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it"
+    if not excited and (share is None or share < 0.5):
+        return f"the drive does not excite {f:.4g} Hz" + skirt
     if not resolved and (share is None or share < 0.5):
         return (
             f"the record does not resolve the response near {f:.4g} Hz (coherence {coh:.2g} < "
-            f"{view.resolved_coherence:g}: as much noise as response there)"
-            + ("" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it")
+            f"{view.resolved_coherence:g}: as much noise as response there)" + skirt
         )
     if zeta > 0.3:
         return f"it is not a resonance (damping ratio {zeta:.2g})"
