@@ -115,13 +115,23 @@ def mode_on_own(view, omega: float) -> str:
     return ""
 
 
+#: the drive's power spectrum within this share of its peak (20 dB) is its band, which must
+#: span :data:`SKIRT_SPAN` in frequency (highest over lowest) for a mode the drive does not
+#: excite to be seen by its skirt: a skirt is a gain and phase that change with frequency, and
+#: at one line (a sine) it is only a gain and a phase, which the calibration has as well
+DRIVE_BAND_LEVEL = 0.01
+#: see :data:`DRIVE_BAND_LEVEL`
+SKIRT_SPAN = 1.25
+
+
 def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = None) -> str:
     """Why an added mode at ``omega`` (rad/s) with damping ratio ``zeta`` is not plausible.  A
     mode the drive does not excite, or where the record does not resolve the response, is
     refused unless what it explains (``raw``, the extended model's prediction) lies mostly
     where the record does resolve it: a mode above the drive's band shows by its skirt inside
     the band (a gain and phase that change with frequency), not by noise near its own
-    frequency.
+    frequency.  A mode the drive does not excite also needs a drive whose band spans
+    :data:`SKIRT_SPAN` in frequency.
 
     Parameters
     ----------
@@ -156,6 +166,13 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
     coh, resolved = view.resolution_near(omega)
     share = None if raw is None or (excited and resolved) else view.resolved_share(raw)
     skirt = "" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it"
+    strong = fr[(P >= DRIVE_BAND_LEVEL * P.max()) & (fr > 0)]
+    span = float(strong.max() / strong.min()) if strong.size else 1.0
+    if not excited and span < SKIRT_SPAN:
+        return (
+            f"the drive does not excite {f:.4g} Hz, and its band (within 20 dB of its peak) spans "
+            f"{span:.3g}× in frequency, too narrow to show a skirt"
+        )
     if not excited and (share is None or share < 0.5):
         return f"the drive does not excite {f:.4g} Hz" + skirt
     if not resolved and (share is None or share < 0.5):
