@@ -10,11 +10,11 @@ that only follows the fit part's detail predicts nothing between them).  Drifts 
 more often than that are not told from the dynamics and are not sought.
 
 Three rules use it: ``drift-when-nothing`` (:func:`drift_step`) names a drift when nothing else
-explains the record; ``effect-or-drift`` sets a step's winner aside when its effect is such a
-curve and the drive is not (:func:`smooth_share` of the effect at least :data:`SMOOTH`, of the
-drive below :data:`SLOW_DRIVE`: the record cannot tell the effect from a drift, which needs no
-drive, so the drift is tried when nothing else is named); and the first step asks
-whether a straight line explains the record as well as the best candidate
+explains the record; ``effect-or-drift`` (:func:`drift_like`) sets a step's winner aside when
+its effect is such a curve and the drive is not (:func:`smooth_share` of the effect at least
+:data:`SMOOTH`, of the drive below :data:`SLOW_DRIVE`: the record cannot tell the effect from a
+drift, which needs no drive, so the drift is tried when nothing else is named); and the first
+step asks whether a straight line explains the record as well as the best candidate
 (:func:`drift_explains`; the diagnosis then restarts with the drift solved).
 """
 
@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import BSpline
 
-from .calibration import rms
+from .calibration import rms, score
 from .context import Context, State
 from .decision import BASIC, Verdict, compare, judge, regress
 from .report import CandidateResult, Step
@@ -89,6 +89,31 @@ def smooth_share(ctx: Context, effect: np.ndarray) -> float:
     left = effect - regress(drift_basis(ctx), effect, idx)
     spread = float(np.sum((effect[val] - effect[val].mean()) ** 2))
     return 1.0 - float(np.sum(left[val] ** 2)) / spread if spread > 0 else 0.0
+
+
+def drift_like(ctx: Context, state: State, raw: np.ndarray) -> float | None:
+    """Rule ``effect-or-drift``: the :func:`smooth_share` of what a step's winner adds to the
+    output (its raw prediction with the sensor gain and offset solved, less the current
+    prediction) when it is at least :data:`SMOOTH`, else None.  The engine applies it only
+    under a drive whose own smooth share is below :data:`SLOW_DRIVE`.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    state : State
+        The chain's current state.
+    raw : numpy.ndarray
+        The winner's raw prediction on every sample.
+
+    Returns
+    -------
+    float or None
+        The share (0-1) when the winner's effect cannot be told from a drift, else None.
+    """
+    g, b = score(ctx, raw)[:2]
+    share = smooth_share(ctx, g * np.asarray(raw) + b - state.prediction)
+    return share if share >= SMOOTH else None
 
 
 def drift_step(ctx: Context, state: State, solved: float | None, floor: float) -> tuple[Step, np.ndarray] | None:

@@ -21,7 +21,7 @@ from .calibration import calibrate, rms, score
 from .candidate import LINEAR, Candidate, Extension
 from .context import SENSOR_GAIN, Context, State, residual_floor
 from .decision import Comparison, compare, judge, reference_prediction, regress
-from .drift import SLOW_DRIVE, SMOOTH, drift_explains, drift_step, smooth_share
+from .drift import SLOW_DRIVE, drift_explains, drift_like, drift_step, smooth_share
 from .laws import law_kinds
 from .modes import mode_kinds
 from .pool import Pool, single_threaded_blas
@@ -895,9 +895,8 @@ def _chain(
                 step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
             asides = []  # winners set aside by rule 'effect-or-drift', listed with the step
             while winner is not None and not slow_drive:
-                g, b = score(ctx, winner.raw)[:2]
-                share = smooth_share(ctx, g * winner.raw + b - state.prediction)
-                if share < SMOOTH:
+                share = drift_like(ctx, state, winner.raw)
+                if share is None:
                     break
                 note = (
                     f"step {k + 1}: {winner.result.cause} ({winner.result.label}, gain {winner.result.gain:.3g}) set "
