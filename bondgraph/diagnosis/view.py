@@ -141,7 +141,7 @@ class View:
             if state.drive is not None
             else None
         )
-        self.structural = not state.linear
+        self._structural = not state.linear
         #: nonlinear terms in elements' laws named so far: (element, partner, term, c, r2)
         self.terms = tuple(state.terms)
         self._core_drive, self._core_extra, self._core_model = state.core_drive, state.core_extra, state.core_model
@@ -203,7 +203,7 @@ class View:
     def on_core(self) -> bool:
         """True when the current model is a drive transform of its linear core: a structural
         extension can then extend :meth:`core` and be fitted driven by ``drive``."""
-        return self.drive is not None and not self.structural and self.exact and not self.reduced
+        return self.drive is not None and not self._structural and self.exact and not self.reduced
 
     def core(self) -> Model:
         """A copy of the linear core carrying the current values: the calibrated nominal model,
@@ -264,7 +264,7 @@ class View:
         out = model.outputs[self.output]
         out.expr = out.expr + g * sp.sympify(term)
 
-    def nominal_value(self, name: str) -> float:
+    def _nominal_value(self, name: str) -> float:
         """A parameter's value in the model file (before calibration).
 
         Parameters
@@ -279,7 +279,7 @@ class View:
         """
         return self._ctx.ident.current(name)
 
-    def theta_values(self, values: Mapping[str, float] | None = None) -> np.ndarray:
+    def _theta_values(self, values: Mapping[str, float] | None = None) -> np.ndarray:
         """θ of the linear core for the current values (``values`` overriding; others ignored).
 
         Parameters
@@ -324,11 +324,11 @@ class View:
             (rows, columns) output, output units at sensor gain 1.
         """
         ctx = self._ctx
-        th = self.theta_values(values)
+        th = self._theta_values(values)
         U = columns if isinstance(columns, np.ndarray) and columns.ndim == 2 else np.column_stack(columns)
         return ctx.lti.state_space(th, ctx.cut).response(ctx.dt, U, rows=rows, steady=starts_steady())
 
-    def respond_sensitivities(
+    def _respond_sensitivities(
         self,
         columns: np.ndarray,
         names: Sequence[str],
@@ -357,7 +357,7 @@ class View:
             (Y, dY), dY per unit of each parameter; or None.
         """
         ctx = self._ctx
-        modal = sensitivity(ctx.lti, self.theta_values(values), names, ctx.cut)
+        modal = sensitivity(ctx.lti, self._theta_values(values), names, ctx.cut)
         return None if modal is None else modal.time(ctx.dt, columns, rows, steady=starts_steady())
 
     def frequency_response(self, omega: np.ndarray, values: Mapping[str, float] | None = None) -> np.ndarray:
@@ -378,7 +378,7 @@ class View:
             Complex H(jω), output units per drive unit.
         """
         ctx = self._ctx
-        th = self.theta_values(values)
+        th = self._theta_values(values)
         omega = np.asarray(omega, float)
         return (
             ctx.lti.state_space(th, ctx.cut).frequency_response(omega)
@@ -462,7 +462,7 @@ class View:
         explain to first order with the calibration: one Gauss–Newton step of the effect's
         coefficients and the calibrated linear parameters, sensor gain and offset.  On the
         linear core the columns are regressed beyond the output's sensitivities to those
-        parameters (:meth:`respond_sensitivities`), because every candidate's fit refits them:
+        parameters (:meth:`_respond_sensitivities`), because every candidate's fit refits them:
         a column that is partly a stiffness change is judged by what the stiffness cannot do.
         Off the core, beyond the offset only.
 
@@ -506,7 +506,9 @@ class View:
         cols = [np.ones(idx.size)]
         if self.on_core and not self.terms:
             names = [n for n in self.linear if n in self._ctx.core_parameters]
-            out = self.respond_sensitivities(np.asarray(self.drive, float)[:, None], names, rows=idx) if names else None
+            out = (
+                self._respond_sensitivities(np.asarray(self.drive, float)[:, None], names, rows=idx) if names else None
+            )
             if out is not None:
                 Y, dY = out
                 cols.append(Y[:, 0])
@@ -539,7 +541,7 @@ class View:
         candidate) or ×/÷ ``diagnosis.spread``."""
         out = []
         for n in self.linear:
-            lo, hi = self._bounds.get(n) or param_bounds(self._ctx, n, self.nominal_value(n))
+            lo, hi = self._bounds.get(n) or param_bounds(self._ctx, n, self._nominal_value(n))
             v = (start or {}).get(n, self.values[n])
             out.append(Param(n, math.copysign(min(max(abs(v), lo), hi), v), lo, hi))
         return out
@@ -599,7 +601,7 @@ class View:
         dict of str to float
             Name → value, in the parameters' units.
         """
-        return {n: self.nominal_value(n) for n in self.linear}
+        return {n: self._nominal_value(n) for n in self.linear}
 
     def fit_drive(
         self,
@@ -739,7 +741,7 @@ class View:
                     )
                 )
             more = [np.asarray(col, float) * np.ones(U.shape[0]) for db, _ in moved for col in db]
-            out = self.respond_sensitivities(
+            out = self._respond_sensitivities(
                 np.column_stack([U] + more) if more else U, [p.name for p in lin], vals, rows
             )
             if out is None:
