@@ -692,6 +692,27 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     assert "0% of what it explains" in mode_implausible(view, 2 * np.pi * high, 0.02, noise)
 
 
+def test_a_mode_above_one_sine_is_not_named_by_its_skirt():
+    """Under one sine the drive's band is a single line: a mode above it could only add a gain
+    and a phase there, which the calibration has as well, so it is refused however much of
+    what it explains lies where the record resolves the response."""
+    from bondgraph.diagnosis import View
+    from bondgraph.diagnosis.calibration import calibrate
+    from bondgraph.diagnosis.context import Context
+    from bondgraph.diagnosis.modes import mode_implausible
+
+    rng = np.random.default_rng(8)
+    n, fs = 6000, 500.0
+    t = np.arange(n) / fs
+    u = np.sin(2 * np.pi * 3.1 * t)
+    y = bg.simulate(lag_model(0.025), t, {"u": bg.PiecewiseLinear(t, u)}, rtol=1e-9)["y"]
+    ctx = Context(lag_model(), Dataset(t, {"u": u, "y": y + rng.normal(0, 0.01, n)}))
+    state, cal, _ = calibrate(ctx)
+    view = View(ctx, state, cal.free)
+    why = mode_implausible(view, 2 * np.pi * 0.3 * view.fs, 0.02, state.prediction + 0.1 * view.residual)
+    assert "too narrow to show a skirt" in why, why
+
+
 # ---- Ctrl-C -------------------------------------------------------------------------------------
 def _children(pid):
     out = []

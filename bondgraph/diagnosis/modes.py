@@ -163,9 +163,6 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
     fr, P = welch(d, view.fs, 4096)
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
     excited = bool(near.any() and P[near].max() >= 1e-6 * P.max())
-    coh, resolved = view.resolution_near(omega)
-    share = None if raw is None or (excited and resolved) else view.resolved_share(raw)
-    skirt = "" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it"
     strong = fr[(P >= DRIVE_BAND_LEVEL * P.max()) & (fr > 0)]
     span = float(strong.max() / strong.min()) if strong.size else 1.0
     if not excited and span < SKIRT_SPAN:
@@ -173,6 +170,9 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
             f"the drive does not excite {f:.4g} Hz, and its band (within 20 dB of its peak) spans "
             f"{span:.3g}× in frequency, too narrow to show a skirt"
         )
+    coh, resolved = view.resolution_near(omega)
+    share = None if raw is None or (excited and resolved) else view.resolved_share(raw)
+    skirt = "" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it"
     if not excited and (share is None or share < 0.5):
         return f"the drive does not excite {f:.4g} Hz" + skirt
     if not resolved and (share is None or share < 0.5):
