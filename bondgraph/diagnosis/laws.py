@@ -91,9 +91,9 @@ class LawTerm(Candidate):
     (:meth:`~bondgraph.diagnosis.view.View.strained`,
     :meth:`~bondgraph.diagnosis.view.View.implausible`), from the model file's values too;
     then fitted with the calibration from the best point (a kind's even part, held at 0 in
-    the scan, from 0 and from ±:data:`EVEN_STARTS` of its scale).  An element whose coefficient ends
-    on its upper bound (past it the law is no longer plausible) is held at 0 and the others are
-    fitted again without it, unless no element would be left.  Only the plausibility ends
+    the scan, from 0 and from ±:data:`EVEN_STARTS` of its scale).  An element whose
+    coefficient ends on its upper bound (past it the law is no longer plausible) is held at 0
+    and the others are fitted again without it, unless no element would be left.  Only the plausibility ends
     count as search bounds: a coefficient at or near 0 (the optimiser flags values within a
     thousandth of the bounds' width of either end) is no such effect, not a limit.
     """

@@ -167,7 +167,8 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
     span = float(strong.max() / strong.min()) if strong.size else 1.0
     if not excited and span < SKIRT_SPAN:
         return (
-            f"the drive does not excite {f:.4g} Hz, and its band (within 20 dB of its peak) spans "
+            f"the drive does not excite {f:.4g} Hz, and its band (within "
+            f"{-10 * math.log10(DRIVE_BAND_LEVEL):.0f} dB of its peak) spans "
             f"{span:.3g}× in frequency, too narrow to show a skirt"
         )
     coh, resolved = view.resolution_near(omega)
