@@ -65,6 +65,12 @@ class Extension:
     where : str, optional
         Where the fitted effect acts, when narrower than the candidate's site (the one element
         of a shared-role site whose term carries the effect); "" for the site itself.
+    cause : str, optional
+        The cause the fitted effect stands for, when the fit rather than the candidate names
+        it (a spring law's fitted shape: :meth:`LawTerm.stands_for
+        <bondgraph.diagnosis.laws.LawTerm.stands_for>`); "" for the candidate's own.
+    why : str, optional
+        With ``cause``: why the fit names it (appended to the candidate's line in the report).
     """
 
     model: Model
@@ -79,6 +85,8 @@ class Extension:
     terms: list = field(default_factory=list)
     additive: object | None = None
     where: str = ""
+    cause: str = ""
+    why: str = ""
 
 
 class Candidate(ABC):

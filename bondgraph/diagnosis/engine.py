@@ -123,6 +123,8 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
         raise FloatingPointError("the extended model's prediction is not finite")
     res.params = {k: float(ext.values[k]) for k in ext.new}
     res.site = ext.where or res.site
+    if ext.cause:
+        res.cause, res.label = ext.cause, f"{res.label}; {ext.why}" if ext.why else res.label
     res.n_params = len(ext.new)
     res.at_bounds = list(ext.at_bounds)
     res.success, res.message = ext.success, ext.message

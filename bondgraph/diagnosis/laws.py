@@ -472,6 +472,8 @@ class LawTerm(Candidate):
         coefs = {el: self._pair(values[n], values.get(f"{self.even_prefix}_{el}", 0.0)) for n, el in kept}
         terms = [(el, partners[el], self.term, coefs[el], r2s[el]) for _, el in kept]
         where = self._carrier(view, lure, values, coefs, r2s, els) if len(kept) > 1 else ""
+        cause = self.stands_for(view, values, coefs, r2s, xs)
+        cause = cause if cause != self.cause else ""
         return Extension(
             self.build(view, coefs, r2s),
             values,
@@ -484,7 +486,33 @@ class LawTerm(Candidate):
             msg,
             terms=terms,
             where=kept[0][1] if len(kept) == 1 and len(els) > 1 else where,
+            cause=cause,
+            why=f"the fitted law is {cause} where the record takes it (rule 'secant-trend')" if cause else "",
         )
+
+    def stands_for(self, view, values: dict, coefs: dict, r2s: dict, xs: dict) -> str:
+        """The cause the fitted terms stand for, when the fit rather than the kind names it;
+        "" (the default) for the kind's own :attr:`cause`.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data and the current model.
+        values : dict of str to float
+            The fitted values (the new coefficients and the recalibrated linear parameters).
+        coefs : dict of str to float or tuple
+            Element → its fitted coefficient (the pair (c, d) for a kind with an even part).
+        r2s : dict of str to float
+            Element → centring amplitude².
+        xs : dict of str to numpy.ndarray
+            Element → its variable's series in the current model.
+
+        Returns
+        -------
+        str
+            A cause, or "".
+        """
+        return ""
 
     def _carrier(self, view, lure, values, coefs, r2s, els) -> str:
         """The element whose fitted term alone moves the output at least
@@ -590,6 +618,46 @@ class Softening(LawTerm):
             1.5·⟨q²⟩, displacement².
         """
         return abs(slope(view.model, el, view.values)) / _peak(x) ** 2, 1.5 * float(np.mean(x**2))
+
+    def stands_for(self, view, values, coefs, r2s, xs):
+        """Hardening or softening by the fitted law's own shape where the record takes the
+        spring (rule ``secant-trend``): a stiffness that rises with the distance from rest is
+        hardening, one that falls softening, whichever sign the kind gives its cubic.  With
+        the even part free, a record that takes the spring one way only (steps from rest, a
+        drive with an offset) cannot tell the cubic from the quadratic, and a cubic of either
+        sign fits with the quadratic's help; what the fitted law does on the displacements the
+        record visits is what it knows.  The measure is the slope of the secant stiffness
+        (e(q) − e(0))/q over |q| (least squares over the samples beyond a twentieth of the
+        peak, so weighted by the time the record spends there) times the range of |q|: the
+        change of the secant stiffness across the visited range, summed over the elements.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data and the current model.
+        values : dict of str to float
+            The fitted values.
+        coefs : dict of str to tuple
+            Element → (k3, k2) fitted.
+        r2s : dict of str to float
+            Element → centring amplitude r².
+        xs : dict of str to numpy.ndarray
+            Element → displacement series q in the current model.
+
+        Returns
+        -------
+        str
+            "hardening" or "softening" ("" when the record leaves no displacement to judge).
+        """
+        trend = 0.0
+        for el, c in coefs.items():
+            q = np.asarray(xs[el], float)
+            q = q[np.abs(q) > 0.05 * _peak(q)]
+            if q.size < 3 or np.ptp(np.abs(q)) <= 0:
+                continue
+            secant = (self.term(c, r2s[el], q, None) - self.term(c, r2s[el], 0.0, None)) / q  # beyond the linear law's
+            trend += np.polyfit(np.abs(q), secant, 1)[0] * np.ptp(np.abs(q))
+        return "" if trend == 0 else "hardening" if trend > 0 else "softening"
 
 
 class Hardening(Softening):
