@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 import bondgraph as bg
 from bondgraph import config
 from bondgraph.data import Dataset
-from bondgraph.fit.identify import Identification
+from bondgraph.fit.identify import Identification, Spec
 from bondgraph.linear.lti import LTI, residualise
 from bondgraph.support.errors import DataError
 
@@ -181,3 +181,23 @@ def test_bounded_least_squares_on_any_shape(rows, cols, seed):
     if rows > cols:
         ref = lsq_linear(A, b, bounds=(lower, upper)).x
         assert np.linalg.norm(A @ x - b) <= np.linalg.norm(A @ ref - b) * (1 + 1e-6) + 1e-9
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.floats(1e-6, 1e6),
+    st.sampled_from([-1.0, 1.0]),
+    st.floats(0.01, 0.99),
+    st.floats(1.01, 100.0),
+    st.floats(1e-3, 1e3),
+)
+def test_a_log_spec_keeps_its_start_sign_and_bounds_the_magnitude(mag, sign, lo, hi, ratio):
+    """z = log |v| for a log parameter, the start's sign kept: a value inside the magnitude
+    bounds comes back unchanged, one outside comes back clipped to the nearer bound."""
+    spec = Spec("p", sign * mag, lo * mag, hi * mag, log=True)
+    zl, zu = spec.z_bounds()
+    assert zl == pytest.approx(math.log(lo * mag)) and zu == pytest.approx(math.log(hi * mag))
+    v = sign * mag * ratio
+    back = spec.from_z(spec.to_z(v))
+    assert math.copysign(1.0, back) == sign
+    assert abs(back) == pytest.approx(min(max(mag * ratio, lo * mag), hi * mag), rel=1e-12)

@@ -41,12 +41,13 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..fit.identify import Spec
 from ..linear.sensitivity import sensitivity
 from ..support.errors import UsageError
 from .context import SENSOR_GAIN, Context, State, welch, welch_length
 from .gauge import fix_scales
 from .pool import fork_map
-from .projection import Param, forward_differences, projected_fit
+from .projection import forward_differences, projected_fit
 
 
 @dataclass
@@ -635,7 +636,7 @@ def max_delay(ctx: Context) -> float:
     return MAX_DELAY * ctx.fs / ctx.source_rate
 
 
-def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, delay: bool, workers: int = 1):
+def _frf_starts(ctx: Context, specs: list[Spec], values: dict, z0: np.ndarray, delay: bool, workers: int = 1):
     """The free parameters (and the delay, last, if ``delay``) fitted to the empirical frequency
     response (:func:`fit_frf`), or None when the drive leaves too few coherent frequencies.  Both
     signs of the sensor are tried: the nominal model's correlation with the data does not tell it
@@ -687,7 +688,7 @@ def _frf_starts(ctx: Context, specs: list[Param], values: dict, z0: np.ndarray, 
     return min(fits, key=lambda f: f[1])[0] if fits else None
 
 
-def _z_bounds(specs: list[Param], delay: float | None):
+def _z_bounds(specs: list[Spec], delay: float | None):
     lb = [s.z_bounds()[0] for s in specs] + ([-delay] if delay else [])
     ub = [s.z_bounds()[1] for s in specs] + ([delay] if delay else [])
     return np.array(lb, float), np.array(ub, float)
@@ -695,7 +696,7 @@ def _z_bounds(specs: list[Param], delay: float | None):
 
 def _fit(
     ctx: Context,
-    specs: list[Param],
+    specs: list[Spec],
     nominal: dict,
     z0: np.ndarray,
     starts=(),
@@ -925,7 +926,7 @@ def calibrate(
     S = sensitivities(ctx, names, nominal, raw0)
     free, held = select(S, names, patterns(names, priority), ctx.settings.identifiable, scale)
     bounds = {n: param_bounds(ctx, n, nominal[n]) for n in free}
-    specs = [Param(n, nominal[n], *bounds[n]) for n in free]
+    specs = [Spec(n, nominal[n], *bounds[n], log=True) for n in free]
     say(
         f"calibrating {', '.join(free) or 'the sensor gain and offset only'}"
         + (f" (held: {', '.join(held)})" if held else "")
@@ -953,7 +954,7 @@ def calibrate(
             held.pop(n)
         free = free + list(asked)
         bounds.update({n: param_bounds(ctx, n, nominal[n]) for n in asked})
-        specs = [Param(n, nominal[n], *bounds[n]) for n in free]
+        specs = [Spec(n, nominal[n], *bounds[n], log=True) for n in free]
         start = {**values, **{n: values[n] * f for n, f in asked.items()}}
         z1 = np.array([s.to_z(start[s.name]) for s in specs])
         values, _, raw, sol, route = _fit(
@@ -1020,8 +1021,11 @@ def calibrate(
         f"calibrating the plausible device too"
     )
     pspecs = [
-        Param(
-            n, min(max(abs(values[n]), plausible[n][0]), plausible[n][1]) * (1 if values[n] > 0 else -1), *plausible[n]
+        Spec(
+            n,
+            min(max(abs(values[n]), plausible[n][0]), plausible[n][1]) * (1 if values[n] > 0 else -1),
+            *plausible[n],
+            log=True,
         )
         for n in free
     ]

@@ -4,7 +4,7 @@ fitting services it may use (all exact linear where the model allows)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import Callable, Mapping, Sequence
 
@@ -20,7 +20,7 @@ from .additive import AdditiveDrive, Term
 from .calibration import RESOLVED_COHERENCE, cross_spectra, empirical_frf, param_bounds, resolved_spectrum, score
 from .context import SENSOR_GAIN, Context, State, drive_held_share
 from .lure import Lure
-from .projection import Param, forward_step, projected_fit, simulation_deadline
+from .projection import forward_step, projected_fit, simulation_deadline
 
 
 def _frozen(a: np.ndarray | None) -> np.ndarray | None:
@@ -535,7 +535,7 @@ class View:
         return score(self._ctx, raw)
 
     # ---- fitting services ---------------------------------------------------------------------
-    def _linear_params(self, start: Mapping[str, float] | None = None) -> list[Param]:
+    def _linear_params(self, start: Mapping[str, float] | None = None) -> list[Spec]:
         """The calibrated linear parameters as refit specs (from ``start`` or the current
         values): within the view's bounds (the plausible device's, for a linear structural
         candidate) or ×/÷ ``diagnosis.spread``."""
@@ -543,7 +543,7 @@ class View:
         for n in self.linear:
             lo, hi = self._bounds.get(n) or param_bounds(self._ctx, n, self._nominal_value(n))
             v = (start or {}).get(n, self.values[n])
-            out.append(Param(n, math.copysign(min(max(abs(v), lo), hi), v), lo, hi))
+            out.append(Spec(n, math.copysign(min(max(abs(v), lo), hi), v), lo, hi, log=True))
         return out
 
     def strained(self) -> list[str]:
@@ -1009,9 +1009,7 @@ class View:
         else:
             known = set(model.all_parameters())
         base = {k: v for k, v in {**self.values, **(start or {})}.items() if k in known}
-        lin = (
-            [Param(p.name, base.get(p.name, p.start), p.lower, p.upper) for p in self._linear_params()] if refit else []
-        )
+        lin = [replace(p, start=base.get(p.name, p.start)) for p in self._linear_params()] if refit else []
         held = {s.name: s.start for s in new if s.lower == s.upper}
         new = [s for s in new if s.lower != s.upper]
         base.update(held)

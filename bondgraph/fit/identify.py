@@ -46,8 +46,10 @@ from ..support.errors import DataError, ParameterError, UsageError, did_you_mean
 class Spec:
     """How one parameter is fitted: start value, bounds, scale, log transform, linearity.
 
-    The optimiser works on z, the parameter mapped by :meth:`to_z`: z = log v for a log
-    parameter, z = v / scale otherwise.
+    The optimiser works on z, the parameter mapped by :meth:`to_z`: z = log |v| for a log
+    parameter (its sign is the start value's, and ``lower`` and ``upper`` bound its
+    magnitude), z = v / scale otherwise.  The one parameter type of :mod:`bondgraph.fit`
+    and of the diagnosis's calibration and fits.
 
     Parameters
     ----------
@@ -56,12 +58,12 @@ class Spec:
     start : float
         Start value, in the parameter's unit.
     lower, upper : float, optional
-        Bounds, same unit (default unbounded; a log parameter needs ``lower`` > 0 for a
-        finite lower z bound).
+        Bounds, same unit (default unbounded); of the magnitude for a log parameter, which
+        needs ``lower`` > 0 for a finite lower z bound.
     scale : float, optional
         Typical magnitude, same unit (used when not ``log``).
     log : bool, optional
-        Fit log v (a positive parameter spanning decades).
+        Fit log |v| with the start's sign (a parameter spanning decades).
     linear : bool, optional
         The output is linear in this parameter: it is solved by bounded linear least squares
         at each step of the nonlinear ones instead of being searched for.
@@ -81,14 +83,15 @@ class Spec:
         Parameters
         ----------
         v : float
-            The parameter's value, in its unit (> 0 for a log parameter).
+            The parameter's value, in its unit (not 0 for a log parameter).
 
         Returns
         -------
         float
-            log v for a log parameter, v / scale otherwise.
+            log |v| for a log parameter, its magnitude clipped to the bounds; v / scale
+            otherwise.
         """
-        return math.log(v) if self.log else v / self.scale
+        return math.log(min(max(abs(v), self.lower), self.upper)) if self.log else v / self.scale
 
     def from_z(self, z: float) -> float:
         """The value at an optimiser coordinate (the inverse of :meth:`to_z`).
@@ -101,9 +104,10 @@ class Spec:
         Returns
         -------
         float
-            exp z for a log parameter, z · scale otherwise, in the parameter's unit.
+            ±exp z for a log parameter (the start's sign), z · scale otherwise, in the
+            parameter's unit.
         """
-        return math.exp(z) if self.log else z * self.scale
+        return math.copysign(math.exp(z), self.start) if self.log else z * self.scale
 
     def z_bounds(self) -> tuple[float, float]:
         """The bounds mapped to the optimiser's coordinate.
