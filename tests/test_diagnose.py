@@ -674,7 +674,7 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     ctx = Context(lag_model(), Dataset(t, {"u": u, "y": y + rng.normal(0, 0.01, n)}))
     state, cal, _ = calibrate(ctx)
     view = View(ctx, state, cal.free)
-    high = 0.3 * view.fs  # the record may be decimated: well inside its band
+    high = 0.3 * view.record.fs  # the record may be decimated: well inside its band
     assert high > 20.0 and view.resolution_near(2 * np.pi * 3.1) > (0.99, True)
     coh, resolved = view.resolution_near(2 * np.pi * high)
     assert coh < view.resolved_coherence and not resolved
@@ -684,7 +684,7 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     # response (its skirt in the drive's band), not when it explains the noise near itself
     from scipy import signal
 
-    cut = lambda kind, f: signal.filtfilt(*signal.butter(4, f / (view.fs / 2), kind), view.residual)
+    cut = lambda kind, f: signal.filtfilt(*signal.butter(4, f / (view.record.fs / 2), kind), view.residual)
     skirt = state.prediction + cut("low", 5.0)
     noise = state.prediction + cut("high", 0.6 * high)
     assert view.resolved_share(skirt) > 0.9 and view.resolved_share(noise) < 0.1
@@ -709,7 +709,7 @@ def test_a_mode_above_one_sine_is_not_named_by_its_skirt():
     ctx = Context(lag_model(), Dataset(t, {"u": u, "y": y + rng.normal(0, 0.01, n)}))
     state, cal, _ = calibrate(ctx)
     view = View(ctx, state, cal.free)
-    why = mode_implausible(view, 2 * np.pi * 0.3 * view.fs, 0.02, state.prediction + 0.1 * view.residual)
+    why = mode_implausible(view, 2 * np.pi * 0.3 * view.record.fs, 0.02, state.prediction + 0.1 * view.residual)
     assert "too narrow to show a skirt" in why, why
 
 

@@ -284,9 +284,9 @@ def test_fit_drive_hands_the_optimiser_the_derivatives_of_its_columns(resonator_
 
     def lowpass(zb):  # the drive through a first-order lag of time constant exp(zb[0]) s
         tau = math.exp(zb[0])
-        Phi, Gam, G1 = foh(np.array([[-1 / tau]]), np.array([[1 / tau]]), view.dt)
+        Phi, Gam, G1 = foh(np.array([[-1 / tau]]), np.array([[1 / tau]]), view.record.dt)
         x = StateSpace(np.array([[-1 / tau]]), np.array([[1 / tau]]), np.eye(1), np.zeros((1, 1)))
-        return [x.response(view.dt, d)[:, 0]]
+        return [x.response(view.record.dt, d)[:, 0]]
 
     def direct(zb):
         return [np.tanh(math.exp(zb[0]) * 30 * d)]

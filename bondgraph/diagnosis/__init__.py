@@ -61,7 +61,7 @@ from .lure import DRIVE
 from .report import CandidateResult, Report, Step
 from .settings import Settings
 from .sites import Site
-from .view import DriveFit, View
+from .view import DriveFit, Record, View
 
 __all__ = [
     "AdditiveDrive",
@@ -74,6 +74,7 @@ __all__ = [
     "LawTerm",
     "Site",
     "View",
+    "Record",
     "DriveFit",
     "Report",
     "Settings",

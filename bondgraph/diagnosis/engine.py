@@ -504,7 +504,7 @@ def advance(ctx: Context, state: State, oc: Outcome, view: View) -> State:
     if before is None and ext.terms and view.exact and not view.reduced:
         # terms fitted on the current model itself (linear: e.g. with a compliant output stage
         # named before them): that model, under the drive, is the core they are held on
-        before, core_model = np.asarray(view.u), state.model
+        before, core_model = np.asarray(view.record.u), state.model
     # what the linear core sees and the terms held on it, while the model stays a Lur'e system
     core = ext.drive if ext.drive is not None else before if ext.terms and before is not None else None
     terms = tuple(state.terms) + tuple(ext.terms) if core is not None else ()

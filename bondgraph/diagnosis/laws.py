@@ -62,7 +62,7 @@ def field(view) -> tuple:
     """
     if view.drive_expr is not None and view.drive is not None:
         return view.drive_expr, np.asarray(view.drive)
-    return view.input_symbol, np.asarray(view.u)
+    return view.record.input_symbol, np.asarray(view.record.u)
 
 
 #: the even part's further starts in the final fit, in units of its scale (beside 0)
@@ -88,8 +88,7 @@ class LawTerm(Candidate):
     refitting the linear parameters briefly (a nonlinear resonance moves with the
     calibration), from the calibrated values and, when the calibration left one on its
     search bound or outside the plausible device's tolerance
-    (:meth:`~bondgraph.diagnosis.view.View.strained`,
-    :meth:`~bondgraph.diagnosis.view.View.implausible`), from the model file's values too;
+    (:meth:`~bondgraph.diagnosis.view.View.fit_starts`), from the model file's values too;
     then fitted with the calibration from the best point (a kind's even part, held at 0 in
     the scan, from 0 and from ±:data:`EVEN_STARTS` of its scale).  An element whose
     coefficient ends on its upper bound (past it the law is no longer plausible) is held at 0
@@ -301,7 +300,7 @@ class LawTerm(Candidate):
             series = lure.linear_responses(dict(view.values), lure.drive, self.term)
             xs = {el: series[f"diag.x:{el}"] for el in els}
             az = {el: series.get(f"diag.a:{el}") for el in els}
-            return lure, xs, az, series[view.output]
+            return lure, xs, az, series[view.record.output]
         st = view.states()
         xs = {el: st[view.state_of(el)] if self.element_kind == "C" else st["output rate"] for el in els}
         az = {
@@ -388,9 +387,9 @@ class LawTerm(Candidate):
                     raw = lure.simulate(values, lure.drive, self.term, coefs)
                 except NotConverged:  # integrate the rewritten model for these values instead,
                     try:  # within a bounded number of explicit steps
-                        return view.simulate(model, values, max_steps=50 * len(view.y))
+                        return view.simulate(model, values, max_steps=50 * len(view.record.y))
                     except SimulationError:  # it diverges: a fit as bad as no model at all
-                        return np.zeros(len(view.y))
+                        return np.zeros(len(view.record.y))
                 return raw if lure.extra is None else raw + lure.extra
 
         def fitted(specs, nfev, start=None):

@@ -109,7 +109,7 @@ def mode_on_own(view, omega: float) -> str:
         The reason, or "".
     """
     f = omega / (2 * math.pi)
-    for fm in view.resonances_hz:
+    for fm in view.record.resonances_hz:
         if fm > 0 and abs(f / fm - 1) < 0.15:
             return f"it sits on the model's own mode at {fm:.4g} Hz"
     return ""
@@ -151,16 +151,16 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
         not a resonance), or "" when plausible.
     """
     f = omega / (2 * math.pi)
-    if f > 0.45 * view.fs:
+    if f > 0.45 * view.record.fs:
         return f"its frequency ({f:.4g} Hz) is beyond the data's Nyquist frequency"
-    low = view.lowest_resonance_hz
+    low = view.record.lowest_resonance_hz
     if low is not None and f < 0.5 * low:
         return (
             f"its frequency ({f:.4g} Hz) is below half the model's lowest mode ({low:.4g} Hz): not a "
             f"higher mode of this structure"
         )
-    d = np.asarray(view.drive if view.drive is not None else view.u)
-    fr, P = welch(d, view.fs, 4096)
+    d = np.asarray(view.drive if view.drive is not None else view.record.u)
+    fr, P = welch(d, view.record.fs, 4096)
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
     excited = bool(near.any() and P[near].max() >= 1e-6 * P.max())
     strong = fr[(P >= DRIVE_BAND_LEVEL * P.max()) & (fr > 0)]
@@ -207,13 +207,13 @@ def resonance_trials(view) -> list[tuple[float, float, float]]:
         No frequency-response mismatch to place a mode at.
     """
     d = np.asarray(view.drive)
-    idx = view.fit_idx
+    idx = view.record.fit_idx
     r = view.residual[idx] - view.residual[idx].mean()
     trials = []
     for om0 in mismatch_peaks(view):
         for om in om0 * np.geomspace(0.85, 1.15, 7):
             for ze in (0.005, 0.02, 0.06):
-                q = resonator(d, view.dt, om, ze)[idx]
+                q = resonator(d, view.record.dt, om, ze)[idx]
                 q = q - q.mean()
                 g = (q @ r) / max(q @ q, 1e-300)
                 trials.append((float(np.sum((r - g * q) ** 2)), float(om), ze))
@@ -322,7 +322,7 @@ class ParallelMode(Candidate):
         # only moves it locally): from the model file's values too, then
         for start in view.fit_starts():
             trial = view.fit_drive(
-                direct=lambda z: list(resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]), velocity=True).T),
+                direct=lambda z: list(resonator(d, view.record.dt, math.exp(z[0]), math.exp(z[1]), velocity=True).T),
                 z0=[math.log(om), math.log(ze)],
                 z_bounds=[(math.log(om / 2), math.log(om * 2)), (math.log(1e-4), math.log(0.5))],
                 z_names=[f"{p}.omega", f"{p}.zeta"],

@@ -189,7 +189,7 @@ class RestoringHysteresis(Candidate):
         # the levels and heights that explain most to first order start the fits
         trials = [(0.0, self.levels[1], 0.1 * stiffness)]
         if out is not None:
-            idx = view.fit_idx
+            idx = view.record.fit_idx
             r = view.residual[idx] - view.residual[idx].mean()
             trials = []
             for share, col in out[2].items():
@@ -218,9 +218,9 @@ class RestoringHysteresis(Candidate):
                             raw = lure.hysteretic(values, lure.drive, el, values[f"hy.k_{el}"], values[f"hy.zmax_{el}"])
                         except NotConverged:
                             try:
-                                return view.simulate(model, values, max_steps=50 * len(view.y))
+                                return view.simulate(model, values, max_steps=50 * len(view.record.y))
                             except SimulationError:
-                                return np.zeros(len(view.y))
+                                return np.zeros(len(view.record.y))
                         return raw if lure.extra is None else raw + lure.extra
 
                 specs = [

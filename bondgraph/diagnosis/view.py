@@ -75,6 +75,93 @@ class DriveFit:
     additive: AdditiveDrive | None = None
 
 
+@dataclass(frozen=True)
+class Record:
+    """The record a candidate is fitted to, and what the engine learnt of it before any
+    candidate (read-only arrays).
+
+    Parameters
+    ----------
+    t, u, y : numpy.ndarray
+        Time (s), the recorded drive (input units) and output (output units) on every sample
+        (after resampling and decimation).
+    dt, fs : float
+        The sampling interval (s) and rate (Hz).
+    fit_idx : numpy.ndarray
+        Sample indices of the fit part.
+    fit_mask, val_mask : numpy.ndarray
+        Boolean masks of the fit and validation parts.
+    input, output : str
+        The drive's and the output's names.
+    input_symbol : sympy.Symbol
+        The drive's symbol in the model.
+    noise : float or None
+        White-noise equivalent RMS of the measurement noise (output units), or None without
+        an estimate.
+    band_hz, main_hz : float
+        Where the drive's band ends and where its power spectrum peaks (Hz).
+    modes_hz : tuple of float
+        Frequencies (Hz) of the modes of the calibrated nominal model the data resolve.
+    resonances_hz : tuple of float
+        ... and of its resonances among them (complex poles with damping ratio < 0.5).
+    lowest_resonance_hz : float or None
+        The lowest resonance (Hz) of the whole nominal model, resolved or residualised (None
+        without one).
+    """
+
+    t: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    dt: float
+    fs: float
+    fit_idx: np.ndarray
+    fit_mask: np.ndarray
+    val_mask: np.ndarray
+    input: str
+    output: str
+    input_symbol: sp.Symbol
+    noise: float | None
+    band_hz: float
+    main_hz: float
+    modes_hz: tuple
+    resonances_hz: tuple
+    lowest_resonance_hz: float | None
+
+    @classmethod
+    def of(cls, ctx: Context) -> Record:
+        """The record of a prepared context.
+
+        Parameters
+        ----------
+        ctx : Context
+            The prepared record.
+
+        Returns
+        -------
+        Record
+            Its facts, arrays read-only.
+        """
+        return cls(
+            _frozen(ctx.t),
+            _frozen(ctx.u),
+            _frozen(ctx.y),
+            ctx.dt,
+            ctx.fs,
+            _frozen(ctx.ident.fit_idx),
+            _frozen(ctx.ident.fit_mask),
+            _frozen(ctx.ident.val_mask),
+            ctx.input,
+            ctx.output,
+            ctx.model.inputs[ctx.input].symbol,
+            ctx.noise,
+            ctx.band_hz,
+            ctx.main_hz,
+            tuple(ctx.slow_hz),
+            tuple(ctx.resonance_hz),
+            ctx.lowest_resonance_hz,
+        )
+
+
 class View:
     """What a candidate sees.  Arrays are read-only; ``model`` must not be changed (use
     :meth:`rewrite` for a copy carrying the current values).  ``effort``: a factor on every
@@ -111,19 +198,10 @@ class View:
         self._ctx, self._state = ctx, state
         self._effort = float(effort)
         self._bounds = dict(bounds or {})
-        self.t, self.u, self.y = _frozen(ctx.t), _frozen(ctx.u), _frozen(ctx.y)
-        self.dt = ctx.dt
-        self.fit_idx = _frozen(ctx.ident.fit_idx)
-        self.fit_mask, self.val_mask = _frozen(ctx.ident.fit_mask), _frozen(ctx.ident.val_mask)
-        self.input, self.output = ctx.input, ctx.output
-        self.input_symbol = ctx.model.inputs[ctx.input].symbol
+        #: the record and what the engine learnt of it before any candidate
+        self.record = Record.of(ctx)
         #: the diagnosis's settings (:class:`~bondgraph.diagnosis.settings.Settings`, frozen)
         self.settings = ctx.settings
-        self.noise = ctx.noise
-        self.band_hz = ctx.band_hz
-        #: where the drive's power spectrum peaks (Hz)
-        self.main_hz = ctx.main_hz
-        self.fs = ctx.fs
         #: fast states were residualised: the bond graph's structural elements are not seen
         self.reduced = bool(ctx.n_fast)
         self.exact = ctx.lti is not None
@@ -143,19 +221,11 @@ class View:
         )
         self._structural = not state.linear
         #: nonlinear terms in elements' laws named so far: (element, partner, term, c, r2)
-        self.terms = tuple(state.terms)
+        self._terms = tuple(state.terms)
         self._core_drive, self._core_extra, self._core_model = state.core_drive, state.core_extra, state.core_model
-        self.causes = tuple(state.causes)
         self.prediction = _frozen(state.prediction)
         self.residual = _frozen(ctx.y - state.prediction)
         self.gain = state.gain
-        #: frequencies (Hz) of the modes of the calibrated nominal model the data resolve
-        self.modes_hz = tuple(ctx.slow_hz)
-        #: ... and those of its resonances (complex poles with damping ratio < 0.5)
-        self.resonances_hz = tuple(ctx.resonance_hz)
-        #: the lowest resonance (Hz) of the whole nominal model, resolved or residualised (None
-        #: without one)
-        self.lowest_resonance_hz = ctx.lowest_resonance_hz
         #: the part of the current output that does not pass through the linear core (e.g. an
         #: added parallel mode), sensor gain 1; drive-side fits keep it
         self.extra = None
@@ -179,7 +249,7 @@ class View:
         float
             The share of the record, between 0 and 1.
         """
-        return drive_held_share(self.u, self.fs, length)
+        return drive_held_share(self.record.u, self.record.fs, length)
 
     def _budget(self, max_nfev: int) -> int:
         """An optimiser's evaluation budget at this view's effort."""
@@ -237,7 +307,7 @@ class View:
             ``model`` itself.
         """
         nominal = self._ctx.model
-        V = self.input_symbol
+        V = self.record.input_symbol
         new = {name: el.xreplace({V: expr}) for name, el in nominal.elements.items() if V in el.free_symbols()}
         for name, el in new.items():
             el.role = getattr(model.elements[name], "role", None)
@@ -261,7 +331,7 @@ class View:
             The term, in output units at sensor gain 1.
         """
         g = next(d.symbol for n, (d, _) in model.parameters.items() if n == SENSOR_GAIN)
-        out = model.outputs[self.output]
+        out = model.outputs[self.record.output]
         out.expr = out.expr + g * sp.sympify(term)
 
     def _nominal_value(self, name: str) -> float:
@@ -478,7 +548,7 @@ class View:
             The share, between 0 and 1 (0 for columns that are not finite or are explained
             by the calibration alone).
         """
-        idx = self.fit_idx
+        idx = self.record.fit_idx
         full = np.asarray(column, float).reshape(len(self.residual), -1)
         q, r = full[idx], np.asarray(self.residual, float)[idx]
         if not np.all(np.isfinite(q)):
@@ -502,9 +572,9 @@ class View:
         respect to the logarithms of the calibrated linear parameters (cached)."""
         if getattr(self, "_directions", None) is not None:
             return self._directions
-        idx = self.fit_idx
+        idx = self.record.fit_idx
         cols = [np.ones(idx.size)]
-        if self.on_core and not self.terms:
+        if self.on_core and not self._terms:
             names = [n for n in self.linear if n in self._ctx.core_parameters]
             out = (
                 self._respond_sensitivities(np.asarray(self.drive, float)[:, None], names, rows=idx) if names else None
@@ -563,7 +633,7 @@ class View:
             if not p.lower * (1 + 1e-6) < abs(self.values[p.name]) < p.upper * (1 - 1e-6)
         ]
 
-    def implausible(self) -> list[str]:
+    def _implausible(self) -> list[str]:
         """The calibrated linear parameters whose current value lies outside the plausible
         device's tolerance: the calibration may have bent the device to mimic an effect, so a
         fit of that effect should start from the model file's values too.
@@ -584,14 +654,14 @@ class View:
     def fit_starts(self) -> list[dict[str, float] | None]:
         """Where a fit inside the dynamics starts its linear parameters: the calibration (None)
         and, when the calibration ended on a search bound (:meth:`strained`) or outside the
-        plausible device (:meth:`implausible`), the model file's values too.
+        plausible device (:meth:`_implausible`), the model file's values too.
 
         Returns
         -------
         list of dict or None
             ``[None]`` or ``[None, model_file_values()]``.
         """
-        return [None] + ([self.model_file_values()] if self.strained() or self.implausible() else [])
+        return [None] + ([self.model_file_values()] if self.strained() or self._implausible() else [])
 
     def model_file_values(self) -> dict[str, float]:
         """The model file's values of the calibrated linear parameters.
@@ -859,7 +929,7 @@ class View:
             return None
         return self.fit_drive(start=start, max_nfev=20, names=[] if additive else None).prediction
 
-    def identification(self, model: Model, integrate: bool = False) -> Identification:
+    def _identification(self, model: Model, integrate: bool = False) -> Identification:
         """An :class:`Identification` of ``model`` on the same data and split (exact linear
         route when the model is linear, unless ``integrate``).
 
@@ -941,7 +1011,7 @@ class View:
         """:meth:`predictor`'s (predict, known), and on the exact linear route a function
         (values, names, rows) -> (raw, ∂raw/∂names) at the rows ``rows`` or None
         (:meth:`~bondgraph.fit.identify.Identification.sensitivities`); None off it."""
-        ident = self.identification(model)
+        ident = self._identification(model)
         known = {p.name for p in ident.sim.eqs.params}
         if ident.lti is None:  # the integrator: one slow run must not outlast the fit's budget
             return (lambda values: ident.predict(values, deadline=simulation_deadline())), known, None
@@ -1081,15 +1151,17 @@ class View:
         if not self.exact or self.reduced:
             return None
         try:
-            if self.terms and self._core_drive is not None:
-                lure = Lure(self.core(), self.input, self.output, elements, partners, self._ctx.dt, self.terms)
+            if self._terms and self._core_drive is not None:
+                lure = Lure(
+                    self.core(), self.record.input, self.record.output, elements, partners, self._ctx.dt, self._terms
+                )
                 lure.drive, lure.extra = np.asarray(self._core_drive), self._core_extra
             elif self.on_core:
-                lure = Lure(self.core(), self.input, self.output, elements, partners, self._ctx.dt)
+                lure = Lure(self.core(), self.record.input, self.record.output, elements, partners, self._ctx.dt)
                 lure.drive, lure.extra = np.asarray(self.drive), self.extra
             else:  # the model itself, when it is linear (a linear structural extension included)
-                lure = Lure(model, self.input, self.output, elements, partners, self._ctx.dt)
-                lure.drive, lure.extra = np.asarray(self.u), None
+                lure = Lure(model, self.record.input, self.record.output, elements, partners, self._ctx.dt)
+                lure.drive, lure.extra = np.asarray(self.record.u), None
         except BondGraphError:
             return None
         return lure
@@ -1113,14 +1185,14 @@ class View:
         SimulationError
             The integration failed or passed the context's time limit.
         """
-        ident = self.identification(self.model, integrate=True)
+        ident = self._identification(self.model, integrate=True)
         known = {p.name for p in ident.sim.eqs.params}
         vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
-        run_inputs = {self.input: ident.signal}
+        run_inputs = {self.record.input: ident.signal}
         x0 = record_start(ident.sim, ident.sim.theta(vals), run_inputs, float(self._ctx.t[0]))
         res = ident.sim.run(self._ctx.t, run_inputs, params=vals, x0=x0, rtol=1e-5, deadline=simulation_deadline())
         out = dict(res.states)
-        out["output rate"] = np.gradient(res.outputs[self.output], self._ctx.t)
+        out["output rate"] = np.gradient(res.outputs[self.record.output], self._ctx.t)
         return out
 
     def state_of(self, element: str) -> str:

@@ -39,9 +39,9 @@ class LoopInductance(Candidate):
             return "the model's fast states were residualised"
         if not view.exact:
             return "needs a model linear in its states"
-        if drive_loop(view.core(), view.input) is None:
+        if drive_loop(view.core(), view.record.input) is None:
             return "the drive is not a voltage source in a loop of the model"
-        unit = view.model.inputs[view.input].unit
+        unit = view.model.inputs[view.record.input].unit
         if unit not in VOLTS:  # an effort source of another domain: no electrical loop
             return f"the drive is not a voltage (its unit is {unit})"
         return True
@@ -49,7 +49,7 @@ class LoopInductance(Candidate):
     @staticmethod
     def build(view, model, L: float):
         """``model`` with the inductance added to the drive's loop (located on the nominal model)."""
-        junction, _ = drive_loop(view.core(), view.input)
+        junction, _ = drive_loop(view.core(), view.record.input)
         p = model.parameter("loop.L", L, "H", "series inductance in the drive's loop", bounds=(0, 1e12))
         model.add(I("loop.Ls", p))
         model.bond(junction, "loop.Ls")
@@ -73,7 +73,7 @@ class LoopInductance(Candidate):
 
     def fit(self, view):
         core = view.core()
-        _, resistors = drive_loop(core, view.input)
+        _, resistors = drive_loop(core, view.record.input)
         rs = [
             n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values.get(n, 0.0) > 0
         ]

@@ -137,7 +137,7 @@ class InputHysteresis(_DriveCandidate):
     n_plays = 10
 
     def evidence(self, view):
-        m = view.fit_mask
+        m = view.record.fit_mask
         return {"loop_area": loop_area(view.residual[m], view.drive[m])}
 
     def fit(self, view):
@@ -202,7 +202,7 @@ class InputBoucWen(_DriveCandidate):
     label = "Bouc-Wen state on the drive"
 
     def applies(self, view):
-        if view.drive is None or view.additive.base_expr != view.input_symbol:
+        if view.drive is None or view.additive.base_expr != view.record.input_symbol:
             return "needs the raw drive's rate (a drive-side stage was added first)"
         return True
 
@@ -247,7 +247,7 @@ class InputBoucWen(_DriveCandidate):
         g = model.parameter("bw.gamma", gamma, "1", "Bouc-Wen gamma")
         vr = model.parameter("bw.Vr", Vr, "", "reference drive (largest |drive| of the data)")
         z = model.state("bw.z", z_start, unit="1", doc="Bouc-Wen hysteretic variable (units of V/V_r)")
-        vdot = model.input_rate(view.input) / vr
+        vdot = model.input_rate(view.record.input) / vr
         model.set_rate("bw.z", vdot - b * sp.Abs(vdot) * z - g * vdot * sp.Abs(z))
         expr = view.additive_expr(kappa * vr * z)
         view.with_drive(model, expr)
@@ -300,7 +300,7 @@ class InputCreep(_DriveCandidate):
         """The relaxation times (s), two per decade from five samples (from 10/ω of the
         model's slowest mode on a drive that holds: a faster cell there only reshapes the
         transient of the model's own dynamics) to three record lengths."""
-        lo, hi = 5 * view.dt, 3 * float(view.t[-1] - view.t[0])
+        lo, hi = 5 * view.record.dt, 3 * float(view.record.t[-1] - view.record.t[0])
         if cls.holds(view):
             lo = max(lo, cls.model_lag(view))
         n = max(2, int(round(math.log10(hi / lo) * 2)) + 1)
@@ -309,13 +309,16 @@ class InputCreep(_DriveCandidate):
     @staticmethod
     def model_lag(view) -> float:
         """10/ω (s) of the model's slowest mode (0 without one)."""
-        slow = [f for f in view.modes_hz if f > 0]
+        slow = [f for f in view.record.modes_hz if f > 0]
         return 10.0 / (2 * math.pi * min(slow)) if slow else 0.0
 
     @staticmethod
     def drive_lag(view) -> float:
         """A quarter of the drive's main period (s), 1 % of the record at most."""
-        return min(0.25 / view.main_hz if view.main_hz > 0 else 0.0, 0.01 * float(view.t[-1] - view.t[0]))
+        return min(
+            0.25 / view.record.main_hz if view.record.main_hz > 0 else 0.0,
+            0.01 * float(view.record.t[-1] - view.record.t[0]),
+        )
 
     @classmethod
     def holds(cls, view) -> bool:
@@ -334,8 +337,8 @@ class InputCreep(_DriveCandidate):
         taus = self.taus(view)
         d = np.asarray(view.additive.base)
         d0 = float(d[0])
-        steady = [lowpass(d, tau, view.dt) for tau in taus]
-        decays = [np.exp(-np.arange(len(d)) * (view.dt / tau)) for tau in taus]
+        steady = [lowpass(d, tau, view.record.dt) for tau in taus]
+        decays = [np.exp(-np.arange(len(d)) * (view.record.dt / tau)) for tau in taus]
 
         def cells_from(prior):  # cells in equilibrium with the level ``prior`` at the start
             return [s + (prior - d0) * e for s, e in zip(steady, decays)]
@@ -537,22 +540,22 @@ class InputRC(_DriveCandidate):
     cap = 1e-6
 
     def _range(self, view):
-        return view.dt / 10, float(view.t[-1] - view.t[0]) / 20
+        return view.record.dt / 10, float(view.record.t[-1] - view.record.t[0]) / 20
 
     def fit(self, view):
         d = np.asarray(view.drive)
         lo, hi = self._range(view)
         taus = np.geomspace(lo, hi, 16)
-        idx = view.fit_idx
-        Y = view.respond([lowpass(d, tau, view.dt) for tau in taus])
+        idx = view.record.fit_idx
+        Y = view.respond([lowpass(d, tau, view.record.dt) for tau in taus])
         sse = []
         for j in range(len(taus)):
             A = np.column_stack([Y[idx, j], np.ones(idx.size)])
-            res = np.linalg.lstsq(A, view.y[idx], rcond=None)[1]
+            res = np.linalg.lstsq(A, view.record.y[idx], rcond=None)[1]
             sse.append(float(res[0]) if res.size else math.inf)
         tau0 = float(taus[int(np.argmin(sse))])
         fit = view.fit_drive(
-            lambda z: [lowpass(d, math.exp(z[0]), view.dt)],
+            lambda z: [lowpass(d, math.exp(z[0]), view.record.dt)],
             [-np.inf],
             [np.inf],
             identity=False,
@@ -573,14 +576,14 @@ class InputRC(_DriveCandidate):
         expr = Quantity("e", "rc.C")
         view.with_drive(model, expr)
         # the stage passes the drive with unit gain; the fitted coefficient is the sensor gain's change
-        fit.drive = lowpass(d, tau, view.dt)
+        fit.drive = lowpass(d, tau, view.record.dt)
         fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.extra
         return self.extension(view, fit, model, {"rc.R": tau / self.cap}, expr)
 
     def implausible(self, view, ext):
         tau = ext.values["rc.R"] * self.cap
         f = 1 / (2 * math.pi * tau)
-        if f > 0.45 * view.fs:
+        if f > 0.45 * view.record.fs:
             return f"its corner ({f:.3g} Hz) is above the data's band"
         return ""
 
@@ -599,21 +602,21 @@ class InputRLC(_DriveCandidate):
 
     def fit(self, view):
         d = np.asarray(view.drive)
-        top = 2 * math.pi * 0.45 * view.fs
-        low = 2 * math.pi / float(view.t[-1] - view.t[0]) * 10
-        idx = view.fit_idx
+        top = 2 * math.pi * 0.45 * view.record.fs
+        low = 2 * math.pi / float(view.record.t[-1] - view.record.t[0]) * 10
+        idx = view.record.fit_idx
         best = None
         for om in np.geomspace(low, top, 10):
             for ze in (0.1, 0.4, 1.0):
-                col = view.respond([om**2 * resonator(d, view.dt, om, ze)])[:, 0]
+                col = view.respond([om**2 * resonator(d, view.record.dt, om, ze)])[:, 0]
                 A = np.column_stack([col, np.ones(len(d))])[idx]
-                res = np.linalg.lstsq(A, view.y[idx], rcond=None)[1]
+                res = np.linalg.lstsq(A, view.record.y[idx], rcond=None)[1]
                 sse = float(res[0]) if res.size else math.inf
                 if best is None or sse < best[0]:
                     best = (sse, om, ze)
         _, om0, ze0 = best
         fit = view.fit_drive(
-            lambda z: [math.exp(2 * z[0]) * resonator(d, view.dt, math.exp(z[0]), math.exp(z[1]))],
+            lambda z: [math.exp(2 * z[0]) * resonator(d, view.record.dt, math.exp(z[0]), math.exp(z[1]))],
             [-np.inf],
             [np.inf],
             identity=False,
@@ -639,7 +642,7 @@ class InputRLC(_DriveCandidate):
             model.bond("rlc.loop", e)
         expr = Quantity("e", "rlc.Cs")
         view.with_drive(model, expr)
-        fit.drive = om**2 * resonator(d, view.dt, om, ze)
+        fit.drive = om**2 * resonator(d, view.record.dt, om, ze)
         fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.extra
         return self.extension(view, fit, model, {"rlc.R": R_val, "rlc.L": L_val}, expr)
 
@@ -648,7 +651,7 @@ class InputRLC(_DriveCandidate):
 
     def implausible(self, view, ext):
         om = 1 / math.sqrt(ext.values["rlc.L"] * self.cap)
-        if om / (2 * math.pi) > 0.45 * view.fs:
+        if om / (2 * math.pi) > 0.45 * view.record.fs:
             return f"its resonance ({om / (2 * math.pi):.3g} Hz) is above the data's band"
         zeta = ext.values["rlc.R"] / 2 * math.sqrt(self.cap / ext.values["rlc.L"])
         if zeta < self.min_damping:
