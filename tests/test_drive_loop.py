@@ -22,7 +22,7 @@ from bondgraph.diagnosis import diagnose
 from bondgraph.diagnosis.engine import model_file_options
 from bondgraph.diagnosis.rewrite import drive_loop, parameters_of
 from bondgraph.model.modelfile import load_model
-from library.extensions import LoopInductance
+from library.extensions import InputRC, InputRLC, LoopInductance
 from library.piezo import layer_extension, linear_polarization, piezo_layer
 
 MODELS = Path(__file__).resolve().parent.parent / "models"
@@ -77,6 +77,25 @@ def test_the_drive_loop_is_found_only_where_the_input_is_a_voltage_source():
     assert parameters_of(apa, "Re") == ["Re"] and parameters_of(apa, "amp") == []
     bimorph = load_model(MODELS / "bimorph_t215.py").model  # the voltage enters as modal forces
     assert drive_loop(bimorph, next(iter(bimorph.inputs))) is None
+
+
+def test_an_electrical_stage_is_tried_on_a_voltage_drive_only():
+    """A force has no series resistance or cable capacitance to filter it: on a mass-spring
+    driven by a force (unit N) the electrical stages are not tried, and say why."""
+    g = Model("mass-spring-damper")
+    F = g.input("F", "N")
+    g.add(Se("force", F), J1("v"), I("mass", 1.0), C("spring", 1e-4), R("damper", 12.0))
+    g.bond("force", "v")
+    for e in ("mass", "spring", "damper"):
+        g.bond("v", e)
+    g.output("x", g.displacement("spring"), "m")
+    t = np.arange(0.0, 2.0, 1e-3)
+    u = np.sin(2 * np.pi * 7.0 * t) + 0.5 * np.sin(2 * np.pi * 31.0 * t)
+    x = bg.simulate(g, t, {"F": bg.PiecewiseLinear(t, u)})["x"]
+    x = x + 1e-3 * np.ptp(x) * np.random.default_rng(3).standard_normal(t.size)
+    rep = diagnose(g, Dataset(t, {"F": u, "x": x}), candidates=[InputRC(), InputRLC(), LoopInductance()], workers=1)
+    why = [c.skipped for c in rep.steps[0].candidates]
+    assert len(why) == 3 and all("the drive is not a voltage (its unit is N)" in w for w in why), why
 
 
 @pytest.fixture(scope="module")

@@ -20,6 +20,25 @@ VOLTS = ("V", "volt", "volts", "")
 SCAN_H = np.geomspace(1e-9, 1e3, 25)
 
 
+def not_a_voltage(view) -> str:
+    """Why an electrical stage cannot sit on the drive: "" when the drive is a voltage (or its
+    unit is not declared), else the reason (a force or a flow has no series resistance or
+    cable capacitance to filter it).
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+
+    Returns
+    -------
+    str
+        "" or the reason.
+    """
+    unit = view.model.inputs[view.record.input].unit
+    return "" if unit in VOLTS else f"the drive is not a voltage (its unit is {unit})"
+
+
 class LoopInductance(Candidate):
     """A series inductance L (H) in the loop of the drive's voltage source (the 1-junction where
     source, series resistance and the actuator's electrical port share the drive current),
@@ -41,10 +60,7 @@ class LoopInductance(Candidate):
             return "needs a model linear in its states"
         if drive_loop(view.core(), view.record.input) is None:
             return "the drive is not a voltage source in a loop of the model"
-        unit = view.model.inputs[view.record.input].unit
-        if unit not in VOLTS:  # an effort source of another domain: no electrical loop
-            return f"the drive is not a voltage (its unit is {unit})"
-        return True
+        return not_a_voltage(view) or True  # an effort source of another domain: no electrical loop
 
     @staticmethod
     def build(view, model, L: float):

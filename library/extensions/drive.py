@@ -22,6 +22,8 @@ from bondgraph.diagnosis import LINEAR, NOT_A_DRIVE, Candidate, Extension, Term
 from bondgraph.diagnosis.filters import lowpass, resonator
 from library.hysteresis import PrandtlIshlinskii, bouc_wen_response, play_outputs, threshold_grid
 
+from .circuit import not_a_voltage
+
 
 def drive_scale(view) -> float:
     """Largest |base drive| (the drive the additive effects act on)."""
@@ -530,9 +532,18 @@ class InputExpansion(_InputPolynomial):
     sign, prefix = 1.0, "exp"
 
 
-class InputRC(_DriveCandidate):
+class _ElectricalStage(_DriveCandidate):
+    """An electrical stage on the drive: it applies to a voltage drive only."""
+
+    def applies(self, view):
+        ok = super().applies(view)
+        return (not_a_voltage(view) or True) if ok is True else ok
+
+
+class InputRC(_ElectricalStage):
     """An RC input stage: the drive reaches the actuator through a series resistance into a
-    capacitance, u = d/(1 + sRC) (amplifier output resistance, cables)."""
+    capacitance, u = d/(1 + sRC) (amplifier output resistance, cables); on a voltage drive
+    only."""
 
     cause = "electrical-rc"
     label = "series R with a capacitance on the drive (RC lag)"
@@ -588,12 +599,12 @@ class InputRC(_DriveCandidate):
         return ""
 
 
-class InputRLC(_DriveCandidate):
+class InputRLC(_ElectricalStage):
     """A series R–L into the actuator's capacitance on the drive: u = d/(LCs² + RCs + 1), the
     electrical stage of a long cable or an inductive amplifier output (its resonance
     ω = 1/√(LC), damping ratio ζ = (R/2)·√(C/L)).  The resistance in series (the amplifier's
     output, the leads) damps it: a resonance sharper than ``min_damping`` is a mechanical mode
-    seen through the same second-order shape, not an input stage."""
+    seen through the same second-order shape, not an input stage.  On a voltage drive only."""
 
     cause = "electrical-rc"
     label = "series R-L with a capacitance on the drive (RLC stage)"
