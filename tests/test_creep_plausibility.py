@@ -92,13 +92,14 @@ def _view(drive, fs, modes_hz, main_hz):
     from bondgraph.diagnosis.context import drive_held_share
 
     t = np.arange(drive.size) / fs
-    return SimpleNamespace(
+    record = SimpleNamespace(
         t=t,
         dt=1 / fs,
         modes_hz=modes_hz,
         main_hz=main_hz,
         held_share=lambda length: drive_held_share(drive, fs, length),
     )
+    return SimpleNamespace(record=record)
 
 
 def test_on_a_drive_that_holds_only_the_models_dynamics_bound_a_creep_lag():

@@ -675,9 +675,9 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     state, cal, _ = calibrate(ctx)
     view = View(ctx, state, cal.free)
     high = 0.3 * view.record.fs  # the record may be decimated: well inside its band
-    assert high > 20.0 and view.resolution_near(2 * np.pi * 3.1) > (0.99, True)
-    coh, resolved = view.resolution_near(2 * np.pi * high)
-    assert coh < view.resolved_coherence and not resolved
+    assert high > 20.0 and view.record.resolution_near(2 * np.pi * 3.1) > (0.99, True)
+    coh, resolved = view.record.resolution_near(2 * np.pi * high)
+    assert coh < view.record.resolved_coherence and not resolved
     assert "does not resolve the response near" in mode_implausible(view, 2 * np.pi * high, 0.02)
     assert "resolve" not in mode_implausible(view, 2 * np.pi * 3.1, 0.02)
     # a mode up there is still named when what it explains lies where the record resolves the

@@ -42,7 +42,7 @@ def frf_mismatch(view):
     mismatch : numpy.ndarray
         The relative mismatch (dimensionless) at each.
     """
-    w, H, coh = view.empirical_frf()
+    w, H, coh = view.record.empirical_frf()
     Hm = view.gain * view.frequency_response(w)
     return w, np.abs(H - Hm) * coh / np.maximum(np.abs(Hm), 1e-300 + 1e-3 * np.abs(Hm).max(initial=0.0))
 
@@ -61,11 +61,11 @@ def unresolved(view) -> str:
     str
         The reason, or "".
     """
-    if view.empirical_frf()[0].size:
+    if view.record.empirical_frf()[0].size:
         return ""
     return (
         f"the record resolves the response at no frequency (coherence of output and drive "
-        f"≤ {view.resolved_coherence:g} everywhere): no mismatch to place a mode at"
+        f"≤ {view.record.resolved_coherence:g} everywhere): no mismatch to place a mode at"
     )
 
 
@@ -171,7 +171,7 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
             f"{-10 * math.log10(DRIVE_BAND_LEVEL):.0f} dB of its peak) spans "
             f"{span:.3g}× in frequency, too narrow to show a skirt"
         )
-    coh, resolved = view.resolution_near(omega)
+    coh, resolved = view.record.resolution_near(omega)
     share = None if raw is None or (excited and resolved) else view.resolved_share(raw)
     skirt = "" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it"
     if not excited and (share is None or share < 0.5):
@@ -179,7 +179,7 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
     if not resolved and (share is None or share < 0.5):
         return (
             f"the record does not resolve the response near {f:.4g} Hz (coherence {coh:.2g} < "
-            f"{view.resolved_coherence:g}: as much noise as response there)" + skirt
+            f"{view.record.resolved_coherence:g}: as much noise as response there)" + skirt
         )
     if zeta > 0.3:
         return f"it is not a resonance (damping ratio {zeta:.2g})"

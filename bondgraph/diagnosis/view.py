@@ -107,6 +107,10 @@ class Record:
     lowest_resonance_hz : float or None
         The lowest resonance (Hz) of the whole nominal model, resolved or residualised (None
         without one).
+    u_recorded : numpy.ndarray
+        The drive as recorded, on every sample (its reading between samples aside).
+    noise_psd : float or None
+        The noise floor's one-sided spectral density (output units²/Hz), or None.
     """
 
     t: np.ndarray
@@ -126,6 +130,8 @@ class Record:
     modes_hz: tuple
     resonances_hz: tuple
     lowest_resonance_hz: float | None
+    u_recorded: np.ndarray
+    noise_psd: float | None
 
     @classmethod
     def of(cls, ctx: Context) -> Record:
@@ -159,7 +165,72 @@ class Record:
             tuple(ctx.slow_hz),
             tuple(ctx.resonance_hz),
             ctx.lowest_resonance_hz,
+            _frozen(ctx.u_recorded),
+            ctx.noise_psd,
         )
+
+    def held_share(self, length: float) -> float:
+        """Share of the record (0-1) in which the measured drive holds still (within 1 % of
+        its range) for ``length`` s or longer: steps, holds, rests between bursts.
+
+        Parameters
+        ----------
+        length : float
+            Shortest hold counted, s.
+
+        Returns
+        -------
+        float
+            The share of the record, between 0 and 1.
+        """
+        return drive_held_share(self.u, self.fs, length)
+
+    def empirical_frf(self):
+        """(ω rad/s, H, coherence) of the measured output over the input (Welch), at the bins the
+        record resolves (:meth:`resolution_near`'s rule).
+
+        Returns
+        -------
+        omega : numpy.ndarray
+            Angular frequencies of the Welch bins, rad/s.
+        H : numpy.ndarray
+            Complex H1 estimate, output units per input unit.
+        coherence : numpy.ndarray
+            Magnitude-squared coherence, between 0 and 1.
+        """
+        return empirical_frf(self.u_recorded, self.y, self.fs, self.noise_psd)
+
+    #: coherence above which the record resolves the response (the empirical FRF's bins)
+    resolved_coherence = RESOLVED_COHERENCE
+
+    def resolution_near(self, omega: float, width: float = 0.03) -> tuple[float, bool]:
+        """(median magnitude-squared coherence, whether the record resolves the response) of
+        the measured output with the input within ±``width`` (relative) of ``omega`` (rad/s;
+        the nearest Welch bin if none is that close).  Resolved: the coherence is above
+        :attr:`resolved_coherence`, or the output's spectral density is at least
+        :data:`~bondgraph.diagnosis.calibration.RESOLVED_SNR` times the noise floor's on most
+        of those bins (:func:`~bondgraph.diagnosis.calibration.resolved_spectrum`); below, the
+        noise is as large as the response.
+
+        Parameters
+        ----------
+        omega : float
+            Angular frequency, rad/s.
+        width : float, optional
+            Relative half-width of the band.
+
+        Returns
+        -------
+        coherence : float
+            The median coherence, between 0 and 1.
+        resolved : bool
+            Whether the record resolves the response there.
+        """
+        w, coh, ok = resolved_spectrum(self.u_recorded, self.y, self.fs, self.noise_psd)
+        near = np.abs(w - omega) <= width * omega
+        if not near.any():
+            near = np.arange(w.size) == int(np.argmin(np.abs(w - omega)))
+        return float(np.median(coh[near])), bool(np.mean(ok[near]) > 0.5)
 
 
 class View:
@@ -234,22 +305,6 @@ class View:
             self.extra = _frozen(
                 extra if np.max(np.abs(extra)) > 1e-9 * np.max(np.abs(state.raw)) else np.zeros_like(extra)
             )
-
-    def held_share(self, length: float) -> float:
-        """Share of the record (0-1) in which the measured drive holds still (within 1 % of
-        its range) for ``length`` s or longer: steps, holds, rests between bursts.
-
-        Parameters
-        ----------
-        length : float
-            Shortest hold counted, s.
-
-        Returns
-        -------
-        float
-            The share of the record, between 0 and 1.
-        """
-        return drive_held_share(self.record.u, self.record.fs, length)
 
     def _budget(self, max_nfev: int) -> int:
         """An optimiser's evaluation budget at this view's effort."""
@@ -456,57 +511,10 @@ class View:
             * np.exp(-1j * omega * ctx.delay * ctx.dt)
         )
 
-    def empirical_frf(self):
-        """(ω rad/s, H, coherence) of the measured output over the input (Welch), at the bins the
-        record resolves (:meth:`resolution_near`'s rule).
-
-        Returns
-        -------
-        omega : numpy.ndarray
-            Angular frequencies of the Welch bins, rad/s.
-        H : numpy.ndarray
-            Complex H1 estimate, output units per input unit.
-        coherence : numpy.ndarray
-            Magnitude-squared coherence, between 0 and 1.
-        """
-        return empirical_frf(self._ctx.u_recorded, self._ctx.y, self._ctx.fs, self._ctx.noise_psd)
-
-    #: coherence above which the record resolves the response (the empirical FRF's bins)
-    resolved_coherence = RESOLVED_COHERENCE
-
-    def resolution_near(self, omega: float, width: float = 0.03) -> tuple[float, bool]:
-        """(median magnitude-squared coherence, whether the record resolves the response) of
-        the measured output with the input within ±``width`` (relative) of ``omega`` (rad/s;
-        the nearest Welch bin if none is that close).  Resolved: the coherence is above
-        :attr:`resolved_coherence`, or the output's spectral density is at least
-        :data:`~bondgraph.diagnosis.calibration.RESOLVED_SNR` times the noise floor's on most
-        of those bins (:func:`~bondgraph.diagnosis.calibration.resolved_spectrum`); below, the
-        noise is as large as the response.
-
-        Parameters
-        ----------
-        omega : float
-            Angular frequency, rad/s.
-        width : float, optional
-            Relative half-width of the band.
-
-        Returns
-        -------
-        coherence : float
-            The median coherence, between 0 and 1.
-        resolved : bool
-            Whether the record resolves the response there.
-        """
-        w, coh, ok = resolved_spectrum(self._ctx.u_recorded, self._ctx.y, self._ctx.fs, self._ctx.noise_psd)
-        near = np.abs(w - omega) <= width * omega
-        if not near.any():
-            near = np.arange(w.size) == int(np.argmin(np.abs(w - omega)))
-        return float(np.median(coh[near])), bool(np.mean(ok[near]) > 0.5)
-
     def resolved_share(self, raw: np.ndarray) -> float:
         """The share (0-1) of the residual power a raw prediction removes (its sensor gain and
-        offset solved) that lies where the record resolves the response (:meth:`resolution_near`'s
-        rule, bin by bin); 0 when it removes none.
+        offset solved) that lies where the record resolves the response
+        (:meth:`Record.resolution_near`'s rule, bin by bin); 0 when it removes none.
 
         Parameters
         ----------

@@ -326,7 +326,7 @@ class InputCreep(_DriveCandidate):
     def holds(cls, view) -> bool:
         """Whether ``min_held`` of the record or more lies in holds of the drive three times
         :meth:`drive_lag` long (steps, holds, rests)."""
-        return view.held_share(3 * cls.drive_lag(view)) >= cls.min_held
+        return view.record.held_share(3 * cls.drive_lag(view)) >= cls.min_held
 
     @classmethod
     def lag_limit(cls, view) -> float:
