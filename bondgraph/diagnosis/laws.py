@@ -471,7 +471,7 @@ class LawTerm(Candidate):
         coefs = {el: self._pair(values[n], values.get(f"{self.even_prefix}_{el}", 0.0)) for n, el in kept}
         terms = [(el, partners[el], self.term, coefs[el], r2s[el]) for _, el in kept]
         where = self._carrier(view, lure, values, coefs, r2s, els) if len(kept) > 1 else ""
-        cause = self.stands_for(view, values, coefs, r2s, xs)
+        cause = self.stands_for(coefs, r2s, xs)
         cause = cause if cause != self.cause else ""
         return Extension(
             self.build(view, coefs, r2s),
@@ -489,16 +489,12 @@ class LawTerm(Candidate):
             why=f"the fitted law is {cause} where the record takes it (rule 'secant-trend')" if cause else "",
         )
 
-    def stands_for(self, view, values: dict, coefs: dict, r2s: dict, xs: dict) -> str:
+    def stands_for(self, coefs: dict, r2s: dict, xs: dict) -> str:
         """The cause the fitted terms stand for, when the fit rather than the kind names it;
         "" (the default) for the kind's own :attr:`cause`.
 
         Parameters
         ----------
-        view : View
-            The read-only view of the data and the current model.
-        values : dict of str to float
-            The fitted values (the new coefficients and the recalibrated linear parameters).
         coefs : dict of str to float or tuple
             Element → its fitted coefficient (the pair (c, d) for a kind with an even part).
         r2s : dict of str to float
@@ -618,7 +614,7 @@ class Softening(LawTerm):
         """
         return abs(slope(view.model, el, view.values)) / _peak(x) ** 2, 1.5 * float(np.mean(x**2))
 
-    def stands_for(self, view, values, coefs, r2s, xs):
+    def stands_for(self, coefs, r2s, xs):
         """Hardening or softening by the fitted law's own shape where the record takes the
         spring (rule ``secant-trend``): a stiffness that rises with the distance from rest is
         hardening, one that falls softening, whichever sign the kind gives its cubic.  With
@@ -632,10 +628,6 @@ class Softening(LawTerm):
 
         Parameters
         ----------
-        view : View
-            The read-only view of the data and the current model.
-        values : dict of str to float
-            The fitted values.
         coefs : dict of str to tuple
             Element → (k3, k2) fitted.
         r2s : dict of str to float
