@@ -142,8 +142,10 @@ class LawTerm(Candidate):
         return list(model.with_role(self.role))
 
     def applies(self, view):
-        """True, or why the term cannot act here: no element at the site (or with the role), or
-        the site's modes are faster than the data resolve.
+        """True, or why the term cannot act here: no element at the site (or with the role), the
+        site's modes are faster than the data resolve, or the term is in an element's law
+        already (named at an earlier step, perhaps under another cause: rule
+        ``secant-trend``).
 
         Parameters
         ----------
@@ -166,6 +168,10 @@ class LawTerm(Candidate):
                 f"the elements at {self.site_name} act in modes faster than the data resolve (their "
                 f"quasi-static effect is a drive nonlinearity)"
             )
+        known = view.model.all_parameters()
+        held = [el for el in self.elements(view.model) if f"{self.prefix}_{el}" in known]
+        if held:
+            return f"its term is in the law of {', '.join(held)} already (named at an earlier step)"
         return True
 
     @staticmethod
