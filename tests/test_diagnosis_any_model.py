@@ -220,6 +220,13 @@ def test_a_softening_spring_pushed_one_way_is_named_softening():
     # the hardening kind whose fit was named softening is not tried again on the spring's law,
     # which holds its term already (it failed on a duplicate parameter)
     assert not [c.error for s in rep.steps for c in s.candidates if c.error]
+    later = [c for s in rep.steps[1:] for c in s.candidates if c.label == "cubic hardening of the spring law"]
+    assert later and all("in the law of spring already" in c.skipped for c in later)
+    # docs/diagnosis.md §8 tells this record's verdict: the softening kind's own fit refused
+    # by 'beyond-linear', the renamed one named by 'most-beyond-linear'
+    first = rep.steps[0]
+    own = [c for c in first.candidates if c.label == "cubic softening of the spring law"]
+    assert own and own[0].rule == "beyond-linear" and first.rule == "most-beyond-linear"
 
 
 def test_a_restoring_force_with_memory_is_named_hysteresis_at_the_spring():
