@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import cached_property
 from types import MappingProxyType
 from typing import Callable, Mapping, Sequence
 
@@ -198,7 +199,29 @@ class Record:
         coherence : numpy.ndarray
             Magnitude-squared coherence, between 0 and 1.
         """
+        return self._frf
+
+    @cached_property
+    def _frf(self):
+        """:meth:`empirical_frf`, computed once per record."""
         return empirical_frf(self.u_recorded, self.y, self.fs, self.noise_psd)
+
+    @cached_property
+    def resolved(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(ω rad/s, coherence, resolved) at every Welch bin above 0
+        (:func:`~bondgraph.diagnosis.calibration.resolved_spectrum` of the recorded drive and
+        the output), computed once per record.
+
+        Returns
+        -------
+        omega : numpy.ndarray
+            Angular frequencies, rad/s.
+        coherence : numpy.ndarray
+            Magnitude-squared coherence, between 0 and 1.
+        resolved : numpy.ndarray of bool
+            Whether the record resolves the response there.
+        """
+        return resolved_spectrum(self.u_recorded, self.y, self.fs, self.noise_psd)
 
     #: coherence above which the record resolves the response (the empirical FRF's bins)
     resolved_coherence = RESOLVED_COHERENCE
@@ -226,7 +249,7 @@ class Record:
         resolved : bool
             Whether the record resolves the response there.
         """
-        w, coh, ok = resolved_spectrum(self.u_recorded, self.y, self.fs, self.noise_psd)
+        w, coh, ok = self.resolved
         near = np.abs(w - omega) <= width * omega
         if not near.any():
             near = np.arange(w.size) == int(np.argmin(np.abs(w - omega)))
@@ -527,8 +550,8 @@ class View:
             The share, between 0 and 1.
         """
         g, b = self.score(raw)[:2]
-        u, y, fs = self._ctx.u_recorded, self._ctx.y, self._ctx.fs
-        ok = resolved_spectrum(u, y, fs, self._ctx.noise_psd)[2]
+        u, y, fs = self.record.u_recorded, self.record.y, self.record.fs
+        ok = self.record.resolved[2]
         before = cross_spectra(u, self.residual, fs)[2][1:]
         after = cross_spectra(u, y - (g * np.asarray(raw) + b), fs)[2][1:]
         drop = np.maximum(before - after, 0.0)
