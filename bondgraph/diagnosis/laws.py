@@ -391,11 +391,8 @@ class LawTerm(Candidate):
                 ]
                 try:
                     raw = lure.simulate(values, lure.drive, self.term, coefs)
-                except NotConverged:  # integrate the rewritten model for these values instead,
-                    try:  # within a bounded number of explicit steps
-                        return view.simulate(model, values, max_steps=50 * len(view.record.y))
-                    except SimulationError:  # it diverges: a fit as bad as no model at all
-                        return np.zeros(len(view.record.y))
+                except NotConverged:  # it diverges: a fit as bad as no model at all
+                    return np.zeros(len(view.record.y))
                 return raw if lure.extra is None else raw + lure.extra
 
         def fitted(specs, nfev, start=None):

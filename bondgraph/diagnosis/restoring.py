@@ -213,14 +213,11 @@ class RestoringHysteresis(Candidate):
                 predict = None
                 if fast:
 
-                    def predict(values, model=model):
+                    def predict(values):
                         try:
                             raw = lure.hysteretic(values, lure.drive, el, values[f"hy.k_{el}"], values[f"hy.zmax_{el}"])
-                        except NotConverged:
-                            try:
-                                return view.simulate(model, values, max_steps=50 * len(view.record.y))
-                            except SimulationError:
-                                return np.zeros(len(view.record.y))
+                        except NotConverged:  # it diverges: a fit as bad as no model at all
+                            return np.zeros(len(view.record.y))
                         return raw if lure.extra is None else raw + lure.extra
 
                 specs = [

@@ -981,10 +981,8 @@ class View:
             ident.lti = None
         return ident
 
-    def simulate(self, model: Model, values: Mapping[str, float], max_steps: int | None = None) -> np.ndarray:
-        """Raw output (sensor gain 1, no offset) of ``model`` with ``values`` on every sample;
-        with ``max_steps``, by the compiled explicit integrator within that many steps (a
-        :class:`~bondgraph.numerics.simulate.SimulationError` beyond: a bounded cost for a fallback).
+    def simulate(self, model: Model, values: Mapping[str, float]) -> np.ndarray:
+        """Raw output (sensor gain 1, no offset) of ``model`` with ``values`` on every sample.
 
         Parameters
         ----------
@@ -992,8 +990,6 @@ class View:
             The model to simulate.
         values : mapping of str to float
             Parameter values (names the model does not know are ignored).
-        max_steps : int, optional
-            Step limit of the explicit integrator.
 
         Returns
         -------
@@ -1003,17 +999,10 @@ class View:
         Raises
         ------
         SimulationError
-            The integration failed, passed ``max_steps`` or the context's time limit.
+            The integration failed or passed the context's time limit.
         """
-        if max_steps is None:
-            predict, known = self.predictor(model)
-            return predict({k: v for k, v in values.items() if k in known})
-        ident = self._ctx.ident.like(model, rtol=1e-6, method="dopri5")
-        ident.lti = None
-        known = {p.name for p in ident.sim.eqs.params}
-        return ident.predict(
-            {k: v for k, v in values.items() if k in known}, deadline=simulation_deadline(), max_steps=int(max_steps)
-        )
+        predict, known = self.predictor(model)
+        return predict({k: v for k, v in values.items() if k in known})
 
     def predictor(self, model: Model, drive: np.ndarray | None = None):
         """(values -> raw prediction of ``model`` on every sample, the parameter names it
