@@ -220,14 +220,14 @@ class SquareLaw(Candidate):
     label = "quadratic drive term"
 
     def applies(self, view):
-        return True if view.drive is not None else "needs the drive"
+        return True if view.current.drive is not None else "needs the drive"
 
     def fit(self, view):
-        d = np.asarray(view.drive)
+        d = np.asarray(view.current.drive)
         fit = view.fit_drive([d**2], [-np.inf], [np.inf])
         model = view.rewrite()
         a = model.parameter("sq.a", float(fit.coef[0]), "1/V", "quadratic drive coefficient")
-        expr = view.drive_expr + a * view.drive_expr**2
+        expr = view.current.drive_expr + a * view.current.drive_expr**2
         view.with_drive(model, expr)
         return Extension(
             model,
@@ -271,7 +271,7 @@ class Broken(Candidate):
         return True
 
     def fit(self, view):
-        return len(view.drive) + "x"
+        return len(view.current.drive) + "x"
 
 
 def test_a_candidates_defect_is_its_failed_line_not_the_end_of_the_diagnosis():
@@ -297,17 +297,17 @@ class PowerLaw(Candidate):
     label = "power-law drive term"
 
     def applies(self, view):
-        return True if view.drive is not None else "needs the drive"
+        return True if view.current.drive is not None else "needs the drive"
 
     def fit(self, view):
-        d = np.abs(np.asarray(view.drive))
+        d = np.abs(np.asarray(view.current.drive))
         fit = view.fit_drive(
             lambda z: [d ** z[0]], [-np.inf], [np.inf], z0=[3.5], z_bounds=[(1.0, 4.0)], z_names=["pw.p"], max_nfev=2
         )
         model = view.rewrite()
         a = model.parameter("pw.a", float(fit.coef[0]), "", "power-law coefficient")
         p = model.parameter("pw.p", float(fit.z[0]), "", "power-law exponent")
-        expr = view.drive_expr + a * sp.Abs(view.drive_expr) ** p
+        expr = view.current.drive_expr + a * sp.Abs(view.current.drive_expr) ** p
         view.with_drive(model, expr)
         return Extension(
             model,
@@ -489,7 +489,7 @@ def test_a_candidate_whose_simulation_passes_the_limit_is_reported_failed():
 
         def fit(self, view):
             view.states()
-            return Extension(view.model, dict(view.values), [], None, None, None, [], True, "")
+            return Extension(view.current.model, dict(view.current.values), [], None, None, None, [], True, "")
 
     ctx = Context(lag_model(), lag_record(), settings=Settings.from_config(candidate_limit=1e-9))
     state, cal, _ = calibrate(ctx)
@@ -684,7 +684,7 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     # response (its skirt in the drive's band), not when it explains the noise near itself
     from scipy import signal
 
-    cut = lambda kind, f: signal.filtfilt(*signal.butter(4, f / (view.record.fs / 2), kind), view.residual)
+    cut = lambda kind, f: signal.filtfilt(*signal.butter(4, f / (view.record.fs / 2), kind), view.current.residual)
     skirt = state.prediction + cut("low", 5.0)
     noise = state.prediction + cut("high", 0.6 * high)
     assert view.resolved_share(skirt) > 0.9 and view.resolved_share(noise) < 0.1
@@ -709,7 +709,7 @@ def test_a_mode_above_one_sine_is_not_named_by_its_skirt():
     ctx = Context(lag_model(), Dataset(t, {"u": u, "y": y + rng.normal(0, 0.01, n)}))
     state, cal, _ = calibrate(ctx)
     view = View(ctx, state, cal.free)
-    why = mode_implausible(view, 2 * np.pi * 0.3 * view.record.fs, 0.02, state.prediction + 0.1 * view.residual)
+    why = mode_implausible(view, 2 * np.pi * 0.3 * view.record.fs, 0.02, state.prediction + 0.1 * view.current.residual)
     assert "too narrow to show a skirt" in why, why
 
 

@@ -84,8 +84,8 @@ def test_a_term_named_after_the_split_is_held_on_the_split_model():
     els = [el for el, *_ in state.terms]
     lure = view.lure(view.rewrite(), [], {})
     assert lure is not None and lure.elements == els
-    stepped = lure.linear_responses(dict(view.values), lure.drive, StiffnessSoftening.term)["x"]
-    integrated = view.simulate(state.model, dict(view.values))
+    stepped = lure.linear_responses(dict(view.current.values), lure.drive, StiffnessSoftening.term)["x"]
+    integrated = view.simulate(state.model, dict(view.current.values))
     assert np.max(np.abs(stepped - integrated)) < 1e-3 * np.ptp(integrated)
     assert np.max(np.abs(stepped - state.raw)) < 1e-3 * np.ptp(state.raw)
 

@@ -280,7 +280,7 @@ def assert_columns_derivatives(seen, own=0, zero=()):
 
 def test_fit_drive_hands_the_optimiser_the_derivatives_of_its_columns(resonator_view, monkeypatch):
     view = resonator_view
-    d = np.asarray(view.drive)
+    d = np.asarray(view.current.drive)
 
     def lowpass(zb):  # the drive through a first-order lag of time constant exp(zb[0]) s
         tau = math.exp(zb[0])
@@ -297,7 +297,7 @@ def test_fit_drive_hands_the_optimiser_the_derivatives_of_its_columns(resonator_
             lowpass, [-np.inf], [np.inf], direct=direct, z0=[math.log(0.01)], z_bounds=[(math.log(1e-3), 0.0)]
         ),
     )
-    assert seen["z0"].size == 1 + len(view.linear)
+    assert seen["z0"].size == 1 + len(view.current.calibrated)
     assert_columns_derivatives(seen, own=1)
 
 
@@ -310,10 +310,10 @@ def test_fit_model_hands_the_optimiser_the_derivatives_of_its_columns(resonator_
     model.bond("v", "c2")
     specs = [
         Spec("cc2", 0.5, 0.05, 5.0, log=True),
-        Spec("cc", view.values["cc"], view.values["cc"] / 3, view.values["cc"] * 3, log=True),
+        Spec("cc", view.current.values["cc"], view.current.values["cc"] / 3, view.current.values["cc"] * 3, log=True),
     ]
     seen = captured(monkeypatch, lambda: view.fit_model(model, specs, refit=True))
-    assert seen["derivatives"] is not None and seen["z0"].size == 2 + len(view.linear)
+    assert seen["derivatives"] is not None and seen["z0"].size == 2 + len(view.current.calibrated)
     assert_columns_derivatives(seen, zero=[1])
 
 

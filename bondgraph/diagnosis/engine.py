@@ -501,14 +501,14 @@ def advance(ctx: Context, state: State, oc: Outcome, view: View) -> State:
     g, b, _, _ = score(ctx, oc.raw)
     before = state.drive if state.drive is not None else state.core_drive
     core_model = state.core_model
-    if before is None and ext.terms and view.exact and not view.reduced:
+    if before is None and ext.terms and view.record.exact and not view.record.reduced:
         # terms fitted on the current model itself (linear: e.g. with a compliant output stage
         # named before them): that model, under the drive, is the core they are held on
         before, core_model = np.asarray(view.record.u), state.model
     # what the linear core sees and the terms held on it, while the model stays a Lur'e system
     core = ext.drive if ext.drive is not None else before if ext.terms and before is not None else None
     terms = tuple(state.terms) + tuple(ext.terms) if core is not None else ()
-    extra = (state.core_extra if state.terms else view.extra) if terms else None
+    extra = (state.core_extra if state.terms else view.current.extra) if terms else None
     return State(
         ext.model,
         dict(ext.values),

@@ -60,8 +60,8 @@ def field(view) -> tuple:
     series : numpy.ndarray
         Its samples, drive units.
     """
-    if view.drive_expr is not None and view.drive is not None:
-        return view.drive_expr, np.asarray(view.drive)
+    if view.current.drive_expr is not None and view.current.drive is not None:
+        return view.current.drive_expr, np.asarray(view.current.drive)
     return view.record.input_symbol, np.asarray(view.record.u)
 
 
@@ -157,19 +157,19 @@ class LawTerm(Candidate):
         bool or str
             True when the candidate applies; otherwise a short reason.
         """
-        if not self.elements(view.model):
+        if not self.elements(view.current.model):
             return (
                 f"no element is tagged '{self.role}'"
                 if self.site is None
                 else f"'{self.site.name}' is not in the model"
             )
-        if view.reduced:
+        if view.record.reduced:
             return (
                 f"the elements at {self.site_name} act in modes faster than the data resolve (their "
                 f"quasi-static effect is a drive nonlinearity)"
             )
-        known = view.model.all_parameters()
-        held = [el for el in self.elements(view.model) if f"{self.prefix}_{el}" in known]
+        known = view.current.model.all_parameters()
+        held = [el for el in self.elements(view.current.model) if f"{self.prefix}_{el}" in known]
         if held:
             return f"its term is in the law of {', '.join(held)} already (named at an earlier step)"
         return True
@@ -258,7 +258,7 @@ class LawTerm(Candidate):
         float
             Effort per (variable unit)² (N/m² for a spring).
         """
-        return abs(slope(view.model, el, view.values)) / _peak(x)
+        return abs(slope(view.current.model, el, view.current.values)) / _peak(x)
 
     def _pair(self, c, d=0.0):
         """The coefficient :meth:`term` takes: c, or (c, d) for a kind with an even part."""
@@ -303,7 +303,7 @@ class LawTerm(Candidate):
         """(lure or None, {el: x}, {el: a}, output series of the current model or None)."""
         lure = view.lure(view.rewrite(), els, partners)
         if lure is not None:
-            series = lure.linear_responses(dict(view.values), lure.drive, self.term)
+            series = lure.linear_responses(dict(view.current.values), lure.drive, self.term)
             xs = {el: series[f"diag.x:{el}"] for el in els}
             az = {el: series.get(f"diag.a:{el}") for el in els}
             return lure, xs, az, series[view.record.output]
@@ -332,8 +332,8 @@ class LawTerm(Candidate):
             residual with the calibration (:meth:`View.first_order_share`), between 0 and 1, or
             None.
         """
-        els = self.elements(view.model)
-        partners = {el: self.partner(view.model, el) for el in els}
+        els = self.elements(view.current.model)
+        partners = {el: self.partner(view.current.model, el) for el in els}
         try:
             lure, xs, az, base = self._series(view, els, partners)
         except (NotConverged, SimulationError):
@@ -347,10 +347,10 @@ class LawTerm(Candidate):
                 [(self._pair(0.0, self.probe * self.even_scale(view, el, xs[el])), refs[el][1]) for el in els]
             )
         try:
-            moved = [lure.simulate(dict(view.values), lure.drive, self.term, coefs) for coefs in probes]
+            moved = [lure.simulate(dict(view.current.values), lure.drive, self.term, coefs) for coefs in probes]
         except NotConverged:
             return None
-        return view.first_order_share(np.column_stack([(m - base) * view.gain / self.probe for m in moved]))
+        return view.first_order_share(np.column_stack([(m - base) * view.current.gain / self.probe for m in moved]))
 
     def fit(self, view):
         """Fit the coefficients with the calibration (the scan of the class notes).
@@ -371,8 +371,8 @@ class LawTerm(Candidate):
         SimulationError
             The extended model cannot be simulated at any point of the scan.
         """
-        els = self.elements(view.model)
-        partners = {el: self.partner(view.model, el) for el in els}
+        els = self.elements(view.current.model)
+        partners = {el: self.partner(view.current.model, el) for el in els}
         names = [f"{self.prefix}_{el}" for el in els]
         evens = [f"{self.even_prefix}_{el}" for el in els] if self.even_prefix else []
         lure, xs, az, base = self._series(view, els, partners)
@@ -539,12 +539,12 @@ class LawTerm(Candidate):
             for f in (self.grid[-1], 0.1 * self.grid[-1]):
                 coefs = [(self._pair(f * refs[e][0] if e == el else 0.0), r2s[e]) for e in els]
                 try:
-                    raw = lure.simulate(dict(view.values), lure.drive, self.term, coefs)
+                    raw = lure.simulate(dict(view.current.values), lure.drive, self.term, coefs)
                 except NotConverged:
                     continue
                 effect[el] = float(np.std(raw - base))
                 break
-        floor = 0.05 * float(np.std(view.residual)) / max(abs(view.gain), 1e-300)
+        floor = 0.05 * float(np.std(view.current.residual)) / max(abs(view.current.gain), 1e-300)
         return [el for el in els if effect[el] < floor and effect[el] < max(effect.values())]
 
 
@@ -615,7 +615,7 @@ class Softening(LawTerm):
         r2 : float
             1.5·⟨q²⟩, displacement².
         """
-        return abs(slope(view.model, el, view.values)) / _peak(x) ** 2, 1.5 * float(np.mean(x**2))
+        return abs(slope(view.current.model, el, view.current.values)) / _peak(x) ** 2, 1.5 * float(np.mean(x**2))
 
     def stands_for(self, coefs, r2s, xs):
         """Hardening or softening by the fitted law's own shape where the record takes the
@@ -767,7 +767,7 @@ class Clearance(LawTerm):
         r2 : float
             The half-width d = width · q_peak, displacement.
         """
-        return abs(slope(view.model, el, view.values)), (self.width or self.widths[0]) * _peak(x)
+        return abs(slope(view.current.model, el, view.current.values)), (self.width or self.widths[0]) * _peak(x)
 
     def fit(self, view):
         """Fit at this half-width, or, without one, at each of :attr:`widths`, keeping the best.
@@ -829,7 +829,7 @@ class NonlinearDamping(LawTerm):
         ok = super().applies(view)
         if ok is not True or self.velocity:
             return ok
-        if not any(self.partner(view.model, el) for el in self.elements(view.model)):
+        if not any(self.partner(view.current.model, el) for el in self.elements(view.current.model)):
             return "no damping element has a stiffness partner (the velocity-cubic form covers it)"
         return True
 
@@ -897,7 +897,7 @@ class NonlinearDamping(LawTerm):
         """
         amp = x if a is None else a
         return (
-            abs(slope(view.model, el, view.values)) / _peak(amp) ** 2,
+            abs(slope(view.current.model, el, view.current.values)) / _peak(amp) ** 2,
             (1.5 if a is None else 0.5) * float(np.mean(amp**2)),
         )
 
@@ -981,7 +981,9 @@ class Friction(LawTerm):
         r2 : float
             s = share · f_peak, velocity.
         """
-        return abs(slope(view.model, el, view.values)), (self.velocity_share or self.smoothing[0]) * _peak(x)
+        return abs(slope(view.current.model, el, view.current.values)), (
+            self.velocity_share or self.smoothing[0]
+        ) * _peak(x)
 
     def fit(self, view):
         """Fit at this smoothing, or, without one, at each of :attr:`smoothing` while it helps.
@@ -1006,7 +1008,7 @@ def _best_of(view, candidates, stop_unless: float | None = None):
     """The best fit of several variants of one kind (validation RMS on the fit part); with
     ``stop_unless``, the later variants only while the best improves the fit part by more than
     that factor."""
-    before = view.score(view.prediction)[2]
+    before = view.score(view.current.prediction)[2]
     best = None
     for cand in candidates:
         ext = cand.fit(view)

@@ -43,7 +43,7 @@ def frf_mismatch(view):
         The relative mismatch (dimensionless) at each.
     """
     w, H, coh = view.record.empirical_frf()
-    Hm = view.gain * view.frequency_response(w)
+    Hm = view.current.gain * view.frequency_response(w)
     return w, np.abs(H - Hm) * coh / np.maximum(np.abs(Hm), 1e-300 + 1e-3 * np.abs(Hm).max(initial=0.0))
 
 
@@ -159,7 +159,7 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
             f"its frequency ({f:.4g} Hz) is below half the model's lowest mode ({low:.4g} Hz): not a "
             f"higher mode of this structure"
         )
-    d = np.asarray(view.drive if view.drive is not None else view.record.u)
+    d = np.asarray(view.current.drive if view.current.drive is not None else view.record.u)
     fr, P = welch(d, view.record.fs, 4096)
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
     excited = bool(near.any() and P[near].max() >= 1e-6 * P.max())
@@ -206,9 +206,9 @@ def resonance_trials(view) -> list[tuple[float, float, float]]:
     ValueError
         No frequency-response mismatch to place a mode at.
     """
-    d = np.asarray(view.drive)
+    d = np.asarray(view.current.drive)
     idx = view.record.fit_idx
-    r = view.residual[idx] - view.residual[idx].mean()
+    r = view.current.residual[idx] - view.current.residual[idx].mean()
     trials = []
     for om0 in mismatch_peaks(view):
         for om in om0 * np.geomspace(0.85, 1.15, 7):
@@ -278,7 +278,7 @@ class ParallelMode(Candidate):
         bool or str
             True, or why it does not apply.
         """
-        return NOT_A_DRIVE if view.drive is None else unresolved(view) or True
+        return NOT_A_DRIVE if view.current.drive is None else unresolved(view) or True
 
     def evidence(self, view):
         """The largest frequency-response mismatch and where it is.
@@ -312,8 +312,8 @@ class ParallelMode(Candidate):
             The model with the mode (parameters ``hm.omega`` rad/s, ``hm.zeta``, ``hm.g``,
             ``hm.h``).
         """
-        p = free_prefix(view.model, "hm")
-        d = np.asarray(view.drive)
+        p = free_prefix(view.current.model, "hm")
+        d = np.asarray(view.current.drive)
         trials = resonance_trials(view)
         _, om, ze = trials[0]
         starts = [[math.log(t[1]), math.log(t[2])] for t in trials[1:3]]
@@ -340,7 +340,7 @@ class ParallelMode(Candidate):
         gg = model.parameter(f"{p}.g", g, "", "output coefficient of the added mode's displacement (unit modal mass)")
         hh = model.parameter(f"{p}.h", h, "", "output coefficient of the added mode's velocity (unit modal mass)")
         model.add(
-            Se(f"{p}.force", view.drive_expr),
+            Se(f"{p}.force", view.current.drive_expr),
             J1(f"{p}.mode"),
             I(f"{p}.mass", 1),
             C(f"{p}.spring", 1 / o**2),
@@ -356,8 +356,8 @@ class ParallelMode(Candidate):
             {**fit.values, **new},
             list(new),
             fit.prediction,
-            view.drive,
-            view.drive_expr,
+            view.current.drive,
+            view.current.drive_expr,
             fit.at_bounds,
             fit.success,
             fit.message,
@@ -454,17 +454,17 @@ class OutputMode(Candidate):
         bool or str
             True, or why it does not apply.
         """
-        if self.element(view.model) is None:
+        if self.element(view.current.model) is None:
             return (
                 f"no element is tagged '{self.role}'"
                 if self.site is None
                 else f"'{self.site_name}' is not in the model"
             )
-        if view.reduced:
+        if view.record.reduced:
             return "the mass's dynamics are faster than the data resolve"
-        if view.drive is None:
+        if view.current.drive is None:
             return NOT_A_DRIVE
-        if not view.exact:
+        if not view.record.exact:
             return "needs a model linear in its states"
         return unresolved(view) or True
 
@@ -473,7 +473,7 @@ class OutputMode(Candidate):
         derive (not when the output, a voltage across a capacitor, say, and the plate's
         displacement have different units)."""
         try:
-            derive(self.build(view, view.rewrite(), 1.0, 0.1, 0.5, free_prefix(view.model, "om")))
+            derive(self.build(view, view.rewrite(), 1.0, 0.1, 0.5, free_prefix(view.current.model, "om")))
         except ModelError:
             return False
         return True
@@ -503,7 +503,7 @@ class OutputMode(Candidate):
         Model
             ``model`` itself.
         """
-        el = self.element(view.model)
+        el = self.element(view.current.model)
         x = sp.Dummy("p")
         M = 1 / sp.diff(law(model, el)(x), x)
         om = model.parameter(f"{p}.omega", omega, "rad/s", "natural frequency of the two-mass mode")
@@ -542,10 +542,10 @@ class OutputMode(Candidate):
             The model with the mass split (parameters ``om.omega`` rad/s, ``om.zeta``,
             ``om.mu``).
         """
-        p = free_prefix(view.model, "om")
+        p = free_prefix(view.current.model, "om")
         best = None
         on_core = view.on_core  # fitted on the linear core, driven by what it sees (exact route)
-        drive = view.drive if on_core else None
+        drive = view.current.drive if on_core else None
         # starts: the resonator scan's best frequency and damping at each of the two largest
         # mismatch peaks, with the mass share that fits best before any refit
         peaks = []
@@ -558,7 +558,7 @@ class OutputMode(Candidate):
         for (om, ze), plate in itertools.product(peaks, plates):
             model = self.build(view, view.core() if on_core else view.rewrite(), om, ze, 0.5, p, plate)
             predict, known = view.predictor(model, drive)
-            base = {k: v for k, v in view.values.items() if k in known}
+            base = {k: v for k, v in view.current.values.items() if k in known}
             mu = min(
                 (0.1, 0.3, 0.5, 0.8, 0.95),
                 key=lambda m: view.score(predict({**base, f"{p}.omega": om, f"{p}.zeta": ze, f"{p}.mu": m}))[2],

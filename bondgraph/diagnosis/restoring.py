@@ -91,25 +91,25 @@ class RestoringHysteresis(Candidate):
         bool or str
             True, or why it does not apply.
         """
-        if self._element(view.model) is None:
+        if self._element(view.current.model) is None:
             return f"'{self.site_name}' is not in the model"
-        if view.reduced:
+        if view.record.reduced:
             return f"{self.site_name} acts in modes faster than the data resolve"
         return True
 
     def _columns(self, view):
         """(lure, displacement series at the element, {level: filtered unit column})."""
-        el = self._element(view.model)
+        el = self._element(view.current.model)
         lure = view.lure(view.rewrite(), [el], {el: None})
         if lure is None:
             return None
-        series = lure.linear_responses(dict(view.values), lure.drive, lambda c, r2, x, a: 0 * x)
+        series = lure.linear_responses(dict(view.current.values), lure.drive, lambda c, r2, x, a: 0 * x)
         x = series[f"diag.x:{el}"]
         peak = _peak(x)
         cols = {}
         for share in self.levels:
             z = bouc_wen_path(np.ascontiguousarray(x, float), share * peak)
-            cols[share] = lure.site_response(dict(view.values), z, el) * view.gain
+            cols[share] = lure.site_response(dict(view.current.values), z, el) * view.current.gain
         return lure, x, cols
 
     def screen(self, view):
@@ -151,7 +151,7 @@ class RestoringHysteresis(Candidate):
         Model
             A new model with parameters ``hy.k_EL``, ``hy.zmax_EL`` and the state ``hy.z_EL``.
         """
-        el = self._element(view.model)
+        el = self._element(view.current.model)
         model = view.rewrite()
         k = model.parameter(f"hy.k_{el}", kh, "", f"{self.label}: height of the loop's force per unit z at {el}")
         zm = model.parameter(f"hy.zmax_{el}", zmax, "", f"saturation level of the Bouc–Wen state at {el}")
@@ -182,15 +182,15 @@ class RestoringHysteresis(Candidate):
         SimulationError
             The extended model cannot be simulated from any start.
         """
-        el = self._element(view.model)
-        stiffness = abs(slope(view.model, el, view.values))
+        el = self._element(view.current.model)
+        stiffness = abs(slope(view.current.model, el, view.current.values))
         out = self._columns(view)
         peak = _peak(out[1]) if out is not None else _peak(view.states()[view.state_of(el)])
         # the levels and heights that explain most to first order start the fits
         trials = [(0.0, self.levels[1], 0.1 * stiffness)]
         if out is not None:
             idx = view.record.fit_idx
-            r = view.residual[idx] - view.residual[idx].mean()
+            r = view.current.residual[idx] - view.current.residual[idx].mean()
             trials = []
             for share, col in out[2].items():
                 q = col[idx] - col[idx].mean()
@@ -319,7 +319,7 @@ class Backbone(LawTerm):
         r2 : float
             r = 0.15 · q_peak, displacement.
         """
-        return abs(slope(view.model, el, view.values)), RestoringHysteresis.levels[1] * _peak(x)
+        return abs(slope(view.current.model, el, view.current.values)), RestoringHysteresis.levels[1] * _peak(x)
 
 
 def restoring_kinds(model) -> list[Candidate]:

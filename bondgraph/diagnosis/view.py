@@ -112,6 +112,11 @@ class Record:
         The drive as recorded, on every sample (its reading between samples aside).
     noise_psd : float or None
         The noise floor's one-sided spectral density (output units²/Hz), or None.
+    exact : bool
+        The nominal model is linear: the exact linear route (and the Lur'e route of the
+        element-law kinds) is open.
+    reduced : bool
+        Fast states were residualised: the bond graph's structural elements are not all seen.
     """
 
     t: np.ndarray
@@ -133,6 +138,8 @@ class Record:
     lowest_resonance_hz: float | None
     u_recorded: np.ndarray
     noise_psd: float | None
+    exact: bool
+    reduced: bool
 
     @classmethod
     def of(cls, ctx: Context) -> Record:
@@ -168,6 +175,8 @@ class Record:
             ctx.lowest_resonance_hz,
             _frozen(ctx.u_recorded),
             ctx.noise_psd,
+            ctx.lti is not None,
+            bool(ctx.n_fast),
         )
 
     def held_share(self, length: float) -> float:
@@ -256,6 +265,49 @@ class Record:
         return float(np.median(coh[near])), bool(np.mean(ok[near]) > 0.5)
 
 
+@dataclass(frozen=True)
+class Current:
+    """The model a candidate extends: the chain's current model with its values and prediction
+    (read-only arrays).
+
+    Parameters
+    ----------
+    model : Model
+        The current model (must not be changed: :meth:`View.rewrite` gives a copy carrying the
+        current values).
+    values : mapping of str to float
+        Its parameter values (read-only).
+    calibrated : tuple of str
+        The calibrated linear parameters (refitted with a candidate).
+    prediction, residual : numpy.ndarray
+        Its prediction (output units) and the measured output minus it, on every sample.
+    gain : float
+        The sensor gain (its sign is the sensor's orientation).
+    drive : numpy.ndarray or None
+        The series the linear core sees (None once a structural extension made the model more
+        than a drive transform of its core).
+    drive_expr : sympy.Expr or None
+        That series as an expression of the recorded drive.
+    additive : AdditiveDrive or None
+        The drive as a sum of effects of a base drive (:mod:`.additive`); None when the model
+        is not a drive transform of its linear core.
+    extra : numpy.ndarray or None
+        The part of the output that does not pass through the linear core (e.g. an added
+        parallel mode), sensor gain 1; drive-side fits keep it.
+    """
+
+    model: Model
+    values: Mapping[str, float]
+    calibrated: tuple
+    prediction: np.ndarray
+    residual: np.ndarray
+    gain: float
+    drive: np.ndarray | None
+    drive_expr: sp.Expr | None
+    additive: AdditiveDrive | None
+    extra: np.ndarray | None
+
+
 class View:
     """What a candidate sees.  Arrays are read-only; ``model`` must not be changed (use
     :meth:`rewrite` for a copy carrying the current values).  ``effort``: a factor on every
@@ -296,38 +348,32 @@ class View:
         self.record = Record.of(ctx)
         #: the diagnosis's settings (:class:`~bondgraph.diagnosis.settings.Settings`, frozen)
         self.settings = ctx.settings
-        #: fast states were residualised: the bond graph's structural elements are not seen
-        self.reduced = bool(ctx.n_fast)
-        self.exact = ctx.lti is not None
-        self.model = state.model
-        self.values = MappingProxyType(dict(state.values))
-        self.linear = tuple(calibrated)
-        self.drive = _frozen(state.drive)
-        self.drive_expr = state.drive_expr
-        #: the drive as a sum of effects of a base drive (:mod:`.additive`); None when the
-        #: current model is not a drive transform of its linear core
-        self.additive = (
-            state.additive
-            if state.additive is not None
-            else AdditiveDrive(self.drive, state.drive_expr)
-            if state.drive is not None
-            else None
-        )
         self._structural = not state.linear
         #: nonlinear terms in elements' laws named so far: (element, partner, term, c, r2)
         self._terms = tuple(state.terms)
         self._core_drive, self._core_extra, self._core_model = state.core_drive, state.core_extra, state.core_model
-        self.prediction = _frozen(state.prediction)
-        self.residual = _frozen(ctx.y - state.prediction)
-        self.gain = state.gain
-        #: the part of the current output that does not pass through the linear core (e.g. an
-        #: added parallel mode), sensor gain 1; drive-side fits keep it
-        self.extra = None
-        if state.drive is not None and ctx.lti is not None:
+        drive = _frozen(state.drive)
+        #: the model a candidate extends (:class:`Current`)
+        self.current = Current(
+            state.model,
+            MappingProxyType(dict(state.values)),
+            tuple(calibrated),
+            _frozen(state.prediction),
+            _frozen(ctx.y - state.prediction),
+            state.gain,
+            drive,
+            state.drive_expr,
+            state.additive
+            if state.additive is not None
+            else AdditiveDrive(drive, state.drive_expr)
+            if state.drive is not None
+            else None,
+            None,
+        )
+        if state.drive is not None and ctx.lti is not None:  # the output part outside the core
             extra = state.raw - self.respond([state.drive])[:, 0]
-            self.extra = _frozen(
-                extra if np.max(np.abs(extra)) > 1e-9 * np.max(np.abs(state.raw)) else np.zeros_like(extra)
-            )
+            extra = extra if np.max(np.abs(extra)) > 1e-9 * np.max(np.abs(state.raw)) else np.zeros_like(extra)
+            self.current = replace(self.current, extra=_frozen(extra))
 
     def _budget(self, max_nfev: int) -> int:
         """An optimiser's evaluation budget at this view's effort."""
@@ -342,16 +388,16 @@ class View:
         Model
             A new model; changing it leaves the view's model alone.
         """
-        m = self.model.copy()
+        m = self.current.model.copy()
         known = m.all_parameters()
-        m.values.update({k: v for k, v in self.values.items() if k in known})
+        m.values.update({k: v for k, v in self.current.values.items() if k in known})
         return m
 
     @property
     def on_core(self) -> bool:
         """True when the current model is a drive transform of its linear core: a structural
         extension can then extend :meth:`core` and be fitted driven by ``drive``."""
-        return self.drive is not None and not self._structural and self.exact and not self.reduced
+        return self.current.drive is not None and not self._structural and self.record.exact and not self.record.reduced
 
     def core(self) -> Model:
         """A copy of the linear core carrying the current values: the calibrated nominal model,
@@ -365,7 +411,7 @@ class View:
         """
         m = (self._core_model or self._ctx.model).copy()
         known = m.all_parameters()
-        m.values.update({k: v for k, v in self.values.items() if k in known})
+        m.values.update({k: v for k, v in self.current.values.items() if k in known})
         return m
 
     def with_drive(self, model: Model, expr: sp.Expr) -> Model:
@@ -441,7 +487,7 @@ class View:
             The core's parameter vector (see :meth:`bondgraph.Simulator.theta`).
         """
         known = self._ctx.core_parameters
-        vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
+        vals = {k: v for k, v in {**self.current.values, **(values or {})}.items() if k in known}
         return self._ctx.ident.sim.theta(vals)
 
     # ---- linear responses -------------------------------------------------------------------
@@ -552,7 +598,7 @@ class View:
         g, b = self.score(raw)[:2]
         u, y, fs = self.record.u_recorded, self.record.y, self.record.fs
         ok = self.record.resolved[2]
-        before = cross_spectra(u, self.residual, fs)[2][1:]
+        before = cross_spectra(u, self.current.residual, fs)[2][1:]
         after = cross_spectra(u, y - (g * np.asarray(raw) + b), fs)[2][1:]
         drop = np.maximum(before - after, 0.0)
         return float(drop[ok].sum() / drop.sum()) if drop.sum() > 0 else 0.0
@@ -580,8 +626,8 @@ class View:
             by the calibration alone).
         """
         idx = self.record.fit_idx
-        full = np.asarray(column, float).reshape(len(self.residual), -1)
-        q, r = full[idx], np.asarray(self.residual, float)[idx]
+        full = np.asarray(column, float).reshape(len(self.current.residual), -1)
+        q, r = full[idx], np.asarray(self.current.residual, float)[idx]
         if not np.all(np.isfinite(q)):
             return 0.0
         basis = self._calibration_directions()
@@ -589,7 +635,7 @@ class View:
             q - basis @ np.linalg.lstsq(basis, q, rcond=None)[0],
             r - basis @ np.linalg.lstsq(basis, r, rcond=None)[0],
         )
-        rr = float(np.sum((np.asarray(self.residual, float)[idx] - np.mean(self.residual[idx])) ** 2))
+        rr = float(np.sum((np.asarray(self.current.residual, float)[idx] - np.mean(self.current.residual[idx])) ** 2))
         size = np.sqrt(np.sum(full[idx] ** 2, axis=0))
         keep = np.sqrt(np.sum(q**2, axis=0)) > 1e-12 * np.maximum(size, 1e-150)  # beyond the calibration
         if not keep.any() or rr <= 0:
@@ -606,14 +652,16 @@ class View:
         idx = self.record.fit_idx
         cols = [np.ones(idx.size)]
         if self.on_core and not self._terms:
-            names = [n for n in self.linear if n in self._ctx.core_parameters]
+            names = [n for n in self.current.calibrated if n in self._ctx.core_parameters]
             out = (
-                self._respond_sensitivities(np.asarray(self.drive, float)[:, None], names, rows=idx) if names else None
+                self._respond_sensitivities(np.asarray(self.current.drive, float)[:, None], names, rows=idx)
+                if names
+                else None
             )
             if out is not None:
                 Y, dY = out
                 cols.append(Y[:, 0])
-                cols += [dY[i][:, 0] * self.values[n] * self.gain for i, n in enumerate(names)]
+                cols += [dY[i][:, 0] * self.current.values[n] * self.current.gain for i, n in enumerate(names)]
         basis = np.column_stack(cols)
         scale = np.sqrt(np.sum(basis**2, axis=0))
         self._directions = basis[:, scale > 0] / scale[scale > 0]
@@ -641,9 +689,9 @@ class View:
         values): within the view's bounds (the plausible device's, for a linear structural
         candidate) or ×/÷ ``diagnosis.spread``."""
         out = []
-        for n in self.linear:
+        for n in self.current.calibrated:
             lo, hi = self._bounds.get(n) or param_bounds(self._ctx, n, self._nominal_value(n))
-            v = (start or {}).get(n, self.values[n])
+            v = (start or {}).get(n, self.current.values[n])
             out.append(Spec(n, math.copysign(min(max(abs(v), lo), hi), v), lo, hi, log=True))
         return out
 
@@ -661,7 +709,7 @@ class View:
         return [
             p.name
             for p in self._linear_params()
-            if not p.lower * (1 + 1e-6) < abs(self.values[p.name]) < p.upper * (1 - 1e-6)
+            if not p.lower * (1 + 1e-6) < abs(self.current.values[p.name]) < p.upper * (1 - 1e-6)
         ]
 
     def _implausible(self) -> list[str]:
@@ -677,9 +725,9 @@ class View:
         plausible = self._ctx.plausible
         return [
             n
-            for n in self.linear
+            for n in self.current.calibrated
             if n in plausible
-            and not plausible[n][0] * (1 - 1e-9) <= abs(self.values[n]) <= plausible[n][1] * (1 + 1e-9)
+            and not plausible[n][0] * (1 - 1e-9) <= abs(self.current.values[n]) <= plausible[n][1] * (1 + 1e-9)
         ]
 
     def fit_starts(self) -> list[dict[str, float] | None]:
@@ -702,7 +750,7 @@ class View:
         dict of str to float
             Name → value, in the parameters' units.
         """
-        return {n: self._nominal_value(n) for n in self.linear}
+        return {n: self._nominal_value(n) for n in self.current.calibrated}
 
     def fit_drive(
         self,
@@ -772,9 +820,9 @@ class View:
         ValueError
             The current model is not a drive transform of its linear core.
         """
-        if self.drive is None:
+        if self.current.drive is None:
             raise ValueError("the current model is not a drive transform of its linear core")
-        held = self.additive if names is not None else None
+        held = self.current.additive if names is not None else None
         if held is not None:
             keep = identity and held.identity
             lead = ([np.asarray(held.base)] if keep else []) + [t.column for t in held.terms]
@@ -782,7 +830,7 @@ class View:
             lead_hi = ([np.inf] if keep else []) + [t.upper for t in held.terms]
             identity = keep
         else:
-            lead = [np.asarray(self.drive)] if identity else []
+            lead = [np.asarray(self.current.drive)] if identity else []
             lead_lo, lead_hi = [-np.inf] * len(lead), [np.inf] * len(lead)
         n_lead = len(lead)
         lin = self._linear_params(start) if refit else []
@@ -800,7 +848,7 @@ class View:
             dc = list(direct(zb)) if call_d else fixed_d
             return vals, b, dc
 
-        extra = np.asarray(self.extra)
+        extra = np.asarray(self.current.extra)
         has_extra = bool(np.any(extra))
 
         first = [] if call_b else lead + fixed_b
@@ -862,7 +910,7 @@ class View:
         # the bounds are on the drive's weights; the solved coefficients are these times the
         # sensor gain, whose sign is the sensor's orientation, not physics
         lo, hi = lead_lo + list(lower), lead_hi + list(upper)
-        if self.gain < 0:
+        if self.current.gain < 0:
             lo, hi = [-b for b in hi], [-a for a in lo]
         # the direct columns and the offset are free
         n_dir = len(direct(np.asarray(z0, float))) if call_d else len(fixed_d)
@@ -889,7 +937,7 @@ class View:
         )
         vals, b, dc = parts(sol.z)
         c = sol.coef
-        gain = c[0] if identity else self.gain
+        gain = c[0] if identity else self.current.gain
         gain = gain if gain != 0 else 1.0
         weights = c[:n_lead] / gain
         theta = c[n_lead : n_lead + n_basis] / gain
@@ -897,13 +945,13 @@ class View:
         if identity:
             weights[0] = 1.0
         drive = sum(w * col for w, col in zip(weights, lead)) + (sum(t * bk for t, bk in zip(theta, b)) if b else 0.0)
-        drive = np.asarray(drive, float) * np.ones(len(self.drive))
+        drive = np.asarray(drive, float) * np.ones(len(self.current.drive))
         raw = self.respond([drive], vals)[:, 0] + (sum(p * dk for p, dk in zip(phi, dc)) if dc else 0.0)
         if has_extra:
             raw = raw + (extra if identity else c[n_lead + n_basis + n_dir] / gain * extra)
         znames = list(z_names) + [p.name for p in lin]
         at = [znames[i] if i < len(znames) else f"z{i}" for i in sol.at_bounds]
-        values = {**self.values, **vals}
+        values = {**self.current.values, **vals}
         additive = None
         if held is not None:
             refitted = weights[1:] if identity else weights
@@ -932,8 +980,8 @@ class View:
         sympy.Expr
             The new drive expression.
         """
-        a = self.additive
-        expr = self.drive_expr + part
+        a = self.current.additive
+        expr = self.current.drive_expr + part
         return expr - a.base_expr if a.identity and not identity else expr
 
     def refit_linear(self, start: Mapping[str, float], additive: bool = False) -> np.ndarray | None:
@@ -955,8 +1003,8 @@ class View:
         numpy.ndarray or None
             The raw prediction on every sample, or None.
         """
-        additive = additive and bool(self.additive and self.additive.terms)
-        if self.drive is None or not self.exact or not (self.linear or additive):
+        additive = additive and bool(self.current.additive and self.current.additive.terms)
+        if self.current.drive is None or not self.record.exact or not (self.current.calibrated or additive):
             return None
         return self.fit_drive(start=start, max_nfev=20, names=[] if additive else None).prediction
 
@@ -1007,7 +1055,7 @@ class View:
     def predictor(self, model: Model, drive: np.ndarray | None = None):
         """(values -> raw prediction of ``model`` on every sample, the parameter names it
         knows): by the exact linear route, driven by ``drive`` when given (for an extension
-        of :meth:`core`: the drive it sees, ``self.drive``; the output part outside the core,
+        of :meth:`core`: the drive it sees, ``self.current.drive``; the output part outside the core,
         ``extra``, is added), else by the compiled integrator within the context's time
         limits (:func:`~bondgraph.diagnosis.projection.simulation_deadline`).
 
@@ -1042,7 +1090,7 @@ class View:
 
         if drive is None:
             return ident.predict, known, sens
-        extra = 0.0 if self.extra is None else self.extra
+        extra = 0.0 if self.current.extra is None else self.current.extra
         return (lambda values: ident.predict(values, drive=drive) + extra), known, sens
 
     def fit_model(
@@ -1060,7 +1108,7 @@ class View:
         over sensor gain and offset; exact linear route when the extended model stays linear,
         else the compiled integrator, or ``predict(values)`` if given (e.g. :meth:`lure`).  A spec
         with lower = upper is held.  Returns (values, raw prediction, success, message, names at
-        a bound).  ``drive``: for an extension of :meth:`core`, the drive it sees (``self.drive``);
+        a bound).  ``drive``: for an extension of :meth:`core`, the drive it sees (``self.current.drive``);
         the output part outside the core (``extra``) is added.
 
         Parameters
@@ -1098,7 +1146,7 @@ class View:
             predict, known, sens = self._routes(model, drive)
         else:
             known = set(model.all_parameters())
-        base = {k: v for k, v in {**self.values, **(start or {})}.items() if k in known}
+        base = {k: v for k, v in {**self.current.values, **(start or {})}.items() if k in known}
         lin = [replace(p, start=base.get(p.name, p.start)) for p in self._linear_params()] if refit else []
         held = {s.name: s.start for s in new if s.lower == s.upper}
         new = [s for s in new if s.lower != s.upper]
@@ -1168,7 +1216,7 @@ class View:
         Lure or None
             The Lur'e system, or None off the exact linear route.
         """
-        if not self.exact or self.reduced:
+        if not self.record.exact or self.record.reduced:
             return None
         try:
             if self._terms and self._core_drive is not None:
@@ -1178,7 +1226,7 @@ class View:
                 lure.drive, lure.extra = np.asarray(self._core_drive), self._core_extra
             elif self.on_core:
                 lure = Lure(self.core(), self.record.input, self.record.output, elements, partners, self._ctx.dt)
-                lure.drive, lure.extra = np.asarray(self.drive), self.extra
+                lure.drive, lure.extra = np.asarray(self.current.drive), self.current.extra
             else:  # the model itself, when it is linear (a linear structural extension included)
                 lure = Lure(model, self.record.input, self.record.output, elements, partners, self._ctx.dt)
                 lure.drive, lure.extra = np.asarray(self.record.u), None
@@ -1205,9 +1253,9 @@ class View:
         SimulationError
             The integration failed or passed the context's time limit.
         """
-        ident = self._identification(self.model, integrate=True)
+        ident = self._identification(self.current.model, integrate=True)
         known = {p.name for p in ident.sim.eqs.params}
-        vals = {k: v for k, v in {**self.values, **(values or {})}.items() if k in known}
+        vals = {k: v for k, v in {**self.current.values, **(values or {})}.items() if k in known}
         run_inputs = {self.record.input: ident.signal}
         x0 = record_start(ident.sim, ident.sim.theta(vals), run_inputs, float(self._ctx.t[0]))
         res = ident.sim.run(self._ctx.t, run_inputs, params=vals, x0=x0, rtol=1e-5, deadline=simulation_deadline())

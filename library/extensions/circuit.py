@@ -35,7 +35,7 @@ def not_a_voltage(view) -> str:
     str
         "" or the reason.
     """
-    unit = view.model.inputs[view.record.input].unit
+    unit = view.current.model.inputs[view.record.input].unit
     return "" if unit in VOLTS else f"the drive is not a voltage (its unit is {unit})"
 
 
@@ -52,11 +52,11 @@ class LoopInductance(Candidate):
     kind = LINEAR
 
     def applies(self, view):
-        if view.drive is None:
+        if view.current.drive is None:
             return NOT_A_DRIVE
-        if view.reduced:
+        if view.record.reduced:
             return "the model's fast states were residualised"
-        if not view.exact:
+        if not view.record.exact:
             return "needs a model linear in its states"
         if drive_loop(view.core(), view.record.input) is None:
             return "the drive is not a voltage source in a loop of the model"
@@ -75,7 +75,7 @@ class LoopInductance(Candidate):
     def _core_drive(view):
         """The drive an extension of the core sees (None when the current model is not a drive
         transform of its core)."""
-        return view.drive if view.on_core else None
+        return view.current.drive if view.on_core else None
 
     def _base(self, view):
         return self.build(view, view.core() if view.on_core else view.rewrite(), float(SCAN_H[0]))
@@ -91,18 +91,24 @@ class LoopInductance(Candidate):
         core = view.core()
         _, resistors = drive_loop(core, view.record.input)
         rs = [
-            n for r in resistors for n in parameters_of(core, r) if n not in view.linear and view.values.get(n, 0.0) > 0
+            n
+            for r in resistors
+            for n in parameters_of(core, r)
+            if n not in view.current.calibrated and view.current.values.get(n, 0.0) > 0
         ]
         model = self._base(view)
         predict = self._predictor(view, model)
         scores = []
         for L in SCAN_H:
-            raw = predict({**view.values, "loop.L": float(L)})
+            raw = predict({**view.current.values, "loop.L": float(L)})
             scores.append(view.score(raw)[2] if np.all(np.isfinite(raw)) else np.inf)
         L0 = float(SCAN_H[int(np.argmin(scores))])
         specs = [Spec("loop.L", L0, float(SCAN_H[0]), float(SCAN_H[-1]), log=True)]
         spread = float(view.settings.tolerance)
-        specs += [Spec(n, view.values[n], view.values[n] / spread, view.values[n] * spread, log=True) for n in rs]
+        specs += [
+            Spec(n, view.current.values[n], view.current.values[n] / spread, view.current.values[n] * spread, log=True)
+            for n in rs
+        ]
         values, raw, ok, msg, at = view.fit_model(model, specs, max_nfev=30, drive=self._core_drive(view))
         model = self.build(view, view.rewrite(), values["loop.L"])
         model.values.update({n: values[n] for n in rs})

@@ -27,7 +27,7 @@ from .circuit import not_a_voltage
 
 def drive_scale(view) -> float:
     """Largest |base drive| (the drive the additive effects act on)."""
-    return float(np.max(np.abs(view.additive.base))) or 1.0
+    return float(np.max(np.abs(view.current.additive.base))) or 1.0
 
 
 def dwell_levels(d: np.ndarray, bins: int = 100) -> int:
@@ -46,7 +46,7 @@ def static_curve(view, pieces: int) -> np.ndarray:
     memory effect is fitted).  Asked on every drive: on steps held at a few levels, memory shows
     only where a level is reached from both sides, and loops that do not beat a static curve
     there have shown no memory (a saturation on steps reproduced by a play sum is a shape)."""
-    d = np.asarray(view.additive.base)
+    d = np.asarray(view.current.additive.base)
     dev = d - 0.5 * (d.max() + d.min())
     levels = np.arange(1, pieces // 2) / (pieces // 2)
     basis = [dev, np.abs(dev)]
@@ -104,7 +104,7 @@ def loop_area(r: np.ndarray, u: np.ndarray) -> float:
 
 class _DriveCandidate(Candidate):
     def applies(self, view):
-        return True if view.drive is not None else NOT_A_DRIVE
+        return True if view.current.drive is not None else NOT_A_DRIVE
 
     def extension(self, view, fit, model, new: dict, drive_expr) -> Extension:
         values = {**fit.values, **new}
@@ -140,10 +140,10 @@ class InputHysteresis(_DriveCandidate):
 
     def evidence(self, view):
         m = view.record.fit_mask
-        return {"loop_area": loop_area(view.residual[m], view.drive[m])}
+        return {"loop_area": loop_area(view.current.residual[m], view.current.drive[m])}
 
     def fit(self, view):
-        base = view.additive.base
+        base = view.current.additive.base
         r = threshold_grid(base, self.n_plays)
         names = [f"H.w{i + 1}" for i in range(len(r))]
         b0, reach = float(base[0]), float(r[-1]) or 1.0
@@ -169,7 +169,7 @@ class InputHysteresis(_DriveCandidate):
         prior = float(best_on_grid(view, basis, priors, **bounds))
         fit = view.fit_drive(basis(prior), **bounds)
         model = view.rewrite()
-        B = view.additive.base_expr
+        B = view.current.additive.base_expr
         h = model.operator("H", PrandtlIshlinskii(r, fit.coef[: len(r)], prior), B)
         if asymmetric:
             h = h + even_expr(model, "H", float(fit.coef[-1]), centre, half, B)
@@ -185,7 +185,7 @@ class InputHysteresis(_DriveCandidate):
         saturations under sines beat a 10-piece twin by 1.08x and 1.7x).  On a drive held at a
         few levels the n-piece curve already passes through every level; more knees would only
         fit the steps' transitions."""
-        return static_curve(view, 2 * self.n_plays if self.passes_through(view.additive.base) else self.n_plays)
+        return static_curve(view, 2 * self.n_plays if self.passes_through(view.current.additive.base) else self.n_plays)
 
     def passes_through(self, base) -> bool:
         """Whether the drive passes through its range (a sine, a triangle, a chirp), rather than
@@ -204,7 +204,7 @@ class InputBoucWen(_DriveCandidate):
     label = "Bouc-Wen state on the drive"
 
     def applies(self, view):
-        if view.drive is None or view.additive.base_expr != view.record.input_symbol:
+        if view.current.drive is None or view.current.additive.base_expr != view.record.input_symbol:
             return "needs the raw drive's rate (a drive-side stage was added first)"
         return True
 
@@ -220,7 +220,7 @@ class InputBoucWen(_DriveCandidate):
 
     def fit(self, view):
         Vr = drive_scale(view)
-        v = np.asarray(view.additive.base) / Vr
+        v = np.asarray(view.current.additive.base) / Vr
 
         def basis(z):
             beta, gamma = self.shape(z)
@@ -337,7 +337,7 @@ class InputCreep(_DriveCandidate):
 
     def fit(self, view):
         taus = self.taus(view)
-        d = np.asarray(view.additive.base)
+        d = np.asarray(view.current.additive.base)
         d0 = float(d[0])
         steady = [lowpass(d, tau, view.record.dt) for tau in taus]
         decays = [np.exp(-np.arange(len(d)) * (view.record.dt / tau)) for tau in taus]
@@ -362,7 +362,7 @@ class InputCreep(_DriveCandidate):
             + tuple(Term(f"creep.c{k}", cells[i], 0.0, np.inf) for k, i in enumerate(keep, 1)),
         )
         model = view.rewrite()
-        D = view.additive.base_expr
+        D = view.current.additive.base_expr
         model.add(Se("creep.src", D), J0("creep.node"))
         model.bond("creep.src", "creep.node")
         new, qs = {}, []
@@ -465,21 +465,21 @@ class _InputPolynomial(_DriveCandidate):
 
     def applies(self, view):
         ok = super().applies(view)
-        if ok is True and any(t.name.startswith(self.prefixes) for t in view.additive.terms):
+        if ok is True and any(t.name.startswith(self.prefixes) for t in view.current.additive.terms):
             return "a drive polynomial was named already (its terms are this candidate's, with the other sign)"
         return ok
 
     def evidence(self, view):
-        d = np.asarray(view.drive) / drive_scale(view)
+        d = np.asarray(view.current.drive) / drive_scale(view)
         cubic = d**3 - d * (d @ d**3) / max(d @ d, 1e-300)
         resp = view.respond([cubic])[:, 0]
-        r = view.residual - view.residual.mean()
+        r = view.current.residual - view.current.residual.mean()
         resp = resp - resp.mean()
         return {"cubic_corr": float(r @ resp / max(np.linalg.norm(r) * np.linalg.norm(resp), 1e-300))}
 
     def fit(self, view):
         Vr = drive_scale(view)
-        d = np.asarray(view.additive.base)
+        d = np.asarray(view.current.additive.base)
         p = self.prefix
         names = [f"{p}.{suffix}" for suffix, _, _ in self.shapes] + ([f"{p}.q"] if self.asymmetric else [])
         even = even_term(d) if self.asymmetric else None
@@ -487,7 +487,7 @@ class _InputPolynomial(_DriveCandidate):
         fit = view.fit_drive(basis, [0.0, 0.0, -np.inf][: len(names)], [np.inf] * len(names), names=names)
         model = view.rewrite()
         vr = model.parameter(f"{p}.Vr", Vr, "", "reference drive (largest |drive| of the data)")
-        D = view.additive.base_expr
+        D = view.current.additive.base_expr
         curve = (
             self.sign
             * vr
@@ -554,7 +554,7 @@ class InputRC(_ElectricalStage):
         return view.record.dt / 10, float(view.record.t[-1] - view.record.t[0]) / 20
 
     def fit(self, view):
-        d = np.asarray(view.drive)
+        d = np.asarray(view.current.drive)
         lo, hi = self._range(view)
         taus = np.geomspace(lo, hi, 16)
         idx = view.record.fit_idx
@@ -578,9 +578,13 @@ class InputRC(_ElectricalStage):
         model = view.rewrite()
         Rin = model.parameter("rc.R", tau / self.cap, "ohm", "series resistance of the input stage", bounds=(0, 1e12))
         Cin = model.parameter("rc.C", self.cap, "F", "capacitance of the input stage (only R·C matters)")
-        D = view.drive_expr
+        D = view.current.drive_expr
         model.add(
-            Se("rc.src", D), J1("rc.i"), R("rc.Rs", Rin), J0("rc.node"), C("rc.C", Cin, q0=Cin * float(view.drive[0]))
+            Se("rc.src", D),
+            J1("rc.i"),
+            R("rc.Rs", Rin),
+            J0("rc.node"),
+            C("rc.C", Cin, q0=Cin * float(view.current.drive[0])),
         )
         model.chain("rc.src", "rc.i", "rc.node", "rc.C")
         model.bond("rc.i", "rc.Rs")
@@ -588,7 +592,7 @@ class InputRC(_ElectricalStage):
         view.with_drive(model, expr)
         # the stage passes the drive with unit gain; the fitted coefficient is the sensor gain's change
         fit.drive = lowpass(d, tau, view.record.dt)
-        fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.extra
+        fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.current.extra
         return self.extension(view, fit, model, {"rc.R": tau / self.cap}, expr)
 
     def implausible(self, view, ext):
@@ -612,7 +616,7 @@ class InputRLC(_ElectricalStage):
     cap = 1e-6
 
     def fit(self, view):
-        d = np.asarray(view.drive)
+        d = np.asarray(view.current.drive)
         top = 2 * math.pi * 0.45 * view.record.fs
         low = 2 * math.pi / float(view.record.t[-1] - view.record.t[0]) * 10
         idx = view.record.fit_idx
@@ -642,11 +646,11 @@ class InputRLC(_ElectricalStage):
         Lp = model.parameter("rlc.L", L_val, "H", "series inductance of the input stage", bounds=(0, 1e12))
         Cp = model.parameter("rlc.C", self.cap, "F", "capacitance of the input stage (only LC, RC matter)")
         model.add(
-            Se("rlc.src", view.drive_expr),
+            Se("rlc.src", view.current.drive_expr),
             J1("rlc.loop"),
             R("rlc.Rs", Rp),
             I("rlc.Ls", Lp),
-            C("rlc.Cs", Cp, q0=Cp * float(view.drive[0])),
+            C("rlc.Cs", Cp, q0=Cp * float(view.current.drive[0])),
         )
         model.bond("rlc.src", "rlc.loop")
         for e in ("rlc.Rs", "rlc.Ls", "rlc.Cs"):
@@ -654,7 +658,7 @@ class InputRLC(_ElectricalStage):
         expr = Quantity("e", "rlc.Cs")
         view.with_drive(model, expr)
         fit.drive = om**2 * resonator(d, view.record.dt, om, ze)
-        fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.extra
+        fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.current.extra
         return self.extension(view, fit, model, {"rlc.R": R_val, "rlc.L": L_val}, expr)
 
     #: an electrical stage's resistance (amplifier output, leads) damps it at least this much

@@ -104,7 +104,7 @@ class PolarizationSaturation(LawTerm):
             self.prefix = f"sat.k{power + 1}"
 
     def applies(self, view):
-        n = len(view.model.with_role(self.role))
+        n = len(view.current.model.with_role(self.role))
         if n > self.most:
             return f"{n} elements are tagged '{self.role}' (one coefficient each; at most {self.most})"
         return super().applies(view)
@@ -115,7 +115,7 @@ class PolarizationSaturation(LawTerm):
     def refs(self, view, el, x, a):
         peak = float(np.max(np.abs(x))) or 1.0
         return (
-            abs(slope(view.model, el, view.values)) / peak**self.power,
+            abs(slope(view.current.model, el, view.current.values)) / peak**self.power,
             (1.5 if self.power == 2 else 5 / 3) * float(np.mean(x**self.power)),
         )
 
@@ -155,4 +155,4 @@ class FieldStiffness(LawTerm):
 
     def refs(self, view, el, x, a):
         peak = float(np.max(np.abs(a))) or 1.0
-        return abs(slope(view.model, el, view.values)) / peak**2, float(np.mean(a**2))
+        return abs(slope(view.current.model, el, view.current.values)) / peak**2, float(np.mean(a**2))
