@@ -61,7 +61,7 @@ from .lure import DRIVE
 from .report import CandidateResult, Report, Step
 from .settings import Settings
 from .sites import Site
-from .view import DriveFit, Record, View
+from .view import Current, DriveFit, Record, View
 
 __all__ = [
     "AdditiveDrive",
@@ -75,6 +75,7 @@ __all__ = [
     "Site",
     "View",
     "Record",
+    "Current",
     "DriveFit",
     "Report",
     "Settings",
