@@ -700,13 +700,18 @@ def _bouc_wen_increment(z: float, dx: float, zmax: float) -> float:
 def _step_bouc_wen(Phi, Gam, C, Dd, G1, u, xi0, x_prev, row, kh, zmax, Y):
     """The Lur'e stepping of :meth:`Lure.hysteretic`: one term w = k_h·z(x) on input 1, x the
     output row ``row``, from the discrete state ``xi0`` with z at rest (0) at the element
-    variable ``x_prev``; False when a sample's fixed point is not reached."""
+    variable ``x_prev``; False when a sample's fixed point is not reached.  |dz/dx| ≤ 1, so the
+    sample's map w → k_h·z(x(w)) contracts by L ≤ |k_h·D| (D the direct term of w in x) and an
+    iterate that moved by δ is within L·δ/(1 − L) of the fixed point: the iteration stops when
+    that bound (or δ itself) is below the tolerance."""
     n = Phi.shape[0]
     xi = np.zeros(n)
     xn = np.zeros(n)
     for i in range(n):
         xi[i] = xi0[i]
     z, xprev, w = 0.0, x_prev, 0.0
+    lip = abs(kh * Dd[row, 1])
+    reach = lip / (1.0 - lip) if lip < 1.0 else 1.0  # distance to the fixed point per δ
     for k in range(u.shape[0]):
         y0 = Dd[0, 0] * u[k]
         x0 = Dd[row, 0] * u[k]
@@ -719,7 +724,7 @@ def _step_bouc_wen(Phi, Gam, C, Dd, G1, u, xi0, x_prev, row, kh, zmax, Y):
             x = x0 + Dd[row, 1] * w
             zk = _bouc_wen_increment(z, x - xprev, zmax)
             wn = kh * zk
-            if abs(wn - w) <= 1e-12 * (abs(wn) + kh * zmax):
+            if abs(wn - w) * min(reach, 1.0) <= 1e-12 * (abs(wn) + kh * zmax):
                 w = wn
                 ok = True
                 break
