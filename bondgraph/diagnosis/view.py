@@ -309,7 +309,7 @@ class Current:
 
 
 class View:
-    """What a candidate sees.  Arrays are read-only; ``model`` must not be changed (use
+    """What a candidate sees.  Arrays are read-only; ``current.model`` must not be changed (use
     :meth:`rewrite` for a copy carrying the current values).  ``effort``: a factor on every
     optimiser's evaluation budget (:meth:`fit_drive`, :meth:`fit_model`).
 
