@@ -217,19 +217,9 @@ class Record:
 
     @cached_property
     def resolved(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(ω rad/s, coherence, resolved) at every Welch bin above 0
-        (:func:`~bondgraph.diagnosis.calibration.resolved_spectrum` of the recorded drive and
-        the output), computed once per record.
-
-        Returns
-        -------
-        omega : numpy.ndarray
-            Angular frequencies, rad/s.
-        coherence : numpy.ndarray
-            Magnitude-squared coherence, between 0 and 1.
-        resolved : numpy.ndarray of bool
-            Whether the record resolves the response there.
-        """
+        """(ω rad/s, coherence, resolved mask) at every Welch bin above 0: what
+        :func:`~bondgraph.diagnosis.calibration.resolved_spectrum` returns for the recorded drive
+        and the output, computed once per record."""
         return resolved_spectrum(self.u_recorded, self.y, self.fs, self.noise_psd)
 
     #: coherence above which the record resolves the response (the empirical FRF's bins)
