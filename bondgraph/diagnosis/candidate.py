@@ -126,11 +126,12 @@ class Candidate(ABC):
         """
         return True
 
-    def screen(self, view) -> float | None:
-        """The share (0-1) of the current residual that the candidate explains to first order,
-        computed quickly, or None when it cannot say (it is then fitted in full).  When more
-        candidates can say than ``diagnosis.screen_keep``, the engine fits only those that
-        explain most.
+    def screen(self, view):
+        """What the candidate explains of the current residual to first order, computed
+        quickly (:meth:`View.first_order` of its columns), or None when it cannot say (it is
+        then fitted in full).  The engine leaves out a candidate that explains no more than
+        chance allows, and when more remain than ``diagnosis.screen_keep``, fits only those
+        that explain most (:mod:`~bondgraph.diagnosis.screen`).
 
         Parameters
         ----------
@@ -139,8 +140,8 @@ class Candidate(ABC):
 
         Returns
         -------
-        float or None
-            The share of the residual explained, between 0 and 1, or None.
+        FirstOrder or None
+            The share of the residual explained (0-1) and its chance level, or None.
         """
         return None
 

@@ -853,7 +853,8 @@ def _chain(
             screen = settings.screen_effort if k else 1.0
             for n, (i, oc) in enumerate(pool.run(state, fitted, first, screen), 1):
                 if i in shares:
-                    oc.result.evidence["first_order_share"] = shares[i]
+                    oc.result.evidence["first_order_share"] = shares[i].share
+                    oc.result.evidence["first_order_chance"] = shares[i].chance
                 outcomes[i] = oc
                 if tick is not None:
                     tick(status=_line(k + 1, n, len(fitted), oc.result))

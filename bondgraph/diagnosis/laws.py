@@ -315,10 +315,10 @@ class LawTerm(Candidate):
         }
         return None, xs, az, None
 
-    def screen(self, view) -> float | None:
-        """The share (0-1) of the current residual's energy on the fit part that the term
-        explains to first order (module docstring), or None when the model is no Lur'e system
-        (the kind is then fitted in full).
+    def screen(self, view):
+        """What the term explains of the current residual's energy on the fit part to first
+        order (module docstring), or None when the model is no Lur'e system (the kind is then
+        fitted in full).
 
         Parameters
         ----------
@@ -327,10 +327,9 @@ class LawTerm(Candidate):
 
         Returns
         -------
-        float or None
+        FirstOrder or None
             What the filtered regressor (with an even part, both of them) explains of the
-            residual with the calibration (:meth:`View.first_order_share`), between 0 and 1, or
-            None.
+            residual with the calibration (:meth:`View.first_order`), or None.
         """
         els = self.elements(view.current.model)
         partners = {el: self.partner(view.current.model, el) for el in els}
@@ -350,7 +349,7 @@ class LawTerm(Candidate):
             moved = [lure.simulate(dict(view.current.values), lure.drive, self.term, coefs) for coefs in probes]
         except NotConverged:
             return None
-        return view.first_order_share(np.column_stack([(m - base) * view.current.gain / self.probe for m in moved]))
+        return view.first_order(np.column_stack([(m - base) * view.current.gain / self.probe for m in moved]))
 
     def fit(self, view):
         """Fit the coefficients with the calibration (the scan of the class notes).

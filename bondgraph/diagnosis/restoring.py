@@ -113,8 +113,8 @@ class RestoringHysteresis(Candidate):
         return lure, x, cols
 
     def screen(self, view):
-        """The largest share of the residual that k_h·z explains to first order, over the
-        saturation :attr:`levels`, or None off the exact linear route.
+        """What k_h·z explains of the residual to first order at the saturation level of
+        :attr:`levels` where it explains most, or None off the exact linear route.
 
         Parameters
         ----------
@@ -123,8 +123,8 @@ class RestoringHysteresis(Candidate):
 
         Returns
         -------
-        float or None
-            The largest :meth:`View.first_order_share` over the levels (0-1), or None.
+        FirstOrder or None
+            The :meth:`View.first_order` of the largest share over the levels, or None.
         """
         try:
             out = self._columns(view)
@@ -132,7 +132,7 @@ class RestoringHysteresis(Candidate):
             return None
         if out is None:
             return None
-        return max(view.first_order_share(col) for col in out[2].values())
+        return max((view.first_order(col) for col in out[2].values()), key=lambda f: f.share)
 
     def build(self, view, kh: float, zmax: float):
         """The current model with the hysteretic term on the site's element.

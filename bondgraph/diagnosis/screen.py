@@ -2,18 +2,109 @@
 with sites × kinds, so those that can say quickly what they explain
 (:meth:`~bondgraph.diagnosis.candidate.Candidate.screen`: a first-order regression of the
 residual on the kind's regressor passed through the linear transfer from its site) are
-ranked, and only the best ``diagnosis.screen_keep`` of them are fitted in full."""
+screened before any is fitted in full.
+
+**Chance floor** (rule ``chance``).  A candidate whose first-order share is no more than a
+column unrelated to the residual explains by chance is not fitted: such a kind has nothing
+at its site to grow from.  Both the residual r and the candidate's columns are correlated in
+time, so their sample correlation scatters far more than 1/√N: for independent stationary
+series its variance is (1/N)·Σ_k ρ_u(k)·ρ_r(k) over every lag k, ρ the autocorrelations
+(Bartlett, "Some aspects of the time-correlation problem in regard to tests of
+significance", J. R. Stat. Soc. 98(3), 1935).  With the columns orthonormalised (u_j) beyond
+the calibration's directions, X = Σ_j c_j²/var(c_j), c_j the correlation of u_j with r, is
+χ² with as many degrees of freedom as columns when no column is related to r; ``chance`` is
+its tail probability, the candidate is left out when it exceeds ``diagnosis.screen_chance``.
+A false keep costs only a fit; a column that explains more than chance allows is fitted
+however small its share (a strong nonlinearity whose first-order part the calibration
+absorbed still leaves a share well above chance).
+
+**Keep** (rule ``rank``).  Of the rest, when more than ``diagnosis.screen_keep`` remain, only
+that many, those explaining most, are fitted in full."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence
+
+import numpy as np
+from scipy.stats import chi2
 
 from .candidate import Candidate
 
 
+@dataclass(frozen=True)
+class FirstOrder:
+    """What a candidate's columns explain of the residual to first order.
+
+    Attributes
+    ----------
+    share : float
+        The share (0-1) of the residual's energy on the fit part the columns explain beyond
+        the calibration's directions.
+    chance : float
+        The probability (0-1) that columns unrelated to the residual explain as much, given
+        both series' autocorrelation (module docstring); 1 when nothing is left to explain.
+    n_eff : float
+        The effective number of independent samples of the first orthonormal column's
+        correlation with the residual (N / Σ_k ρ_u(k)·ρ_r(k)).
+    """
+
+    share: float
+    chance: float = 1.0
+    n_eff: float = 0.0
+
+
+def _acf(x: np.ndarray) -> np.ndarray:
+    """Autocorrelation of each column at lags 0..N-1 (biased, ρ(0) = 1)."""
+    n = x.shape[0]
+    f = np.fft.rfft(x, 2 * n, axis=0)
+    g = np.fft.irfft(f * np.conj(f), axis=0)[:n]
+    return g / np.where(g[:1] > 0, g[:1], 1.0)
+
+
+def first_order(q: np.ndarray, r: np.ndarray, total: float) -> FirstOrder:
+    """The first-order share of columns q in residual r, and its chance level.
+
+    Parameters
+    ----------
+    q : numpy.ndarray
+        The columns beyond the calibration's directions (samples × columns), on the fit part.
+    r : numpy.ndarray
+        The residual beyond the calibration's directions (the offset among them: mean 0), on
+        the same samples.
+    total : float
+        The residual's energy about its mean before the projection (the share's denominator).
+
+    Returns
+    -------
+    FirstOrder
+        ``share`` is what q explains of ``total``; ``chance`` and ``n_eff`` as the module
+        docstring says.
+    """
+    r0 = r - np.mean(r)
+    rr = float(r0 @ r0)
+    if rr <= 0 or total <= 0:
+        return FirstOrder(0.0)
+    fitted = q @ np.linalg.lstsq(q, r, rcond=None)[0]
+    share = min(float(fitted @ fitted) / total, 1.0)
+    u, s, _ = np.linalg.svd(q, full_matrices=False)
+    u = u[:, s > 1e-12 * s[0]] if s.size and s[0] > 0 else u[:, :0]
+    if u.shape[1] == 0:
+        return FirstOrder(share)
+    n = r0.size
+    rho_r = _acf(r0[:, None])[:, 0]
+    rho_u = _acf(u)
+    weight = np.full(n, 2.0)
+    weight[0] = 1.0  # lags ±k, k > 0, count twice
+    spread = np.maximum((weight[:, None] * rho_u * rho_r[:, None]).sum(axis=0), 1e-12)
+    c = (u.T @ r0) / np.sqrt(rr)
+    x = float(np.sum(c**2 * n / spread))
+    return FirstOrder(share, float(chi2.sf(x, u.shape[1])), float(n / spread[0]))
+
+
 def screen_out(
     view, candidates: Sequence[Candidate], pending: Sequence[int]
-) -> tuple[dict[int, str], dict[int, float]]:
+) -> tuple[dict[int, str], dict[int, FirstOrder]]:
     """The pending candidates left out by the screen, with the reason, and every share found.
 
     Parameters
@@ -28,32 +119,38 @@ def screen_out(
     Returns
     -------
     left_out : dict
-        index → why it is not fitted in full.
+        index → why it is not fitted in full (the rule and its numbers).
     shares : dict
-        index → the share (0-1) of the residual's energy on the fit part the candidate
-        explains to first order, for every candidate that could say.
+        index → what the candidate explains to first order, for every candidate that could
+        say.
     """
-    keep = int(view.settings.screen_keep)
-    shares: dict[int, float] = {}
+    keep, level = int(view.settings.screen_keep), float(view.settings.screen_chance)
+    shares: dict[int, FirstOrder] = {}
     for i in pending:
         cand = candidates[i]
         if type(cand).screen is Candidate.screen or cand.applies(view) is not True:
             continue
         try:
-            share = cand.screen(view)
+            found = cand.screen(view)
         except (ArithmeticError, ValueError, RuntimeError):  # the full fit reports its own failure
-            share = None
-        if share is not None:
-            shares[i] = share
-    if len(shares) <= keep:
-        return {}, shares
-    ranked = sorted(shares, key=lambda i: -shares[i])
-    bar = shares[ranked[keep - 1]]
+            found = None
+        if found is not None:
+            shares[i] = found
     left = {
         i: (
-            f"screened out: explains {shares[i]:.1%} of the residual to first order "
-            f"(the {keep} fitted explain {bar:.1%} or more)"
+            f"screened out (rule chance): explains {f.share:.2%} of the residual to first order, "
+            f"as much as unrelated columns would by chance (p = {f.chance:.2g} > diagnosis.screen_chance "
+            f"{level:g}; {f.n_eff:.0f} effective samples)"
         )
-        for i in ranked[keep:]
+        for i, f in shares.items()
+        if f.chance > level
     }
+    ranked = sorted((i for i in shares if i not in left), key=lambda i: -shares[i].share)
+    if len(ranked) > keep:
+        bar = shares[ranked[keep - 1]].share
+        for i in ranked[keep:]:
+            left[i] = (
+                f"screened out (rule rank): explains {shares[i].share:.1%} of the residual to first order "
+                f"(the {keep} fitted explain {bar:.1%} or more)"
+            )
     return left, shares

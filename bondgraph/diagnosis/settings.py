@@ -49,6 +49,7 @@ class Settings:
     confirm_max: int
     polish_margin: float
     screen_keep: int
+    screen_chance: float
     screen_effort: float
     screen_gain: float
     polish_effort: float

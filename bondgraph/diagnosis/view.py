@@ -22,6 +22,7 @@ from .calibration import RESOLVED_COHERENCE, cross_spectra, empirical_frf, param
 from .context import SENSOR_GAIN, Context, State, drive_held_share
 from .lure import Lure
 from .projection import forward_step, projected_fit, simulation_deadline
+from .screen import FirstOrder, first_order
 
 
 def _frozen(a: np.ndarray | None) -> np.ndarray | None:
@@ -593,15 +594,16 @@ class View:
         drop = np.maximum(before - after, 0.0)
         return float(drop[ok].sum() / drop.sum()) if drop.sum() > 0 else 0.0
 
-    def first_order_share(self, column: np.ndarray) -> float:
-        """The share (0-1) of the residual's energy on the fit part that a column (an
-        effect's output per unit coefficient, sensor gain applied), or several together,
-        explain to first order with the calibration: one Gauss–Newton step of the effect's
-        coefficients and the calibrated linear parameters, sensor gain and offset.  On the
-        linear core the columns are regressed beyond the output's sensitivities to those
-        parameters (:meth:`_respond_sensitivities`), because every candidate's fit refits them:
-        a column that is partly a stiffness change is judged by what the stiffness cannot do.
-        Off the core, beyond the offset only.
+    def first_order(self, column: np.ndarray) -> FirstOrder:
+        """What a column (an effect's output per unit coefficient, sensor gain applied), or
+        several together, explain of the residual's energy on the fit part to first order with
+        the calibration, and how likely unrelated columns explain as much (the screen's
+        chance floor, :mod:`~bondgraph.diagnosis.screen`): one Gauss–Newton step of the
+        effect's coefficients and the calibrated linear parameters, sensor gain and offset.
+        On the linear core the columns are regressed beyond the output's sensitivities to
+        those parameters (:meth:`_respond_sensitivities`), because every candidate's fit
+        refits them: a column that is partly a stiffness change is judged by what the
+        stiffness cannot do.  Off the core, beyond the offset only.
 
         Parameters
         ----------
@@ -611,15 +613,15 @@ class View:
 
         Returns
         -------
-        float
+        FirstOrder
             The share, between 0 and 1 (0 for columns that are not finite or are explained
-            by the calibration alone).
+            by the calibration alone), its chance level and effective samples.
         """
         idx = self.record.fit_idx
         full = np.asarray(column, float).reshape(len(self.current.residual), -1)
         q, r = full[idx], np.asarray(self.current.residual, float)[idx]
         if not np.all(np.isfinite(q)):
-            return 0.0
+            return FirstOrder(0.0)
         basis = self._calibration_directions()
         q, r = (
             q - basis @ np.linalg.lstsq(basis, q, rcond=None)[0],
@@ -629,9 +631,8 @@ class View:
         size = np.sqrt(np.sum(full[idx] ** 2, axis=0))
         keep = np.sqrt(np.sum(q**2, axis=0)) > 1e-12 * np.maximum(size, 1e-150)  # beyond the calibration
         if not keep.any() or rr <= 0:
-            return 0.0
-        fitted = q[:, keep] @ np.linalg.lstsq(q[:, keep], r, rcond=None)[0]
-        return min(float(fitted @ fitted) / rr, 1.0)
+            return FirstOrder(0.0)
+        return first_order(q[:, keep], r, rr)
 
     def _calibration_directions(self) -> np.ndarray:
         """The fit rows' directions the calibration moves the output in (columns): the offset

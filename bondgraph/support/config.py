@@ -212,6 +212,12 @@ DEFAULTS: dict[str, Default] = {
         "when more candidates than this can say what they explain to first order (a "
         "law term at a site), only this many, those explaining most, are fitted in full",
     ),
+    "diagnosis.screen_chance": Default(
+        0.05,
+        "a candidate whose first-order share of the residual unrelated columns reach "
+        "with more than this probability (the residual's and the columns' "
+        "autocorrelation taken into account) is not fitted in full",
+    ),
     "diagnosis.drift_noise": Default(
         3.0,
         "when no cause is named, a slow drift of the output (a smooth curve in time, with "

@@ -123,7 +123,7 @@ class PolarizationSaturation(LawTerm):
         if self.power is not None:
             return super().screen(view)
         shares = [PolarizationSaturation(m).screen(view) for m in self.powers]
-        return None if any(s is None for s in shares) else max(shares)
+        return None if any(s is None for s in shares) else max(shares, key=lambda f: f.share)
 
     def fit(self, view):
         if self.power is not None:

@@ -1,0 +1,81 @@
+"""The screen's chance floor: a first-order correlation between series that are both
+correlated in time is judged by Bartlett's variance, so that unrelated columns pass at the
+stated rate and a related one, however small its share, does not fall below the floor."""
+
+from types import SimpleNamespace
+
+import numpy as np
+from scipy.signal import lfilter
+
+from bondgraph.diagnosis import Settings
+from bondgraph.diagnosis.candidate import Candidate
+from bondgraph.diagnosis.screen import FirstOrder, first_order, screen_out
+
+
+def _ar(rng, n, pole, cols=1):
+    """Unit-variance AR(1) series, a slowly varying residual or regressor."""
+    return lfilter([1.0], [1.0, -pole], rng.standard_normal((n, cols)), axis=0)
+
+
+def _chances(draws, pole_r, pole_q, cols, seed=0):
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(draws):
+        r, q = _ar(rng, 2000, pole_r)[:, 0], _ar(rng, 2000, pole_q, cols)
+        out.append(first_order(q - q.mean(axis=0), r - r.mean(), float(np.sum((r - r.mean()) ** 2))))
+    return out
+
+
+def test_unrelated_columns_pass_the_floor_at_the_stated_rate():
+    # both series AR(1) with pole 0.95: Σ_k ρ_u(k)ρ_r(k) = (1 + 0.95²)/(1 − 0.95²) = 19.5, so
+    # N = 2000 samples are worth 103 independent ones
+    found = _chances(400, 0.95, 0.95, 1)
+    rate = np.mean([f.chance < 0.05 for f in found])
+    assert 0.02 <= rate <= 0.09
+    # the same shares judged as if the 2000 samples were independent: far too many pass
+    naive = np.mean([f.share * 2000 > 3.84 for f in found])
+    assert naive > 0.4
+    assert 80 < np.median([f.n_eff for f in found]) < 130
+
+
+def test_two_columns_count_two_degrees_of_freedom():
+    found = _chances(400, 0.9, 0.8, 2, seed=1)
+    assert 0.02 <= np.mean([f.chance < 0.05 for f in found]) <= 0.09
+    # unrelated columns: the chance level is uniform, its mean is 1/2
+    assert abs(np.mean([f.chance for f in found]) - 0.5) < 0.06
+
+
+def test_a_related_column_with_a_small_share_is_kept():
+    rng = np.random.default_rng(2)
+    q = _ar(rng, 20000, 0.5)
+    r = 0.4 * q[:, 0] + _ar(rng, 20000, 0.95)[:, 0]  # 2 % of r's energy
+    f = first_order(q, r - r.mean(), float(np.sum((r - r.mean()) ** 2)))
+    assert 0.005 < f.share < 0.05 and f.chance < 1e-6
+
+
+class _Said(Candidate):
+    cause = "said"
+
+    def __init__(self, found):
+        self.found = found
+
+    def screen(self, view):
+        return self.found
+
+    def fit(self, view):
+        raise AssertionError("the screen fits nothing")
+
+
+def test_screen_out_names_the_rule_that_left_a_candidate_out():
+    view = SimpleNamespace(settings=Settings.from_config(screen_keep=2))
+    cands = [
+        _Said(FirstOrder(0.30, 1e-9, 500.0)),
+        _Said(FirstOrder(0.20, 1e-6, 500.0)),
+        _Said(FirstOrder(0.10, 1e-4, 500.0)),
+        _Said(FirstOrder(0.002, 0.4, 500.0)),
+        _Said(None),
+    ]
+    left, shares = screen_out(view, cands, range(5))
+    assert sorted(shares) == [0, 1, 2, 3]
+    assert sorted(left) == [2, 3]
+    assert "rule rank" in left[2] and "rule chance" in left[3] and "p = 0.4" in left[3]
