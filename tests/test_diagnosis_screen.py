@@ -1,6 +1,6 @@
-"""The screen's chance floor: a first-order correlation between series that are both
-correlated in time is judged by Bartlett's variance, so that unrelated columns pass at the
-stated rate and a related one, however small its share, does not fall below the floor."""
+"""The screen's chance floor: a first-order product of residual and column, both correlated
+in time, is judged by Bartlett's variance at the noise floor, so that columns unrelated to a
+residual at the floor pass at the stated rate and a related one does not fall below it."""
 
 from types import SimpleNamespace
 
@@ -22,7 +22,7 @@ def _chances(draws, pole_r, pole_q, cols, seed=0):
     out = []
     for _ in range(draws):
         r, q = _ar(rng, 2000, pole_r)[:, 0], _ar(rng, 2000, pole_q, cols)
-        out.append(first_order(q - q.mean(axis=0), r - r.mean(), float(np.sum((r - r.mean()) ** 2))))
+        out.append(first_order(q - q.mean(axis=0), r - r.mean(), float(np.sum((r - r.mean()) ** 2)), None))
     return out
 
 
@@ -49,8 +49,24 @@ def test_a_related_column_with_a_small_share_is_kept():
     rng = np.random.default_rng(2)
     q = _ar(rng, 20000, 0.5)
     r = 0.4 * q[:, 0] + _ar(rng, 20000, 0.95)[:, 0]  # 2 % of r's energy
-    f = first_order(q, r - r.mean(), float(np.sum((r - r.mean()) ** 2)))
+    f = first_order(q, r - r.mean(), float(np.sum((r - r.mean()) ** 2)), None)
     assert 0.005 < f.share < 0.05 and f.chance < 1e-6
+
+
+def test_a_deterministic_mismatch_far_above_the_noise_is_not_chance():
+    # the residual of a periodic effect: a few harmonics, far above white measurement noise;
+    # the column shares one of them (6 % of the residual's energy)
+    rng = np.random.default_rng(3)
+    t = np.arange(20000) / 2000.0
+    harmonics = [np.sin(2 * np.pi * 7.0 * k * t + k) for k in (1, 2, 3)]
+    r = 1.0 * harmonics[0] + 0.3 * harmonics[1] + 0.2 * harmonics[2] + 0.01 * rng.standard_normal(t.size)
+    q = (harmonics[1] + 0.5 * np.cos(2 * np.pi * 3.0 * t))[:, None]
+    total = float(np.sum((r - r.mean()) ** 2))
+    as_two_series = first_order(q, r - r.mean(), total, None)
+    at_the_floor = first_order(q, r - r.mean(), total, 0.01)
+    assert 0.03 < as_two_series.share < 0.1 and as_two_series.n_eff < 60
+    assert as_two_series.chance > 0.05  # two periodic series: too few effective samples to tell
+    assert at_the_floor.chance < 1e-12  # no noise at 1 % explains 6 % of a unit mismatch
 
 
 class _Said(Candidate):

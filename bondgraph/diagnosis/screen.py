@@ -4,19 +4,24 @@ with sites × kinds, so those that can say quickly what they explain
 residual on the kind's regressor passed through the linear transfer from its site) are
 screened before any is fitted in full.
 
-**Chance floor** (rule ``chance``).  A candidate whose first-order share is no more than a
-column unrelated to the residual explains by chance is not fitted: such a kind has nothing
-at its site to grow from.  Both the residual r and the candidate's columns are correlated in
-time, so their sample correlation scatters far more than 1/√N: for independent stationary
-series its variance is (1/N)·Σ_k ρ_u(k)·ρ_r(k) over every lag k, ρ the autocorrelations
+**Chance floor** (rule ``chance``).  A candidate whose columns explain no more of the
+residual than they would of measurement noise is not fitted: such a kind has nothing at its
+site to grow from.  The hypothesis tested is that the residual r is noise, a stationary random
+process with r's autocorrelation ρ_r and a variance σ² no larger than the noise floor's
+(σ² = min(var r, σ_n²), σ_n the record's noise estimate).  Residual and columns are
+correlated in time, so the product of r with a unit-norm column u scatters far more than
+σ: for independent stationary series its variance is σ²·Σ_k ρ_u(k)·ρ_r(k) over every lag k
 (Bartlett, "Some aspects of the time-correlation problem in regard to tests of
 significance", J. R. Stat. Soc. 98(3), 1935).  With the columns orthonormalised (u_j) beyond
-the calibration's directions, X = Σ_j c_j²/var(c_j), c_j the correlation of u_j with r, is
-χ² with as many degrees of freedom as columns when no column is related to r; ``chance`` is
-its tail probability, the candidate is left out when it exceeds ``diagnosis.screen_chance``.
-A false keep costs only a fit; a column that explains more than chance allows is fitted
-however small its share (a strong nonlinearity whose first-order part the calibration
-absorbed still leaves a share well above chance).
+the calibration's directions, X = Σ_j (u_j·r)²/(σ²·Σ_k ρ_uj(k)ρ_r(k)) is χ² with as many
+degrees of freedom as columns under the hypothesis; ``chance`` is its tail probability, and
+the candidate is left out when it exceeds ``diagnosis.screen_chance``.
+
+A residual at the noise floor (a record with nothing to find) leaves X at the size of the
+correlation test of two unrelated series; a residual far above the floor is a deterministic
+mismatch, whose few effective samples would make any correlation look like chance, and the
+factor var r/σ_n² then keeps every column that explains more of it than noise could.  A
+false keep costs only a fit.
 
 **Keep** (rule ``rank``).  Of the rest, when more than ``diagnosis.screen_keep`` remain, only
 that many, those explaining most, are fitted in full."""
@@ -46,7 +51,7 @@ class FirstOrder:
         both series' autocorrelation (module docstring); 1 when nothing is left to explain.
     n_eff : float
         The effective number of independent samples of the first orthonormal column's
-        correlation with the residual (N / Σ_k ρ_u(k)·ρ_r(k)).
+        product with the residual (N / Σ_k ρ_u(k)·ρ_r(k)).
     """
 
     share: float
@@ -62,7 +67,7 @@ def _acf(x: np.ndarray) -> np.ndarray:
     return g / np.where(g[:1] > 0, g[:1], 1.0)
 
 
-def first_order(q: np.ndarray, r: np.ndarray, total: float) -> FirstOrder:
+def first_order(q: np.ndarray, r: np.ndarray, total: float, noise: float | None) -> FirstOrder:
     """The first-order share of columns q in residual r, and its chance level.
 
     Parameters
@@ -74,6 +79,9 @@ def first_order(q: np.ndarray, r: np.ndarray, total: float) -> FirstOrder:
         the same samples.
     total : float
         The residual's energy about its mean before the projection (the share's denominator).
+    noise : float or None
+        The measurement noise's RMS, in r's units (None: r's own RMS, the test of two
+        unrelated series).
 
     Returns
     -------
@@ -97,8 +105,8 @@ def first_order(q: np.ndarray, r: np.ndarray, total: float) -> FirstOrder:
     weight = np.full(n, 2.0)
     weight[0] = 1.0  # lags ±k, k > 0, count twice
     spread = np.maximum((weight[:, None] * rho_u * rho_r[:, None]).sum(axis=0), 1e-12)
-    c = (u.T @ r0) / np.sqrt(rr)
-    x = float(np.sum(c**2 * n / spread))
+    var = rr / n if noise is None else min(rr / n, float(noise) ** 2)
+    x = float(np.sum((u.T @ r0) ** 2 / (var * spread)))
     return FirstOrder(share, float(chi2.sf(x, u.shape[1])), float(n / spread[0]))
 
 
@@ -139,7 +147,7 @@ def screen_out(
     left = {
         i: (
             f"screened out (rule chance): explains {f.share:.2%} of the residual to first order, "
-            f"as much as unrelated columns would by chance (p = {f.chance:.2g} > diagnosis.screen_chance "
+            f"no more than of measurement noise (p = {f.chance:.2g} > diagnosis.screen_chance "
             f"{level:g}; {f.n_eff:.0f} effective samples)"
         )
         for i, f in shares.items()

@@ -19,7 +19,7 @@ from ..numerics.steady import record_start, starts_steady
 from ..support.errors import BondGraphError
 from .additive import AdditiveDrive, Term
 from .calibration import RESOLVED_COHERENCE, cross_spectra, empirical_frf, param_bounds, resolved_spectrum, score
-from .context import SENSOR_GAIN, Context, State, drive_held_share
+from .context import SENSOR_GAIN, Context, State, drive_held_share, residual_floor
 from .lure import Lure
 from .projection import forward_step, projected_fit, simulation_deadline
 from .screen import FirstOrder, first_order
@@ -632,7 +632,17 @@ class View:
         keep = np.sqrt(np.sum(q**2, axis=0)) > 1e-12 * np.maximum(size, 1e-150)  # beyond the calibration
         if not keep.any() or rr <= 0:
             return FirstOrder(0.0)
-        return first_order(q[:, keep], r, rr)
+        return first_order(q[:, keep], r, rr, self._noise_floor())
+
+    def _noise_floor(self) -> float:
+        """The measurement noise's RMS (output units): the record's estimate from a band the
+        drive leaves quiet, else the floor of the current residual's spectrum (an upper
+        estimate, cached)."""
+        if self.record.noise:
+            return float(self.record.noise)
+        if getattr(self, "_floor", None) is None:
+            self._floor = residual_floor(np.asarray(self.current.residual, float), self.record.fs)
+        return self._floor
 
     def _calibration_directions(self) -> np.ndarray:
         """The fit rows' directions the calibration moves the output in (columns): the offset
