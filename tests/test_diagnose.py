@@ -663,7 +663,7 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     from bondgraph.diagnosis import View
     from bondgraph.diagnosis.calibration import calibrate
     from bondgraph.diagnosis.context import Context
-    from bondgraph.diagnosis.modes import mode_implausible
+    from bondgraph.diagnosis.modes import mode_implausible, resolved_share
 
     rng = np.random.default_rng(7)
     n, fs = 6000, 500.0
@@ -687,7 +687,7 @@ def test_a_mode_is_placed_only_where_the_record_resolves_the_response():
     cut = lambda kind, f: signal.filtfilt(*signal.butter(4, f / (view.record.fs / 2), kind), view.current.residual)
     skirt = state.prediction + cut("low", 5.0)
     noise = state.prediction + cut("high", 0.6 * high)
-    assert view.resolved_share(skirt) > 0.9 and view.resolved_share(noise) < 0.1
+    assert resolved_share(view, skirt) > 0.9 and resolved_share(view, noise) < 0.1
     assert "resolve" not in mode_implausible(view, 2 * np.pi * high, 0.02, skirt)
     assert "0% of what it explains" in mode_implausible(view, 2 * np.pi * high, 0.02, noise)
 

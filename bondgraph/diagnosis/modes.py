@@ -20,10 +20,11 @@ from ..fit.identify import Spec
 from ..model.elements import J0, J1, C, I, R, Se
 from ..model.graph import Quantity
 from ..support.errors import ModelError
+from .calibration import cross_spectra
 from .candidate import LINEAR, NOT_A_DRIVE, Candidate, Extension
 from .context import welch
 from .filters import resonator
-from .rewrite import junction_of, law, modify_law
+from .rewrite import add_to_output, junction_of, law, modify_law
 from .sites import Site, each_element, generic_sites
 
 
@@ -67,6 +68,33 @@ def unresolved(view) -> str:
         f"the record resolves the response at no frequency (coherence of output and drive "
         f"≤ {view.record.resolved_coherence:g} everywhere): no mismatch to place a mode at"
     )
+
+
+def resolved_share(view, raw: np.ndarray) -> float:
+    """The share (0-1) of the residual power a raw prediction removes (its sensor gain and
+    offset solved) that lies where the record resolves the response
+    (:meth:`~bondgraph.diagnosis.view.Record.resolution_near`'s rule, bin by bin); 0 when it
+    removes none.
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+    raw : numpy.ndarray
+        A raw prediction on every sample.
+
+    Returns
+    -------
+    float
+        The share, between 0 and 1.
+    """
+    g, b = view.score(raw)[:2]
+    u, y, fs = view.record.u_recorded, view.record.y, view.record.fs
+    ok = view.record.resolved[2]
+    before = cross_spectra(u, view.current.residual, fs)[2][1:]
+    after = cross_spectra(u, y - (g * np.asarray(raw) + b), fs)[2][1:]
+    drop = np.maximum(before - after, 0.0)
+    return float(drop[ok].sum() / drop.sum()) if drop.sum() > 0 else 0.0
 
 
 def mismatch_peaks(view, n: int = 3) -> list[float]:
@@ -172,7 +200,7 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
             f"{span:.3g}× in frequency, too narrow to show a skirt"
         )
     coh, resolved = view.record.resolution_near(omega)
-    share = None if raw is None or (excited and resolved) else view.resolved_share(raw)
+    share = None if raw is None or (excited and resolved) else resolved_share(view, raw)
     skirt = "" if share is None else f" and {share:.0%} of what it explains lies where the record resolves it"
     if not excited and (share is None or share < 0.5):
         return f"the drive does not excite {f:.4g} Hz" + skirt
@@ -349,7 +377,7 @@ class ParallelMode(Candidate):
         model.bond(f"{p}.force", f"{p}.mode")
         for e in ("mass", "spring", "damper"):
             model.bond(f"{p}.mode", f"{p}.{e}")
-        view.add_to_output(model, gg * Quantity("q", f"{p}.spring") + hh * Quantity("p", f"{p}.mass"))
+        add_to_output(model, view.record.output, gg * Quantity("q", f"{p}.spring") + hh * Quantity("p", f"{p}.mass"))
         new = {f"{p}.omega": om, f"{p}.zeta": ze, f"{p}.g": g, f"{p}.h": h}
         return Extension(
             model,
@@ -524,7 +552,7 @@ class OutputMode(Candidate):
         model.bond(f"{p}.plate", f"{p}.mass")
         model.bond(f"{p}.plate", f"{p}.damper")
         if plate:
-            view.add_to_output(model, -Quantity("q", f"{p}.spring"))  # the sensor sits on the plate
+            add_to_output(model, view.record.output, -Quantity("q", f"{p}.spring"))  # the sensor sits on the plate
         return model
 
     def fit(self, view):

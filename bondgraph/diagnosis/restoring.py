@@ -205,7 +205,7 @@ class RestoringHysteresis(Candidate):
         # trial only
         lure = out[0] if out is not None else None
         fast = lure is not None and not lure.fixed
-        starts = [None, view.model_file_values()] if fast else [None]
+        starts = view.fit_starts(always=True) if fast else [None]
         best = None
         for _, share, kh in trials[: 2 if fast else 1]:
             for start in starts:

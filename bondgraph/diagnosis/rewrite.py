@@ -11,6 +11,7 @@ import sympy as sp
 from ..model.elements import J1, C, E, F, I, P, Q, R, Se
 from ..model.graph import Model, Quantity, input_rate_symbol
 from ..support.errors import ModelError
+from .context import SENSOR_GAIN
 
 _VAR = {C: Q, I: P}
 
@@ -226,16 +227,18 @@ def drive_loop(model: Model, input: str) -> tuple[str, list[str]] | None:
 
 
 def add_to_output(model: Model, output: str, term) -> None:
-    """output ← output + term (e.g. the displacement of an added mode).
+    """output ← output + g·term, g the sensor gain (the parameter ``sensor.gain`` the diagnosis
+    gives every model it extends), e.g. the displacement of an added mode.
 
     Parameters
     ----------
     model : Model
-        The model, changed in place (use a copy).
+        The model to change (a copy); changed in place.
     output : str
-        The output's name.
+        The compared output's name.
     term : sympy.Expr or float
-        The term, in the output's units.
+        The term, in output units at sensor gain 1.
     """
+    g = next(d.symbol for n, (d, _) in model.parameters.items() if n == SENSOR_GAIN)
     out = model.outputs[output]
-    out.expr = out.expr + sp.sympify(term)
+    out.expr = out.expr + g * sp.sympify(term)

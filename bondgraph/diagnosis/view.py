@@ -18,8 +18,8 @@ from ..model.graph import Model
 from ..numerics.steady import record_start, starts_steady
 from ..support.errors import BondGraphError
 from .additive import AdditiveDrive, Term
-from .calibration import RESOLVED_COHERENCE, cross_spectra, empirical_frf, param_bounds, resolved_spectrum, score
-from .context import SENSOR_GAIN, Context, State, drive_held_share, residual_floor
+from .calibration import RESOLVED_COHERENCE, empirical_frf, param_bounds, resolved_spectrum, score
+from .context import Context, State, drive_held_share, residual_floor
 from .lure import Lure
 from .projection import forward_step, projected_fit, simulation_deadline
 from .screen import FirstOrder, first_order
@@ -298,6 +298,26 @@ class Current:
     additive: AdditiveDrive | None
     extra: np.ndarray | None
 
+    def drive_plus(self, part: sp.Expr, identity: bool = True) -> sp.Expr:
+        """The drive expression after an additive extension adds ``part``, an expression of
+        :attr:`additive`'s ``base_expr``; with ``identity=False`` ``part`` replaces the base
+        drive's own term.
+
+        Parameters
+        ----------
+        part : sympy.Expr
+            The added part, an expression of the base drive.
+        identity : bool, optional
+            Keep the base drive's own term (False: ``part`` replaces it).
+
+        Returns
+        -------
+        sympy.Expr
+            The new drive expression.
+        """
+        expr = self.drive_expr + part
+        return expr - self.additive.base_expr if self.additive.identity and not identity else expr
+
 
 class View:
     """What a candidate sees.  Arrays are read-only; ``current.model`` must not be changed (use
@@ -435,20 +455,6 @@ class View:
                 model.outputs[name].expr = out.expr.xreplace({V: expr})
         return model
 
-    def add_to_output(self, model: Model, term) -> None:
-        """Add ``term`` to the compared output of ``model``, inside the sensor gain.
-
-        Parameters
-        ----------
-        model : Model
-            The model to change (a copy); changed in place.
-        term : sympy.Expr or float
-            The term, in output units at sensor gain 1.
-        """
-        g = next(d.symbol for n, (d, _) in model.parameters.items() if n == SENSOR_GAIN)
-        out = model.outputs[self.record.output]
-        out.expr = out.expr + g * sp.sympify(term)
-
     def _nominal_value(self, name: str) -> float:
         """A parameter's value in the model file (before calibration).
 
@@ -571,29 +577,6 @@ class View:
             * np.exp(-1j * omega * ctx.delay * ctx.dt)
         )
 
-    def resolved_share(self, raw: np.ndarray) -> float:
-        """The share (0-1) of the residual power a raw prediction removes (its sensor gain and
-        offset solved) that lies where the record resolves the response
-        (:meth:`Record.resolution_near`'s rule, bin by bin); 0 when it removes none.
-
-        Parameters
-        ----------
-        raw : numpy.ndarray
-            A raw prediction on every sample.
-
-        Returns
-        -------
-        float
-            The share, between 0 and 1.
-        """
-        g, b = self.score(raw)[:2]
-        u, y, fs = self.record.u_recorded, self.record.y, self.record.fs
-        ok = self.record.resolved[2]
-        before = cross_spectra(u, self.current.residual, fs)[2][1:]
-        after = cross_spectra(u, y - (g * np.asarray(raw) + b), fs)[2][1:]
-        drop = np.maximum(before - after, 0.0)
-        return float(drop[ok].sum() / drop.sum()) if drop.sum() > 0 else 0.0
-
     def first_order(self, column: np.ndarray) -> FirstOrder:
         """What a column (an effect's output per unit coefficient, sensor gain applied), or
         several together, explain of the residual's energy on the fit part to first order with
@@ -696,7 +679,7 @@ class View:
             out.append(Spec(n, math.copysign(min(max(abs(v), lo), hi), v), lo, hi, log=True))
         return out
 
-    def strained(self) -> list[str]:
+    def _strained(self) -> list[str]:
         """The calibrated linear parameters whose current value sits on its search bound: the
         linear calibration went as far as it may to absorb what no linear device explains (a
         resonance that moves with amplitude read as heavy damping), so a fit inside the
@@ -731,19 +714,27 @@ class View:
             and not plausible[n][0] * (1 - 1e-9) <= abs(self.current.values[n]) <= plausible[n][1] * (1 + 1e-9)
         ]
 
-    def fit_starts(self) -> list[dict[str, float] | None]:
+    def fit_starts(self, always: bool = False) -> list[dict[str, float] | None]:
         """Where a fit inside the dynamics starts its linear parameters: the calibration (None)
-        and, when the calibration ended on a search bound (:meth:`strained`) or outside the
-        plausible device (:meth:`_implausible`), the model file's values too.
+        and, when the calibration ended on a search bound (:meth:`_strained`) or outside the
+        plausible device (:meth:`_implausible`), or with ``always``, the model file's values
+        too.
+
+        Parameters
+        ----------
+        always : bool, optional
+            Start from the model file's values whatever the calibration (a fit cheap enough to
+            run twice).
 
         Returns
         -------
         list of dict or None
-            ``[None]`` or ``[None, model_file_values()]``.
+            ``[None]`` or ``[None, {name: the model file's value}]``.
         """
-        return [None] + ([self.model_file_values()] if self.strained() or self._implausible() else [])
+        again = always or self._strained() or self._implausible()
+        return [None] + ([self._model_file_values()] if again else [])
 
-    def model_file_values(self) -> dict[str, float]:
+    def _model_file_values(self) -> dict[str, float]:
         """The model file's values of the calibrated linear parameters.
 
         Returns
@@ -963,27 +954,6 @@ class View:
             )
             additive = AdditiveDrive(held.base, held.base_expr, identity, held.terms + new)
         return DriveFit(theta, phi, sol.z[:nz], values, raw, drive, sol.success, sol.message, at, additive)
-
-    def additive_expr(self, part: sp.Expr, identity: bool = True) -> sp.Expr:
-        """The drive expression after an additive extension (fitted with ``names``) adds
-        ``part``, an expression of :attr:`additive`'s ``base_expr``; with ``identity=False``
-        ``part`` replaces the base drive's own term.
-
-        Parameters
-        ----------
-        part : sympy.Expr
-            The added part, an expression of the base drive.
-        identity : bool, optional
-            Keep the base drive's own term (False: ``part`` replaces it).
-
-        Returns
-        -------
-        sympy.Expr
-            The new drive expression.
-        """
-        a = self.current.additive
-        expr = self.current.drive_expr + part
-        return expr - a.base_expr if a.identity and not identity else expr
 
     def refit_linear(self, start: Mapping[str, float], additive: bool = False) -> np.ndarray | None:
         """Raw prediction of the current model with only its calibrated linear parameters

@@ -173,7 +173,7 @@ class InputHysteresis(_DriveCandidate):
         h = model.operator("H", PrandtlIshlinskii(r, fit.coef[: len(r)], prior), B)
         if asymmetric:
             h = h + even_expr(model, "H", float(fit.coef[-1]), centre, half, B)
-        expr = view.additive_expr(h, identity=False)
+        expr = view.current.drive_plus(h, identity=False)
         view.with_drive(model, expr)
         return self.extension(view, fit, model, {**dict(zip(names, map(float, fit.coef))), "H.prior": prior}, expr)
 
@@ -251,7 +251,7 @@ class InputBoucWen(_DriveCandidate):
         z = model.state("bw.z", z_start, unit="1", doc="Bouc-Wen hysteretic variable (units of V/V_r)")
         vdot = model.input_rate(view.record.input) / vr
         model.set_rate("bw.z", vdot - b * sp.Abs(vdot) * z - g * vdot * sp.Abs(z))
-        expr = view.additive_expr(kappa * vr * z)
+        expr = view.current.drive_plus(kappa * vr * z)
         view.with_drive(model, expr)
         return self.extension(
             view, fit, model, {"bw.kappa": float(fit.coef[0]), "bw.beta": beta, "bw.gamma": gamma}, expr
@@ -378,7 +378,7 @@ class InputCreep(_DriveCandidate):
             new[f"creep.c{k}"], new[f"creep.tau{k}"] = float(fit.coef[i]), float(taus[i])
             qs.append(c * Quantity("q", f"creep.C{k}"))
         new["creep.prior"] = prior
-        expr = view.additive_expr(sum(qs))
+        expr = view.current.drive_plus(sum(qs))
         view.with_drive(model, expr)
         ext = self.extension(view, fit, model, new, expr)
         ext.values.update(new)
@@ -498,7 +498,7 @@ class _InputPolynomial(_DriveCandidate):
         )
         if even:
             curve = curve + even_expr(model, p, float(fit.coef[2]), even[1], even[2], D)
-        expr = view.additive_expr(curve)
+        expr = view.current.drive_plus(curve)
         view.with_drive(model, expr)
         return self.extension(view, fit, model, dict(zip(names, map(float, fit.coef))), expr)
 
