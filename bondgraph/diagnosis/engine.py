@@ -133,9 +133,37 @@ def _fit_candidate(cand: Candidate, view: View, res: CandidateResult) -> Outcome
         res.recalibration = cand.mimics_recalibration(view, ext)
         res.need_share = cand.linear_share
     ext.prediction = None
-    refit = view.refit_linear(ext.values, additive=ext.additive is not None)
+    refit = refit_linear(view, ext.values, additive=ext.additive is not None)
     static = cand.without_memory(view)
     return Outcome(res, ext, np.asarray(raw, float), refit, None if static is None else np.asarray(static, float))
+
+
+def refit_linear(view: View, start: Mapping[str, float], additive: bool = False) -> np.ndarray | None:
+    """Raw prediction of the current model with only its calibrated linear parameters (and,
+    with ``additive``, the weights of the additive drive's terms) refitted, from ``start``
+    (where a candidate's joint fit left them): what that refit alone explains, so that a
+    candidate is credited only with what its effect adds.  None when the current model is not
+    a drive transform of its linear core or has nothing to refit.
+
+    Parameters
+    ----------
+    view : View
+        The chain state the candidate was fitted on.
+    start : mapping of str to float
+        Start values of the parameters refitted.
+    additive : bool, optional
+        Refit the additive drive's weights too.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        The raw prediction on every sample, or None.
+    """
+    cur = view.current
+    additive = additive and bool(cur.additive and cur.additive.terms)
+    if cur.drive is None or not view.record.exact or not (cur.calibrated or additive):
+        return None
+    return view.fit_drive(start=start, max_nfev=20, names=[] if additive else None).prediction
 
 
 def effect_errors(

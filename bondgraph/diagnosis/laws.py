@@ -308,9 +308,13 @@ class LawTerm(Candidate):
             az = {el: series.get(f"diag.a:{el}") for el in els}
             return lure, xs, az, series[view.record.output]
         st = view.states()
-        xs = {el: st[view.state_of(el)] if self.element_kind == "C" else st["output rate"] for el in els}
+        xs = {el: st[view.record.state_of[el]] if self.element_kind == "C" else st["output rate"] for el in els}
         az = {
-            el: field(view)[1] if partners[el] == DRIVE else st[view.state_of(partners[el])] if partners[el] else None
+            el: field(view)[1]
+            if partners[el] == DRIVE
+            else st[view.record.state_of[partners[el]]]
+            if partners[el]
+            else None
             for el in els
         }
         return None, xs, az, None

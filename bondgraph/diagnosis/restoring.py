@@ -185,7 +185,7 @@ class RestoringHysteresis(Candidate):
         el = self._element(view.current.model)
         stiffness = abs(slope(view.current.model, el, view.current.values))
         out = self._columns(view)
-        peak = _peak(out[1]) if out is not None else _peak(view.states()[view.state_of(el)])
+        peak = _peak(out[1]) if out is not None else _peak(view.states()[view.record.state_of[el]])
         # the levels and heights that explain most to first order start the fits
         trials = [(0.0, self.levels[1], 0.1 * stiffness)]
         if out is not None:

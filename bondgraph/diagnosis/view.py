@@ -118,6 +118,9 @@ class Record:
         element-law kinds) is open.
     reduced : bool
         Fast states were residualised: the bond graph's structural elements are not all seen.
+    state_of : mapping of str to str
+        Element → the name of the (first) state it stores in the nominal model's equations
+        (the displacement of a spring, the momentum of a mass), read-only.
     """
 
     t: np.ndarray
@@ -141,6 +144,7 @@ class Record:
     noise_psd: float | None
     exact: bool
     reduced: bool
+    state_of: Mapping[str, str]
 
     @classmethod
     def of(cls, ctx: Context) -> Record:
@@ -178,6 +182,7 @@ class Record:
             ctx.noise_psd,
             ctx.lti is not None,
             bool(ctx.n_fast),
+            MappingProxyType({o: n for o, n in reversed([(s.origin, str(s.symbol)) for s in ctx.eqs.states])}),
         )
 
     def held_share(self, length: float) -> float:
@@ -955,30 +960,6 @@ class View:
             additive = AdditiveDrive(held.base, held.base_expr, identity, held.terms + new)
         return DriveFit(theta, phi, sol.z[:nz], values, raw, drive, sol.success, sol.message, at, additive)
 
-    def refit_linear(self, start: Mapping[str, float], additive: bool = False) -> np.ndarray | None:
-        """Raw prediction of the current model with only its calibrated linear parameters
-        (and, with ``additive``, the weights of the additive drive's terms) refitted, from
-        ``start`` (where a candidate's joint fit left them): what that refit alone explains,
-        so that a candidate is credited only with what its effect adds.  None when the current
-        model is not a drive transform of its linear core or has nothing to refit.
-
-        Parameters
-        ----------
-        start : mapping of str to float
-            Start values of the parameters refitted.
-        additive : bool, optional
-            Refit the additive drive's weights too.
-
-        Returns
-        -------
-        numpy.ndarray or None
-            The raw prediction on every sample, or None.
-        """
-        additive = additive and bool(self.current.additive and self.current.additive.terms)
-        if self.current.drive is None or not self.record.exact or not (self.current.calibrated or additive):
-            return None
-        return self.fit_drive(start=start, max_nfev=20, names=[] if additive else None).prediction
-
     def _identification(self, model: Model, integrate: bool = False) -> Identification:
         """An :class:`Identification` of ``model`` on the same data and split (exact linear
         route when the model is linear, unless ``integrate``).
@@ -1233,19 +1214,3 @@ class View:
         out = dict(res.states)
         out["output rate"] = np.gradient(res.outputs[self.record.output], self._ctx.t)
         return out
-
-    def state_of(self, element: str) -> str:
-        """Name of the state variable an element stores (e.g. the displacement of a spring).
-
-        Parameters
-        ----------
-        element : str
-            The element's name.
-
-        Returns
-        -------
-        str
-            The state's name.
-        """
-        eqs = self._ctx.eqs
-        return next(str(s.symbol) for s in eqs.states if s.origin == element)
