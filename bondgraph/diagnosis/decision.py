@@ -78,6 +78,25 @@ class Comparison:
     n_eff: float
 
 
+def autocovariance(x: np.ndarray) -> np.ndarray:
+    """Σ_t x(t)·x(t + k) at lags k = 0..N-1 of each column of ``x`` (the biased estimate
+    times N), by FFT with zero padding (no wrap-around).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        A series, or one series per column (samples × columns).
+
+    Returns
+    -------
+    numpy.ndarray
+        The sums, shaped like ``x``.
+    """
+    n = x.shape[0]
+    f = np.fft.rfft(x, 2 * n, axis=0)
+    return np.fft.irfft(f * np.conj(f), axis=0)[:n]
+
+
 def batch_length(d: np.ndarray, blocks: list[slice], offsets: list[int]) -> int:
     """Four times the first zero crossing of d's autocorrelation (about each block's mean).
 
@@ -99,10 +118,7 @@ def batch_length(d: np.ndarray, blocks: list[slice], offsets: list[int]) -> int:
     acf = np.zeros(longest)
     for s, o in zip(blocks, offsets):
         seg = d[o : o + (s.stop - s.start)]
-        seg = seg - seg.mean()
-        m = seg.size
-        f = np.fft.rfft(seg, 2 * m)
-        acf[:m] += np.fft.irfft(f * np.conj(f))[:m]
+        acf[: seg.size] += autocovariance(seg - seg.mean())
     if acf[0] <= 0:
         return 1
     below = np.nonzero(acf[1:] <= 0)[0]

@@ -35,6 +35,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from .candidate import Candidate
+from .decision import autocovariance
 
 
 @dataclass(frozen=True)
@@ -61,9 +62,7 @@ class FirstOrder:
 
 def _acf(x: np.ndarray) -> np.ndarray:
     """Autocorrelation of each column at lags 0..N-1 (biased, ρ(0) = 1)."""
-    n = x.shape[0]
-    f = np.fft.rfft(x, 2 * n, axis=0)
-    g = np.fft.irfft(f * np.conj(f), axis=0)[:n]
+    g = autocovariance(x)
     return g / np.where(g[:1] > 0, g[:1], 1.0)
 
 
@@ -93,20 +92,17 @@ def first_order(q: np.ndarray, r: np.ndarray, total: float, noise: float | None)
     rr = float(r0 @ r0)
     if rr <= 0 or total <= 0:
         return FirstOrder(0.0)
-    fitted = q @ np.linalg.lstsq(q, r, rcond=None)[0]
-    share = min(float(fitted @ fitted) / total, 1.0)
-    u, s, _ = np.linalg.svd(q, full_matrices=False)
+    u, s, _ = np.linalg.svd(q, full_matrices=False)  # an orthonormal basis of the columns' span
     u = u[:, s > 1e-12 * s[0]] if s.size and s[0] > 0 else u[:, :0]
     if u.shape[1] == 0:
-        return FirstOrder(share)
+        return FirstOrder(0.0)
+    products = u.T @ r0
+    share = min(float(products @ products) / total, 1.0)  # the projection's energy
     n = r0.size
-    rho_r = _acf(r0[:, None])[:, 0]
-    rho_u = _acf(u)
-    weight = np.full(n, 2.0)
-    weight[0] = 1.0  # lags ±k, k > 0, count twice
-    spread = np.maximum((weight[:, None] * rho_u * rho_r[:, None]).sum(axis=0), 1e-12)
+    both = _acf(u) * _acf(r0[:, None])
+    spread = np.maximum(2 * both.sum(axis=0) - both[0], 1e-12)  # lags ±k, k > 0, count twice
     var = rr / n if noise is None else min(rr / n, float(noise) ** 2)
-    x = float(np.sum((u.T @ r0) ** 2 / (var * spread)))
+    x = float(np.sum(products**2 / (var * spread)))
     return FirstOrder(share, float(chi2.sf(x, u.shape[1])), float(n / spread[0]))
 
 
