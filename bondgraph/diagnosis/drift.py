@@ -11,9 +11,10 @@ more often than that are not told from the dynamics and are not sought.
 
 Three rules use it: ``drift-when-nothing`` (:func:`drift_step`) names a drift when nothing else
 explains the record; ``effect-or-drift`` (:func:`drift_like`) sets a step's winner aside when
-its effect is such a curve and the drive is not (:func:`smooth_share` of the effect at least
-:data:`SMOOTH`, of the drive below :data:`SLOW_DRIVE`: the record cannot tell the effect from a
-drift, which needs no drive, so the drift is tried when nothing else is named); and the first
+its effect is such a curve, the drive is not (:func:`smooth_share` of the effect at least
+:data:`SMOOTH`, of the drive below :data:`SLOW_DRIVE`), and the curve fitted to the residual
+predicts the record as well as the winner: the record cannot tell the effect from a drift,
+which needs no drive, so the drift is tried when nothing else is named; and the first
 step asks whether a straight line explains the record as well as the best candidate
 (:func:`drift_explains`; the diagnosis then restarts with the drift solved).
 """
@@ -91,11 +92,15 @@ def smooth_share(ctx: Context, effect: np.ndarray) -> float:
     return 1.0 - float(np.sum(left[val] ** 2)) / spread if spread > 0 else 0.0
 
 
-def drift_like(ctx: Context, state: State, raw: np.ndarray) -> float | None:
+def drift_like(ctx: Context, state: State, raw: np.ndarray, rms_winner: float) -> float | None:
     """Rule ``effect-or-drift``: the :func:`smooth_share` of what a step's winner adds to the
     output (its raw prediction with the sensor gain and offset solved, less the current
-    prediction) when it is at least :data:`SMOOTH`, else None.  The engine applies it only
-    under a drive whose own smooth share is below :data:`SLOW_DRIVE`.
+    prediction) when it is at least :data:`SMOOTH` and the drift curve fitted to the current
+    residual predicts the validation part as well as the winner (validation RMS within
+    ``diagnosis.equivalent`` of ``rms_winner``), else None.  An effect that is a slow curve but
+    predicts the validation blocks better than any such curve is told from a drift by the
+    record.  The engine applies the rule only under a drive whose own smooth share is below
+    :data:`SLOW_DRIVE`.
 
     Parameters
     ----------
@@ -105,6 +110,8 @@ def drift_like(ctx: Context, state: State, raw: np.ndarray) -> float | None:
         The chain's current state.
     raw : numpy.ndarray
         The winner's raw prediction on every sample.
+    rms_winner : float
+        The winner's validation RMS (output units).
 
     Returns
     -------
@@ -113,7 +120,11 @@ def drift_like(ctx: Context, state: State, raw: np.ndarray) -> float | None:
     """
     g, b = score(ctx, raw)[:2]
     share = smooth_share(ctx, g * np.asarray(raw) + b - state.prediction)
-    return share if share >= SMOOTH else None
+    if share < SMOOTH:
+        return None
+    e_state = ctx.y - state.prediction
+    e_drift = e_state - regress(drift_basis(ctx), e_state, ctx.ident.fit_idx)
+    return share if rms(e_drift[ctx.ident.val_mask]) <= ctx.settings.equivalent * rms_winner else None
 
 
 def drift_step(ctx: Context, state: State, solved: float | None, floor: float) -> tuple[Step, np.ndarray] | None:

@@ -926,13 +926,14 @@ def _chain(
                 step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
             asides = []  # winners set aside by rule 'effect-or-drift', listed with the step
             while winner is not None and not slow_drive:
-                share = drift_like(ctx, state, winner.raw)
+                share = drift_like(ctx, state, winner.raw, winner.result.rms_validation)
                 if share is None:
                     break
                 note = (
                     f"step {k + 1}: {winner.result.cause} ({winner.result.label}, gain {winner.result.gain:.3g}) set "
                     f"aside (rule 'effect-or-drift'): {share:.1%} of its effect is a slow curve in time that the drive "
-                    f"does not follow, which the record cannot tell from a drift of the output"
+                    f"does not follow, and a drift of the output predicts the record as well: the record cannot "
+                    f"tell them apart"
                 )
                 say(note)
                 ctx.notes.append(note)
