@@ -106,24 +106,26 @@ def test_the_command_line_option_reports_the_drift(tmp_path, capsys):
 
 def test_rule_effect_or_drift_sets_aside_an_effect_that_is_a_slow_curve():
     """A record with a slow ramp the drive does not follow, and a winner whose effect is that
-    ramp: rule ``effect-or-drift`` gives its smooth share (about 1) when the drift curve predicts
-    the record as well as the winner, None when the winner predicts it clearly better; a winner
+    ramp: rule ``effect-or-drift`` gives its smooth share (about 1) when a drift predicts the
+    record as well as the winner, None when the winner predicts it clearly better; a winner
     whose effect follows the drive (a share of the drive itself) passes (None)."""
     from test_diagnose import lag_model, lag_record
 
-    from bondgraph.diagnosis.calibration import calibrate, rms
+    from bondgraph.diagnosis import View
+    from bondgraph.diagnosis.calibration import calibrate
     from bondgraph.diagnosis.context import Context
-    from bondgraph.diagnosis.decision import regress
-    from bondgraph.diagnosis.drift import SMOOTH, drift_basis, drift_like
+    from bondgraph.diagnosis.drift import SMOOTH, drift_like
 
     data = lag_record()
-    state = calibrate(Context(lag_model(), data))[0]
     t, y = data.t, data.columns["y"]
     ramp = 0.05 * np.ptp(y) * ((t - t[0]) / (t[-1] - t[0])) ** 2
     ctx = Context(lag_model(), Dataset(t, {"u": data.columns["u"], "y": y + ramp}))
-    e = ctx.y - state.prediction
-    drift_rms = rms((e - regress(drift_basis(ctx), e, ctx.ident.fit_idx))[ctx.ident.val_mask])
-    share = drift_like(ctx, state, state.raw + ramp / state.gain, drift_rms)
+    state, cal, _ = calibrate(Context(lag_model(), data))
+    view = View(ctx, state, cal.free)
+    winner = state.raw + ramp / state.gain
+    rms_winner = view.score(winner)[3]
+    share = drift_like(ctx, view, winner, rms_winner)
     assert share is not None and SMOOTH <= share <= 1.0
-    assert drift_like(ctx, state, state.raw + ramp / state.gain, drift_rms / 2) is None
-    assert drift_like(ctx, state, state.raw + 0.05 * np.asarray(ctx.u, float), drift_rms) is None
+    assert drift_like(ctx, view, winner, rms_winner / 10) is None
+    follows = state.raw + 0.05 * np.asarray(ctx.u, float)
+    assert drift_like(ctx, view, follows, view.score(follows)[3]) is None

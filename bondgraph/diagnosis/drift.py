@@ -12,8 +12,8 @@ more often than that are not told from the dynamics and are not sought.
 Three rules use it: ``drift-when-nothing`` (:func:`drift_step`) names a drift when nothing else
 explains the record; ``effect-or-drift`` (:func:`drift_like`) sets a step's winner aside when
 its effect is such a curve, the drive is not (:func:`smooth_share` of the effect at least
-:data:`SMOOTH`, of the drive below :data:`SLOW_DRIVE`), and the curve fitted to the residual
-predicts the record as well as the winner: the record cannot tell the effect from a drift,
+:data:`SMOOTH`, of the drive below :data:`SLOW_DRIVE`), and a drift predicts the record as
+well as the winner: the record cannot tell the effect from a drift,
 which needs no drive, so the drift is tried when nothing else is named; and the first
 step asks whether a straight line explains the record as well as the best candidate
 (:func:`drift_explains`; the diagnosis then restarts with the drift solved).
@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import BSpline
 
-from .calibration import rms, score
+from .calibration import rms
 from .context import Context, State
 from .decision import BASIC, Verdict, compare, judge, regress
 from .report import CandidateResult, Step
@@ -92,22 +92,24 @@ def smooth_share(ctx: Context, effect: np.ndarray) -> float:
     return 1.0 - float(np.sum(left[val] ** 2)) / spread if spread > 0 else 0.0
 
 
-def drift_like(ctx: Context, state: State, raw: np.ndarray, rms_winner: float) -> float | None:
+def drift_like(ctx: Context, view, raw: np.ndarray, rms_winner: float) -> float | None:
     """Rule ``effect-or-drift``: the :func:`smooth_share` of what a step's winner adds to the
     output (its raw prediction with the sensor gain and offset solved, less the current
-    prediction) when it is at least :data:`SMOOTH` and the drift curve fitted to the current
-    residual predicts the validation part as well as the winner (validation RMS within
-    ``diagnosis.equivalent`` of ``rms_winner``), else None.  An effect that is a slow curve but
-    predicts the validation blocks better than any such curve is told from a drift by the
-    record.  The engine applies the rule only under a drive whose own smooth share is below
-    :data:`SLOW_DRIVE`.
+    prediction) when it is at least :data:`SMOOTH` and a drift predicts the validation part as
+    well as the winner (validation RMS within ``diagnosis.equivalent`` of ``rms_winner``), else
+    None.  The drift is the curve of :func:`drift_basis` fitted with the same freedom the
+    winner had: on the exact linear route jointly with the calibrated linear parameters (a
+    drift in the record also bends the calibration), else to the current residual.  An effect
+    that is a slow curve but predicts the validation blocks better than any drift is told from
+    one by the record.  The engine applies the rule only under a drive whose own smooth share
+    is below :data:`SLOW_DRIVE`.
 
     Parameters
     ----------
     ctx : Context
         The prepared record.
-    state : State
-        The chain's current state.
+    view : View
+        The step's view of the record and the current model.
     raw : numpy.ndarray
         The winner's raw prediction on every sample.
     rms_winner : float
@@ -118,13 +120,16 @@ def drift_like(ctx: Context, state: State, raw: np.ndarray, rms_winner: float) -
     float or None
         The share (0-1) when the winner's effect cannot be told from a drift, else None.
     """
-    g, b = score(ctx, raw)[:2]
-    share = smooth_share(ctx, g * np.asarray(raw) + b - state.prediction)
+    g, b = view.score(raw)[:2]
+    share = smooth_share(ctx, g * np.asarray(raw) + b - view.current.prediction)
     if share < SMOOTH:
         return None
-    e_state = ctx.y - state.prediction
-    e_drift = e_state - regress(drift_basis(ctx), e_state, ctx.ident.fit_idx)
-    return share if rms(e_drift[ctx.ident.val_mask]) <= ctx.settings.equivalent * rms_winner else None
+    basis = drift_basis(ctx)[:, 1:]  # its columns sum to one: the offset is solved anyway
+    e = view.current.residual
+    drift_rms = rms((e - regress(basis, e, ctx.ident.fit_idx))[ctx.ident.val_mask])
+    if view.on_core:
+        drift_rms = min(drift_rms, view.score(view.fit_drive(direct=list(basis.T), max_nfev=20).prediction)[3])
+    return share if drift_rms <= ctx.settings.equivalent * rms_winner else None
 
 
 def drift_step(ctx: Context, state: State, solved: float | None, floor: float) -> tuple[Step, np.ndarray] | None:

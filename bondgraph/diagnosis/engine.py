@@ -926,7 +926,7 @@ def _chain(
                 step, winner = assess(ctx, state, view, ordered, first[0] if first else None, confirm)
             asides = []  # winners set aside by rule 'effect-or-drift', listed with the step
             while winner is not None and not slow_drive:
-                share = drift_like(ctx, state, winner.raw, winner.result.rms_validation)
+                share = drift_like(ctx, view, winner.raw, winner.result.rms_validation)
                 if share is None:
                     break
                 note = (
