@@ -5,6 +5,7 @@ residual at the floor pass at the stated rate and a related one does not fall be
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 from scipy.signal import lfilter
 
 from bondgraph.diagnosis import Settings
@@ -95,3 +96,22 @@ def test_screen_out_names_the_rule_that_left_a_candidate_out():
     assert sorted(shares) == [0, 1, 2, 3]
     assert sorted(left) == [2, 3]
     assert "rule rank" in left[2] and "rule chance" in left[3] and "p = 0.4" in left[3]
+
+
+def test_the_noise_floor_without_a_quiet_band_is_not_below_coloured_noise():
+    """On a broadband drive the screen's noise floor is the residual's part incoherent with the
+    drive: for a residual of coloured noise (an AR(1) corner far below Nyquist, RMS 1) plus a
+    filtered copy of the drive it is the noise's RMS within a few percent, where the floor of
+    the residual's spectrum (a white level at its high-frequency end) is far below it."""
+    from bondgraph.diagnosis.account import incoherent_rms
+    from bondgraph.diagnosis.context import residual_floor
+
+    rng = np.random.default_rng(3)
+    n, fs = 40000, 1000.0
+    u = rng.standard_normal(n)
+    noise = _ar(rng, n, 0.95)[:, 0]
+    noise = noise / noise.std()
+    e = noise + lfilter([0.5, 0.3], [1.0, -0.5], u)
+    assert incoherent_rms(u, e, fs) == pytest.approx(1.0, rel=0.05)
+    assert residual_floor(e, fs) < 0.5
+    assert incoherent_rms(u, noise, fs) == pytest.approx(1.0, rel=0.05)

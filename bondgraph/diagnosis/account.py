@@ -128,6 +128,28 @@ def linear_share(u: np.ndarray, e: np.ndarray, fs: float) -> float:
     return float(np.sum(coh[keep] * Pee[keep]) / total) if total > 0 else 0.0
 
 
+def incoherent_rms(u: np.ndarray, e: np.ndarray, fs: float) -> float:
+    """RMS of the part of ``e`` that no linear filter of ``u`` explains: measurement noise plus
+    any distortion nonlinear in the drive, an upper estimate of the noise on a drive that leaves
+    no quiet band (on a record with nothing to find the residual is the noise, white or
+    coloured, and all of it is incoherent with the drive).
+
+    Parameters
+    ----------
+    u, e : ndarray
+        The drive and the residual, uniformly sampled.
+    fs : float
+        Sampling rate (Hz).
+
+    Returns
+    -------
+    float
+        The RMS, in the units of ``e``.
+    """
+    e = np.asarray(e, float) - float(np.mean(e))
+    return rms(e) * math.sqrt(max(1.0 - linear_share(u, e, fs), 0.0))
+
+
 def account(u: np.ndarray, y: np.ndarray, prediction: np.ndarray, val: np.ndarray, fs: float, noise) -> Account:
     """The account of a final model's ``prediction`` of ``y`` (see the module docstring).
 

@@ -8,7 +8,9 @@ screened before any is fitted in full.
 residual than they would of measurement noise is not fitted: such a kind has nothing at its
 site to grow from.  The hypothesis tested is that the residual r is noise, a stationary random
 process with r's autocorrelation ρ_r and a variance σ² no larger than the noise floor's
-(σ² = min(var r, σ_n²), σ_n the record's noise estimate).  Residual and columns are
+(σ² = min(var r, σ_n²), σ_n the record's noise estimate: from a band the drive leaves quiet,
+else an upper estimate from the residual, the larger of its spectrum's floor and its part
+incoherent with the drive, so that coloured noise is not taken for a finding).  Residual and columns are
 correlated in time, so the product of r with a unit-norm column u scatters far more than
 σ: for independent stationary series its variance is σ²·Σ_k ρ_u(k)·ρ_r(k) over every lag k
 (Bartlett, "Some aspects of the time-correlation problem in regard to tests of

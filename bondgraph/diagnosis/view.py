@@ -17,6 +17,7 @@ from ..linear.sensitivity import sensitivity
 from ..model.graph import Model
 from ..numerics.steady import record_start, starts_steady
 from ..support.errors import BondGraphError
+from .account import incoherent_rms
 from .additive import AdditiveDrive, Term
 from .calibration import RESOLVED_COHERENCE, empirical_frf, param_bounds, resolved_spectrum, score
 from .context import Context, State, drive_held_share, residual_floor
@@ -624,12 +625,14 @@ class View:
 
     def _noise_floor(self) -> float:
         """The measurement noise's RMS (output units): the record's estimate from a band the
-        drive leaves quiet, else the floor of the current residual's spectrum (an upper
-        estimate, cached)."""
+        drive leaves quiet, else an upper estimate from the current residual: the larger of
+        its spectrum's floor and its part incoherent with the drive (cached)."""
         if self.record.noise:
             return float(self.record.noise)
         if getattr(self, "_floor", None) is None:
-            self._floor = residual_floor(np.asarray(self.current.residual, float), self.record.fs)
+            e = np.asarray(self.current.residual, float)
+            fs = self.record.fs
+            self._floor = max(residual_floor(e, fs), incoherent_rms(np.asarray(self.record.u, float), e, fs))
         return self._floor
 
     def _calibration_directions(self) -> np.ndarray:
