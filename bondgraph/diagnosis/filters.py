@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 from scipy import signal
 
 from ..linear.lti import StateSpace
@@ -34,6 +35,60 @@ def lowpass(u: np.ndarray, tau: float, dt: float) -> np.ndarray:
     b0 = tau / dt * (1.0 - a) - a
     zi = signal.lfiltic([b1, b0], [1.0, -a], [u[0]], [u[0]])
     return signal.lfilter([b1, b0], [1.0, -a], u, zi=zi)[0]
+
+
+@njit(cache=True)
+def _rate_limited(u, tau, rate, dt):
+    v = np.empty(u.size)
+    v[0] = u[0]
+    h = dt / tau
+    for k in range(1, u.size):
+        # backward Euler: g(x) = x − v[k−1] − dt·rate·tanh((u[k] − x)/(τ·rate)) = 0 is increasing
+        # in x and changes sign between v[k−1] and u[k]: Newton kept inside that bracket
+        lo, hi = min(v[k - 1], u[k]), max(v[k - 1], u[k])
+        x = v[k - 1]
+        for _ in range(60):
+            t = math.tanh((u[k] - x) / (tau * rate))
+            g = x - v[k - 1] - dt * rate * t
+            if g > 0.0:
+                hi = x
+            else:
+                lo = x
+            step = g / (1.0 + h * (1.0 - t * t))
+            nx = x - step
+            if not lo <= nx <= hi:
+                nx = 0.5 * (lo + hi)
+            if abs(nx - x) <= 1e-13 * (abs(x) + abs(u[k]) + 1e-300):
+                x = nx
+                break
+            x = nx
+        v[k] = x
+    return v
+
+
+def rate_limited(u: np.ndarray, tau: float, rate: float, dt: float) -> np.ndarray:
+    """A first-order stage whose rate saturates: v̇ = S·tanh((u − v)/(τ·S)), the voltage on a
+    capacitance charged through a series resistance by a source whose current saturates (a
+    lag 1/(τs + 1) for small steps, a slew rate S for large ones), by the backward Euler rule
+    per sample from v = u[0].
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The samples, any unit.
+    tau : float
+        Time constant τ of the unsaturated stage, s (> 0).
+    rate : float
+        The largest rate S, units of u per s (> 0).
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        The stage's output at the samples, units of ``u`` (unit static gain).
+    """
+    return _rate_limited(np.ascontiguousarray(u, dtype=np.float64), float(tau), float(rate), float(dt))
 
 
 def resonator(u: np.ndarray, dt: float, omega: float, zeta: float, velocity: bool = False) -> np.ndarray:

@@ -4,8 +4,8 @@ papers that produces it.
 
 * :mod:`.drive` — effects on the drive (rate-independent hysteresis as a Prandtl–Ishlinskii
   operator or a Bouc–Wen state, creep as a Kelvin–Voigt relaxation spectrum, saturating or
-  expanding polarization, an RC or RLC input stage): the linear core sees a transformed drive, so
-  they are fitted exactly through its linear dynamics;
+  expanding polarization, an RC or RLC input stage, a current-limited one): the linear core
+  sees a transformed drive, so they are fitted exactly through its linear dynamics;
 * :mod:`.circuit` — a series inductance in the drive's own electrical loop (its resistance
   refitted): a linear rewrite that keeps the actuator's current, fitted on the exact linear route;
 * :mod:`.structure` — nonlinear laws of a piezo layer's own elements: a dipole that saturates
@@ -21,7 +21,16 @@ public contract and are registered through the entry point ``bondgraph.diagnosis
 from bondgraph.diagnosis.modes import OutputMode, ParallelMode
 
 from .circuit import LoopInductance
-from .drive import InputBoucWen, InputCreep, InputExpansion, InputHysteresis, InputRC, InputRLC, InputSaturation
+from .drive import (
+    InputBoucWen,
+    InputCreep,
+    InputCurrentLimit,
+    InputExpansion,
+    InputHysteresis,
+    InputRC,
+    InputRLC,
+    InputSaturation,
+)
 from .structure import FieldStiffness, FrictionDamping, NonlinearDamping, PolarizationSaturation, StiffnessSoftening
 
 __all__ = [
@@ -33,6 +42,7 @@ __all__ = [
     "InputHysteresis",
     "InputRC",
     "InputRLC",
+    "InputCurrentLimit",
     "InputSaturation",
     "LoopInductance",
     "NonlinearDamping",
@@ -54,6 +64,7 @@ def candidates() -> list:
         InputExpansion(),
         InputRC(),
         InputRLC(),
+        InputCurrentLimit(),
         LoopInductance(),
         PolarizationSaturation(),
         FieldStiffness(),

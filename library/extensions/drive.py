@@ -19,7 +19,7 @@ import sympy as sp
 
 from bondgraph import J0, J1, C, I, Quantity, R, Se
 from bondgraph.diagnosis import LINEAR, NOT_A_DRIVE, Candidate, Extension, Term
-from bondgraph.diagnosis.filters import lowpass, resonator
+from bondgraph.diagnosis.filters import lowpass, rate_limited, resonator
 from library.hysteresis import PrandtlIshlinskii, bouc_wen_response, play_outputs, threshold_grid
 
 from .circuit import not_a_voltage
@@ -601,6 +601,80 @@ class InputRC(_ElectricalStage):
         if f > 0.45 * view.record.fs:
             return f"its corner ({f:.3g} Hz) is above the data's band"
         return ""
+
+
+class InputCurrentLimit(_ElectricalStage):
+    """A current-limited input stage: the drive charges a capacitance through a series
+    resistance from a source whose output current saturates (an amplifier's current limit
+    into a capacitive load), i = I_max·tanh(e_R/(R·I_max)), so that the stage is the RC lag
+    u = d/(1 + sRC) for small steps and follows large ones at the slew rate S = I_max/C.  The
+    lag and the slew rate are fitted through the linear core; a lag at its lower bound is a
+    pure slew-rate limit, a slew rate at its upper bound no limit at all (the RC stage's
+    business, not this one's).  On a voltage drive only.
+    """
+
+    cause = "electrical-rc"
+    label = "current-limited input stage (slew rate)"
+    cap = 1e-6
+    #: slew rates tried first, from one swing of the drive over the record to twice the
+    #: drive's fastest rate between samples (no limit)
+    rates = 10
+    lags = 4
+
+    def _bounds(self, view, d):
+        dt = view.record.dt
+        span = float(view.record.t[-1] - view.record.t[0])
+        fastest = float(np.max(np.abs(np.diff(d)))) / dt if d.size > 1 else 1.0
+        swing = float(np.ptp(d)) / span
+        return (dt / 10, span / 20), (max(swing, 1e-300), max(2.0 * fastest, 2.0 * swing, 1e-300))
+
+    def fit(self, view):
+        d = np.asarray(view.current.drive, float)
+        dt = view.record.dt
+        (tlo, thi), (slo, shi) = self._bounds(view, d)
+        if shi <= slo:
+            raise ValueError("the drive does not move: no slew rate to fit")
+        grid = [(t, r) for t in np.geomspace(tlo, thi, self.lags) for r in np.geomspace(slo, shi, self.rates)]
+        idx = view.record.fit_idx
+        Y = view.respond([rate_limited(d, t, r, dt) for t, r in grid])
+        sse = []
+        for j in range(len(grid)):
+            A = np.column_stack([Y[idx, j], np.ones(idx.size)])
+            res = np.linalg.lstsq(A, view.record.y[idx], rcond=None)[1]
+            sse.append(float(res[0]) if res.size else math.inf)
+        t0, r0 = grid[int(np.argmin(sse))]
+        fit = view.fit_drive(
+            lambda z: [rate_limited(d, math.exp(z[0]), math.exp(z[1]), dt)],
+            [-np.inf],
+            [np.inf],
+            identity=False,
+            z0=[math.log(t0), math.log(r0)],
+            z_bounds=[(math.log(tlo), math.log(thi)), (math.log(slo), math.log(shi))],
+            z_names=["cl.R", "cl.Imax"],
+        )
+        tau, rate = math.exp(fit.z[0]), math.exp(fit.z[1])
+        # a lag at its lower end is a pure slew-rate limit, not a search limit
+        fit.at_bounds = [n for n in fit.at_bounds if not (n == "cl.R" and tau < 2 * tlo)]
+        model = view.rewrite()
+        Rs = model.parameter("cl.R", tau / self.cap, "ohm", "series resistance of the input stage", bounds=(0, 1e12))
+        Imax = model.parameter(
+            "cl.Imax", rate * self.cap, "A", "largest current of the stage's source", bounds=(0, 1e12)
+        )
+        Cs = model.parameter("cl.C", self.cap, "F", "capacitance of the input stage (only R·C and I_max/C matter)")
+        model.add(
+            Se("cl.src", view.current.drive_expr),
+            J1("cl.i"),
+            R("cl.Rs", conductance_law=lambda e: Imax * sp.tanh(e / (Rs * Imax))),
+            J0("cl.node"),
+            C("cl.C", Cs, q0=Cs * float(d[0])),
+        )
+        model.chain("cl.src", "cl.i", "cl.node", "cl.C")
+        model.bond("cl.i", "cl.Rs")
+        expr = Quantity("e", "cl.C")
+        view.with_drive(model, expr)
+        fit.drive = rate_limited(d, tau, rate, dt)
+        fit.prediction = view.respond([fit.drive], fit.values)[:, 0] + view.current.extra
+        return self.extension(view, fit, model, {"cl.R": tau / self.cap, "cl.Imax": rate * self.cap}, expr)
 
 
 class InputRLC(_ElectricalStage):
