@@ -324,3 +324,20 @@ def test_a_site_is_named_by_its_element_unless_several_share_it():
     g.tag("spring1", "stiffness")
     ((name, elements),) = [(s.name, s.elements) for s in element_sites(g, ("C",))]
     assert name == "stiffness" and elements == ("spring1", "spring2")
+
+
+def test_an_extended_model_whose_equations_do_not_derive_keeps_its_diagnosis(monkeypatch):
+    """A law term fitted on the Lur'e route can give a bond graph whose causality the
+    derivation cannot resolve (a velocity-cubic damper beside a stack's stiffness did, on an
+    APA record): the diagnosis stands, and a note says the equations could not be derived."""
+    import bondgraph.equations.derivation as derivation
+    from bondgraph.support.errors import CausalityError
+
+    def refuse(model, *args, **kwargs):
+        raise CausalityError(f"{model.name}: derivative causality cannot be resolved")
+
+    monkeypatch.setattr(derivation, "derive", refuse)
+    rep = diagnose(oscillator(), one_sided_record(), workers=1, chain=False)
+    assert rep.as_json()["cause"] == "hardening", rep.text()
+    assert rep.equations in (None, "")
+    assert any("equations could not be derived" in n for n in rep.notes)

@@ -1022,7 +1022,13 @@ def _chain(
             from ..equations.derivation import derive
             from ..equations.printing import render
 
-            report.equations = render(derive(ext_model), "text")
+            try:
+                report.equations = render(derive(ext_model), "text")
+            except BondGraphError as exc:  # the fits ran on the Lur'e route; the bond graph itself may not derive
+                report.notes.append(
+                    f"the extended model's equations could not be derived ({exc}); its fits and predictions "
+                    f"ran on the Lur'e route, which does not need them"
+                )
         if not ctx.n_fast and len(ctx.t) <= 200_000:
             report.extended_rms_integrated = _integrated(ctx, ext_model, state)
     report.seconds = time.time() - started
