@@ -13,8 +13,8 @@ Three rules use it: ``drift-when-nothing`` (:func:`drift_step`) names a drift wh
 explains the record; ``effect-or-drift`` (:func:`drift_like`) sets a step's winner aside when
 its effect is such a curve, the drive is not (:func:`smooth_share` of the effect at least
 :data:`SMOOTH`, of the drive below :data:`SLOW_DRIVE`), and a drift predicts the record as
-well as the winner: the record cannot tell the effect from a drift,
-which needs no drive, so the drift is tried when nothing else is named; and the first
+well as the winner: the record cannot tell the effect from a drift, which needs no drive, so
+the drift is tried when nothing else is named; and the first
 step asks whether a straight line explains the record as well as the best candidate
 (:func:`drift_explains`; the diagnosis then restarts with the drift solved).
 """

@@ -75,6 +75,20 @@ def best_on_grid(view, basis_of, grid, **fit_args):
     return min(grid, key=cost)
 
 
+def best_response(view, drives) -> int:
+    """Index of the drive of ``drives`` whose response through the linear core, with a sensor
+    gain and offset solved (one linear least-squares solve each, the linear parameters held),
+    fits the fit part best: the start of a stage's parameters."""
+    idx = view.record.fit_idx
+    Y = view.respond(drives)
+    sse = []
+    for j in range(Y.shape[1]):
+        A = np.column_stack([Y[idx, j], np.ones(idx.size)])
+        res = np.linalg.lstsq(A, view.record.y[idx], rcond=None)[1]
+        sse.append(float(res[0]) if res.size else math.inf)
+    return int(np.argmin(sse))
+
+
 def even_term(base) -> tuple[np.ndarray, float, float]:
     """(column, c, h): the memoryless even term h·((d − c)/h)² of the drive d about the centre c
     of its range (half range h), in drive units: what makes a loop or a static curve of the
@@ -557,14 +571,7 @@ class InputRC(_ElectricalStage):
         d = np.asarray(view.current.drive)
         lo, hi = self._range(view)
         taus = np.geomspace(lo, hi, 16)
-        idx = view.record.fit_idx
-        Y = view.respond([lowpass(d, tau, view.record.dt) for tau in taus])
-        sse = []
-        for j in range(len(taus)):
-            A = np.column_stack([Y[idx, j], np.ones(idx.size)])
-            res = np.linalg.lstsq(A, view.record.y[idx], rcond=None)[1]
-            sse.append(float(res[0]) if res.size else math.inf)
-        tau0 = float(taus[int(np.argmin(sse))])
+        tau0 = float(taus[best_response(view, [lowpass(d, tau, view.record.dt) for tau in taus])])
         fit = view.fit_drive(
             lambda z: [lowpass(d, math.exp(z[0]), view.record.dt)],
             [-np.inf],
@@ -635,14 +642,7 @@ class InputCurrentLimit(_ElectricalStage):
         if shi <= slo:
             raise ValueError("the drive does not move: no slew rate to fit")
         grid = [(t, r) for t in np.geomspace(tlo, thi, self.lags) for r in np.geomspace(slo, shi, self.rates)]
-        idx = view.record.fit_idx
-        Y = view.respond([rate_limited(d, t, r, dt) for t, r in grid])
-        sse = []
-        for j in range(len(grid)):
-            A = np.column_stack([Y[idx, j], np.ones(idx.size)])
-            res = np.linalg.lstsq(A, view.record.y[idx], rcond=None)[1]
-            sse.append(float(res[0]) if res.size else math.inf)
-        t0, r0 = grid[int(np.argmin(sse))]
+        t0, r0 = grid[best_response(view, [rate_limited(d, t, r, dt) for t, r in grid])]
         fit = view.fit_drive(
             lambda z: [rate_limited(d, math.exp(z[0]), math.exp(z[1]), dt)],
             [-np.inf],
