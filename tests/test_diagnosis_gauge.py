@@ -17,7 +17,7 @@ from scipy.signal import lsim
 import bondgraph as bg
 from bondgraph.data import Dataset
 from bondgraph.diagnosis.context import Context
-from bondgraph.diagnosis.gauge import fix_scales, scale_symmetries
+from bondgraph.diagnosis.gauge import fix_scales, scale_start, scale_symmetries
 
 FS = 2000.0
 
@@ -93,3 +93,46 @@ def test_no_symmetry_when_a_mass_is_held():
     )
     values = {"k1": 2.6e4, "c1": 3.0}
     assert scale_symmetries(ctx, ["k1", "c1"], values, ctx.ident.predict(values)) == []
+
+
+def test_the_scale_start_carries_the_calibrated_values_back_with_a_parameter_held():
+    """The mass held at the model file's value, the stiffness and damping calibrated 7x too
+    stiff (as a calibration that slid along the whole set's symmetry leaves them): the start
+    moves the calibrated two by one factor to the model file's scale, the held mass where it
+    is; within narrower bounds the start is clipped onto them."""
+    model = msd()
+    ctx = Context(
+        model, record([1.0], [0.6, 3.0, 2.6e4], "F", "x"), "F", "x", None, None, 0.3, lambda s: None, "linear"
+    )
+    names, free = ["m1", "k1", "c1"], ["k1", "c1"]
+    nominal = {n: ctx.ident.current(n) for n in names}
+    values = {"m1": nominal["m1"], "k1": 7 * 1.3 * nominal["k1"], "c1": 7 / 1.3 * nominal["c1"]}
+    raw = ctx.ident.predict(values)
+    wide = {n: (nominal[n] / 100, nominal[n] * 100) for n in free}
+    start = scale_start(ctx, names, free, values, raw, nominal, {n: 1.5 for n in free}, wide)
+    assert set(start) == set(free)
+    assert start["k1"] == pytest.approx(1.3 * nominal["k1"], rel=1e-9)  # the shape kept: k/c
+    assert start["c1"] == pytest.approx(nominal["c1"] / 1.3, rel=1e-9)
+    narrow = {n: (nominal[n] / 1.2, nominal[n] * 1.2) for n in free}
+    start = scale_start(ctx, names, free, values, raw, nominal, {n: 1.5 for n in free}, narrow)
+    assert start["k1"] == pytest.approx(1.2 * nominal["k1"], rel=1e-12)
+    assert start["c1"] == pytest.approx(nominal["c1"] / 1.2, rel=1e-12)
+
+
+def test_no_scale_start_without_a_symmetry_of_the_whole_set():
+    """The RLC circuit's symmetry needs R, L and 1/C together; with only R given, none moves."""
+    model = rlc()
+    ctx = Context(
+        model,
+        record([1.0], [0.06 * 1.5e-5, 12.0 * 1.5e-5, 1.0], "V", "vC"),
+        "V",
+        "vC",
+        None,
+        None,
+        0.3,
+        lambda s: None,
+        "linear",
+    )
+    values = {"R": 12.0}
+    raw = ctx.ident.predict(values)
+    assert scale_start(ctx, ["R"], ["R"], values, raw, {"R": 10.0}, {"R": 1.5}, {"R": (1.0, 100.0)}) is None

@@ -45,7 +45,7 @@ from ..fit.identify import Spec
 from ..linear.sensitivity import sensitivity
 from ..support.errors import UsageError
 from .context import SENSOR_GAIN, Context, State, welch, welch_length
-from .gauge import fix_scales
+from .gauge import fix_scales, scale_start
 from .pool import fork_map
 from .projection import forward_differences, projected_fit
 
@@ -1030,13 +1030,17 @@ def calibrate(
         for n in free
     ]
     pz0 = np.array([s.to_z(s.start) for s in pspecs])
+    pstarts = [np.array([s.to_z(nominal[s.name]) for s in pspecs])]
+    along = scale_start(ctx, names, free, values, raw, nominal, factors, plausible)
+    if along is not None:  # the calibration's shape at the model file's scale
+        pstarts.append(np.array([s.to_z(along[s.name]) for s in pspecs]))
     pvalues, _, praw, psol, _ = _fit(
         ctx,
         pspecs,
         nominal,
         pz0,
         resample=False,
-        starts=[np.array([s.to_z(nominal[s.name]) for s in pspecs])],
+        starts=pstarts,
         workers=workers,
     )
     pvalues, praw, _ = fix_scales(ctx, free, pvalues, praw, nominal, factors, plausible)

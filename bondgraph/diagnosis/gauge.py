@@ -108,6 +108,20 @@ def scale_symmetries(
     return found
 
 
+def _nearest(
+    e: np.ndarray,
+    names: Sequence[str],
+    values: Mapping[str, float],
+    nominal: Mapping[str, float],
+    factors: Mapping[str, float],
+) -> float:
+    """The step τ along the exponents ``e`` (parameter i times exp(e[i]·τ)) to the point
+    nearest ``nominal``: the least squares of the log-ratios, each weighted by 1/log(factor)²."""
+    d = np.array([math.log(abs(values[n]) / abs(nominal[n])) for n in names])
+    w = np.array([1.0 / max(math.log(factors[n]), 1e-3) ** 2 for n in names])
+    return -float(np.sum(w * e * d) / max(float(np.sum(w * e * e)), 1e-300))
+
+
 def fix_scales(
     ctx: Context,
     names: Sequence[str],
@@ -150,9 +164,7 @@ def fix_scales(
     out = dict(values)
     found = scale_symmetries(ctx, names, out, raw)
     for e in found:
-        d = np.array([math.log(abs(out[n]) / abs(nominal[n])) for n in names])
-        w = np.array([1.0 / max(math.log(factors[n]), 1e-3) ** 2 for n in names])
-        tau = -float(np.sum(w * e * d) / np.sum(w * e * e))
+        tau = _nearest(e, names, out, nominal, factors)
         lo, hi = -math.inf, math.inf  # keep every parameter within its bounds
         for i, n in enumerate(names):
             if e[i]:
@@ -165,3 +177,66 @@ def fix_scales(
         if _proportional(ctx, raw, moved_raw):
             out, raw = moved, moved_raw
     return out, raw, found
+
+
+def scale_start(
+    ctx: Context,
+    names: Sequence[str],
+    free: Sequence[str],
+    values: Mapping[str, float],
+    raw: np.ndarray,
+    nominal: Mapping[str, float],
+    factors: Mapping[str, float],
+    bounds: Mapping[str, tuple[float, float]],
+) -> dict[str, float] | None:
+    """A start for a fit of the calibrated parameters ``free`` within ``bounds``: the
+    calibration moved along each exact scale symmetry of the whole parameter set ``names``
+    (held parameters included, at their values), the calibrated parameters alone moved, to
+    the point nearest ``nominal``, then clipped into ``bounds``.
+
+    When parameters are held, the calibrated ones have no exact symmetry of their own and
+    :func:`fix_scales` finds none; yet the held ones often barely touch the output (a mode
+    above the drive's band), so the calibration can slide far along the whole set's symmetry,
+    every calibrated value off by about one factor, and end outside the parameters'
+    tolerances while the data say nothing about that factor.  A fit confined to the
+    tolerances and started from their edges stays in a local minimum there; this start
+    carries the calibration's shape back to the model file's scale.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    names : sequence of str
+        Every linear parameter of the model.
+    free : sequence of str
+        The calibrated ones.
+    values : mapping of str to float
+        The values of every name (the held ones at the model file's).
+    raw : numpy.ndarray
+        The raw prediction at ``values``.
+    nominal : mapping of str to float
+        The model file's values.
+    factors : mapping of str to float
+        The plausible spread (×/÷) of each calibrated parameter.
+    bounds : mapping of str to tuple of float
+        Bounds of each calibrated parameter's magnitude.
+
+    Returns
+    -------
+    dict of str to float or None
+        The calibrated parameters' start values; None without a symmetry that moves them.
+    """
+    names, free = list(names), list(free)
+    found = scale_symmetries(ctx, names, values, raw)
+    out = {n: values[n] for n in free}
+    moved = False
+    for e in found:
+        ef = np.array([e[names.index(n)] for n in free])
+        if not np.any(ef):
+            continue
+        tau = _nearest(ef, free, out, nominal, factors)
+        out = {n: out[n] * math.exp(ef[i] * tau) for i, n in enumerate(free)}
+        moved = True
+    if not moved:
+        return None
+    return {n: math.copysign(min(max(abs(v), bounds[n][0]), bounds[n][1]), v) for n, v in out.items()}
