@@ -15,6 +15,9 @@ keeps one only if scaling along it by ×2 leaves the output exactly proportional
 then moves the calibration along each, to the point nearest the model file's values in the
 parameters' tolerances (the weighted least squares of their log-ratios), within the search
 bounds.  The fitted output is unchanged: this chooses among equal answers, it fits nothing.
+:func:`scale_start` does the same along the symmetries of the whole parameter set, held
+parameters included, for a start of the plausible device's fit (the calibrated parameters
+alone have none of their own when some are held).
 """
 
 from __future__ import annotations
