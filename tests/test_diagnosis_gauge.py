@@ -95,28 +95,37 @@ def test_no_symmetry_when_a_mass_is_held():
     assert scale_symmetries(ctx, ["k1", "c1"], values, ctx.ident.predict(values)) == []
 
 
-def test_the_scale_start_carries_the_calibrated_values_back_with_a_parameter_held():
-    """The mass held at the model file's value, the stiffness and damping calibrated 7x too
-    stiff (as a calibration that slid along the whole set's symmetry leaves them): the start
-    moves the calibrated two by one factor to the model file's scale, the held mass where it
-    is; within narrower bounds the start is clipped onto them."""
+def test_the_scale_start_carries_every_value_back_with_a_parameter_held():
+    """The damping held at the model file's value, the mass and stiffness calibrated ×0.31
+    (a calibration that slid along the whole set's symmetry until the device scaled by 0.31
+    has the held damping: the true damping is 1/0.31 times the model file's): the start moves
+    every parameter, the held damping included, by one factor to the point nearest the model
+    file's values, so the output is unchanged and the device is found at its own scale; within
+    narrower bounds the start is clipped onto them."""
     model = msd()
     ctx = Context(
         model, record([1.0], [0.6, 3.0, 2.6e4], "F", "x"), "F", "x", None, None, 0.3, lambda s: None, "linear"
     )
-    names, free = ["m1", "k1", "c1"], ["k1", "c1"]
+    names = ["m1", "k1", "c1"]
     nominal = {n: ctx.ident.current(n) for n in names}
-    values = {"m1": nominal["m1"], "k1": 7 * 1.3 * nominal["k1"], "c1": 7 / 1.3 * nominal["c1"]}
+    truth = {"m1": 1.1 * nominal["m1"], "k1": 0.9 * nominal["k1"], "c1": 3.2 * nominal["c1"]}
+    values = {n: truth[n] * nominal["c1"] / truth["c1"] for n in names}  # slid: c1 at the model's
     raw = ctx.ident.predict(values)
-    wide = {n: (nominal[n] / 100, nominal[n] * 100) for n in free}
-    start = scale_start(ctx, names, free, values, raw, nominal, {n: 1.5 for n in free}, wide)
-    assert set(start) == set(free)
-    assert start["k1"] == pytest.approx(1.3 * nominal["k1"], rel=1e-9)  # the shape kept: k/c
-    assert start["c1"] == pytest.approx(nominal["c1"] / 1.3, rel=1e-9)
-    narrow = {n: (nominal[n] / 1.2, nominal[n] * 1.2) for n in free}
-    start = scale_start(ctx, names, free, values, raw, nominal, {n: 1.5 for n in free}, narrow)
-    assert start["k1"] == pytest.approx(1.2 * nominal["k1"], rel=1e-12)
-    assert start["c1"] == pytest.approx(nominal["c1"] / 1.2, rel=1e-12)
+    factors = {"m1": 1.2, "k1": 1.5, "c1": 4.0}
+    wide = {n: (nominal[n] / 100, nominal[n] * 100) for n in names}
+    start = scale_start(ctx, names, values, raw, nominal, factors, wide)
+    assert set(start) == set(names)
+    moved = ctx.ident.predict(start)
+    g = float(moved @ raw / (moved @ moved))
+    assert np.linalg.norm(g * moved - raw) <= 1e-6 * np.linalg.norm(raw)  # the output unchanged
+    s = start["m1"] / truth["m1"]  # the device at one scale (which the data cannot tell) ...
+    for n in names:
+        assert start[n] / truth[n] == pytest.approx(s, rel=1e-9)
+        assert nominal[n] / factors[n] < start[n] < nominal[n] * factors[n]  # ... a plausible one
+    assert s == pytest.approx(0.926, abs=0.01)  # nearest: the narrow mass and stiffness weigh most
+    narrow = {n: (nominal[n] / 1.2, nominal[n] * 1.2) for n in names}
+    start = scale_start(ctx, names, values, raw, nominal, factors, narrow)
+    assert start["c1"] == pytest.approx(1.2 * nominal["c1"], rel=1e-12)
 
 
 def test_no_scale_start_without_a_symmetry_of_the_whole_set():
@@ -135,4 +144,4 @@ def test_no_scale_start_without_a_symmetry_of_the_whole_set():
     )
     values = {"R": 12.0}
     raw = ctx.ident.predict(values)
-    assert scale_start(ctx, ["R"], ["R"], values, raw, {"R": 10.0}, {"R": 1.5}, {"R": (1.0, 100.0)}) is None
+    assert scale_start(ctx, ["R"], values, raw, {"R": 10.0}, {"R": 1.5}, {"R": (1.0, 100.0)}) is None

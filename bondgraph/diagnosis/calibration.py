@@ -8,7 +8,10 @@
    model file's ``CALIBRATE`` patterns first, then by size); the others are held at the
    model's values and reported with the reason.  After the fit, a held parameter whose
    sensitivity alone explains a share ``diagnosis.residual_share`` of the residual is
-   calibrated too (the pivots compare parameters with each other, the residual asks the data).
+   calibrated too (the pivots compare parameters with each other, the residual asks the data),
+   and so is one whose change across its tolerance moves the output by
+   ``diagnosis.tolerance_z`` times the calibrated model's residual (:func:`visible_within_tolerance`:
+   the data pin it down within a plausible device's spread).
 2. **Bounds.**  Within ×/÷ ``diagnosis.spread`` of the model's values and the parameter's
    declared bounds; the sensor gain and offset are free.  The output's delay behind the drive
    (the measurement chain's: sensor electronics, sampling skew) is solved within ±0.5 sample
@@ -28,7 +31,8 @@
    ``TOLERANCE``, else ``diagnosis.tolerance``: manufacturing spread) make the null an
    implausible device; the calibration within tolerance is then fitted too, and linear
    structural causes must explain what the implausible values explain (an input stage or a
-   missing mode can hide behind a 7× capacitance).
+   missing mode can hide behind a 7× capacitance).  Its held parameters are held where the
+   whole set's scale symmetry takes them (:func:`~bondgraph.diagnosis.gauge.scale_start`).
 """
 
 from __future__ import annotations
@@ -309,6 +313,25 @@ def select(S: np.ndarray, names: Sequence[str], priority: Sequence[str], tol: fl
     return [names[k] for k in kept], held
 
 
+def _held_columns(ctx: Context, names: Sequence[str], free: Sequence[str], held: Mapping[str, str], values: dict, sol):
+    """The held parameters the residual may ask for, and what :func:`residual_asks` and
+    :func:`visible_within_tolerance` weigh them by: (names, their sensitivities at the
+    calibrated values with the movable kept ones', the sensor gain's and the offset's projected
+    out, the same before the projection, the residual on the fit part with them projected out,
+    its energy before); None when there is nothing to ask."""
+    cands = [n for n in held if n in names and held[n] != NO_EFFECT]
+    idx = ctx.ident.fit_idx
+    r = (ctx.y - sol.columns @ sol.coef)[idx]
+    energy = float(r @ r)
+    if not cands or energy <= 0:
+        return None
+    S = sensitivities(ctx, list(free) + cands, values, sol.columns[:, 0]) * float(sol.coef[0])
+    movable = [i for i in range(len(free)) if i not in sol.at_bounds]
+    Q, _ = np.linalg.qr(np.column_stack([sol.columns[idx], S[:, movable]]))
+    C = S[:, len(free) :]
+    return cands, C - Q @ (Q.T @ C), C, r - Q @ (Q.T @ r), energy
+
+
 def residual_asks(
     ctx: Context, names: Sequence[str], free: Sequence[str], held: Mapping[str, str], values: dict, sol
 ) -> dict[str, float]:
@@ -344,22 +367,11 @@ def residual_asks(
         Held name → the factor one step would move it by.
     """
     share = ctx.settings.residual_share
-    cands = [n for n in held if n in names and held[n] != NO_EFFECT]
-    if not cands or not share < 1:
+    columns = _held_columns(ctx, names, free, held, values, sol) if share < 1 else None
+    if columns is None:
         return {}
-    idx = ctx.ident.fit_idx
-    raw = sol.columns[:, 0]
-    r = (ctx.y - sol.columns @ sol.coef)[idx]
-    energy = float(r @ r)
-    if energy <= 0:
-        return {}
-    S = sensitivities(ctx, list(free) + cands, values, raw) * float(sol.coef[0])
-    movable = [i for i in range(len(free)) if i not in sol.at_bounds]
-    Q, _ = np.linalg.qr(np.column_stack([sol.columns[idx], S[:, movable]]))
-    r = r - Q @ (Q.T @ r)
-    C = S[:, len(free) :]
-    full = np.linalg.norm(C, axis=0)
-    C = C - Q @ (Q.T @ C)
+    cands, C, full, r, energy = columns
+    full = np.linalg.norm(full, axis=0)
     limit = math.log(ctx.settings.spread)
     asked: dict[str, float] = {}
     while True:  # ends: each round asks for one more parameter or stops
@@ -377,6 +389,75 @@ def residual_asks(
         r = r - q * (q @ r)
         C = C - np.outer(q, q @ C)
     return asked
+
+
+def visible_within_tolerance(
+    ctx: Context,
+    names: Sequence[str],
+    free: Sequence[str],
+    held: Mapping[str, str],
+    values: dict,
+    sol,
+    factors: Mapping[str, float],
+    sigma: float,
+) -> dict[str, float]:
+    """Held parameters whose effect within their tolerance stands above the residual: greedily,
+    the held parameter whose sensitivity (per unit of its logarithm, at the calibrated values,
+    with the kept ones', the sensor gain's, the offset's and those taken before projected out)
+    times the logarithm of its tolerance factor has an RMS of at least
+    ``diagnosis.tolerance_z`` times ``sigma``, the calibrated model's residual RMS on the fit
+    part (at least the noise floor).  Its least-squares estimate then has a standard error of
+    at most 1/``tolerance_z`` of its tolerance, the residual taken for noise, so the record pins
+    it down within a plausible device's spread.  The residual, not the noise floor alone, is
+    the yardstick: with an effect in the record the residual is mostly that effect, and a
+    parameter whose small effect stands above the noise but not above the misfit would only
+    stand in for it (a resistor's lag for a hysteresis loop).  The pivot rule of :func:`select` measures
+    a sensitivity against the largest, not against the noise: on a clean record a parameter
+    with a thousandth of the first mode's effect can be half the residual, and a structural
+    cause then stands in for it.
+
+    Parameters
+    ----------
+    ctx : Context
+        The prepared record.
+    names : sequence of str
+        Every linear parameter.
+    free : sequence of str
+        The calibrated ones.
+    held : mapping of str to str
+        The held ones, with why.
+    values : dict
+        The calibrated values.
+    sol : Projected
+        The calibration's solution.
+    factors : mapping of str to float
+        Each held parameter's tolerance factor (×/÷).
+    sigma : float
+        The residual's RMS (at least the noise floor's), output units.
+
+    Returns
+    -------
+    dict of str to float
+        Held name → its effect within tolerance in units of ``sigma``.
+    """
+    z = ctx.settings.tolerance_z
+    columns = _held_columns(ctx, names, free, held, values, sol) if sigma > 0 and math.isfinite(z) else None
+    if columns is None:
+        return {}
+    cands, C, _, _, _ = columns
+    width = np.array([math.log(factors[n]) for n in cands]) / (sigma * math.sqrt(C.shape[0]))
+    seen: dict[str, float] = {}
+    while True:  # ends: each round takes one more parameter or stops
+        nc = np.linalg.norm(C, axis=0)
+        stand = nc * width
+        stand[[cands.index(n) for n in seen]] = -1.0
+        j = int(np.argmax(stand))
+        if stand[j] < z:
+            break
+        seen[cands[j]] = float(stand[j])
+        q = C[:, j] / nc[j]
+        C = C - np.outer(q, q @ C)
+    return seen
 
 
 def _delay_identifiable(
@@ -943,7 +1024,7 @@ def calibrate(
         values, delay, raw, sol, route = _fit(ctx, specs, nominal, z0, drift=drift, workers=workers)
     ctx.set_delay(delay)
     asked = residual_asks(ctx, names, free, held, values, sol)
-    if asked:  # the delay stays at its solved value (ctx); the fit goes on from this one
+    if asked:
         what = (
             f"{', '.join(asked)} calibrated after all: the first calibration's residual asks for "
             f"{'it' if len(asked) == 1 else 'them'} ({', '.join(f'a step ×{f:.3g}' for f in asked.values())})"
@@ -952,6 +1033,21 @@ def calibrate(
         ctx.notes.append(what)
         for n in asked:
             held.pop(n)
+    sigma = max(ctx.noise or 0.0, rms((ctx.y - sol.columns @ sol.coef)[ctx.ident.fit_idx]))
+    held_factors = tolerances(list(held), tolerance, ctx.settings.tolerance)
+    seen = visible_within_tolerance(ctx, names, free + list(asked), held, values, sol, held_factors, sigma)
+    if seen:
+        what = (
+            f"{', '.join(seen)} calibrated after all: within {'its' if len(seen) == 1 else 'their'} "
+            f"tolerance {'it moves' if len(seen) == 1 else 'they move'} the output by "
+            f"{', '.join(f'{z:.3g}' for z in seen.values())} × the calibrated model's residual"
+        )
+        say(what)
+        ctx.notes.append(what)
+        for n in seen:
+            held.pop(n)
+    asked = {**asked, **dict.fromkeys(seen, 1.0)}
+    if asked:  # the delay stays at its solved value (ctx); the fit goes on from this one
         free = free + list(asked)
         bounds.update({n: param_bounds(ctx, n, nominal[n]) for n in asked})
         specs = [Spec(n, nominal[n], *bounds[n], log=True) for n in free]
@@ -1031,13 +1127,27 @@ def calibrate(
     ]
     pz0 = np.array([s.to_z(s.start) for s in pspecs])
     pstarts = [np.array([s.to_z(nominal[s.name]) for s in pspecs])]
-    along = scale_start(ctx, names, free, values, raw, nominal, factors, plausible)
-    if along is not None:  # the calibration's shape at the model file's scale
-        pstarts.append(np.array([s.to_z(along[s.name]) for s in pspecs]))
+    every = tolerances(names, tolerance, ctx.settings.tolerance)
+    along = scale_start(
+        ctx, names, values, raw, nominal, every, {n: param_bounds(ctx, n, nominal[n], every[n]) for n in names}
+    )
+    base = dict(nominal)
+    if along is not None:  # the calibration at the model file's scale, held parameters moved too
+        pstarts.append(np.array([s.to_z(along.get(s.name, values[s.name])) for s in pspecs]))
+        base.update({n: v for n, v in along.items() if n not in free})
+        moved = {n: v / nominal[n] for n, v in along.items() if n not in free and v != nominal[n]}
+        if moved:
+            what = (
+                "the plausible device holds "
+                + ", ".join(f"{n} at ×{r:.3g} of the model file's value" for n, r in moved.items())
+                + ": where the calibration's scale symmetry takes it"
+            )
+            say(what)
+            ctx.notes.append(what)
     pvalues, _, praw, psol, _ = _fit(
         ctx,
         pspecs,
-        nominal,
+        base,
         pz0,
         resample=False,
         starts=pstarts,

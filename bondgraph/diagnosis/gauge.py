@@ -16,8 +16,8 @@ then moves the calibration along each, to the point nearest the model file's val
 parameters' tolerances (the weighted least squares of their log-ratios), within the search
 bounds.  The fitted output is unchanged: this chooses among equal answers, it fits nothing.
 :func:`scale_start` does the same along the symmetries of the whole parameter set, held
-parameters included, for a start of the plausible device's fit (the calibrated parameters
-alone have none of their own when some are held).
+parameters included, for the plausible device's fit (the calibrated parameters alone have none
+of their own when some are held): its held parameters are held where that moves them.
 """
 
 from __future__ import annotations
@@ -185,25 +185,27 @@ def fix_scales(
 def scale_start(
     ctx: Context,
     names: Sequence[str],
-    free: Sequence[str],
     values: Mapping[str, float],
     raw: np.ndarray,
     nominal: Mapping[str, float],
     factors: Mapping[str, float],
     bounds: Mapping[str, tuple[float, float]],
 ) -> dict[str, float] | None:
-    """A start for a fit of the calibrated parameters ``free`` within ``bounds``: the
-    calibration moved along each exact scale symmetry of the whole parameter set ``names``
-    (held parameters included, at their values), the calibrated parameters alone moved, to
-    the point nearest ``nominal``, then clipped into ``bounds``.
+    """A start for the plausible device's fit: the calibration moved along each exact scale
+    symmetry of the whole parameter set ``names`` (held parameters included) to the point
+    nearest ``nominal``, then clipped into ``bounds``.
 
     When parameters are held, the calibrated ones have no exact symmetry of their own and
-    :func:`fix_scales` finds none; yet the held ones often barely touch the output (a mode
-    above the drive's band), so the calibration can slide far along the whole set's symmetry,
-    every calibrated value off by about one factor, and end outside the parameters'
-    tolerances while the data say nothing about that factor.  A fit confined to the
-    tolerances and started from their edges stays in a local minimum there; this start
-    carries the calibration's shape back to the model file's scale.
+    :func:`fix_scales` finds none; yet the calibration can slide far along the whole set's
+    symmetry, every calibrated value off by about one factor, and end outside the parameters'
+    tolerances while the data say nothing about that factor.  Two cases, one answer: a held
+    parameter that barely touches the output (a mode above the drive's band) leaves the
+    calibrated ones free to slide; a held parameter whose effect is exactly the others'
+    together (a damping that is not separable from the masses, stiffnesses and the sensor gain)
+    pins the slide at its own value, so the calibration is the device scaled to match it.
+    Moving every parameter along the symmetry leaves the output as it is, and the point nearest
+    the model file's values is the device at its own scale; a fit confined to the tolerances
+    and started from their edges stays in a local minimum instead.
 
     Parameters
     ----------
@@ -211,8 +213,6 @@ def scale_start(
         The prepared record.
     names : sequence of str
         Every linear parameter of the model.
-    free : sequence of str
-        The calibrated ones.
     values : mapping of str to float
         The values of every name (the held ones at the model file's).
     raw : numpy.ndarray
@@ -220,26 +220,22 @@ def scale_start(
     nominal : mapping of str to float
         The model file's values.
     factors : mapping of str to float
-        The plausible spread (×/÷) of each calibrated parameter.
+        The plausible spread (×/÷) of each parameter.
     bounds : mapping of str to tuple of float
-        Bounds of each calibrated parameter's magnitude.
+        Bounds of each parameter's magnitude.
 
     Returns
     -------
     dict of str to float or None
-        The calibrated parameters' start values; None without a symmetry that moves them.
+        The value of every parameter a symmetry moves (held ones included); None without one.
     """
-    names, free = list(names), list(free)
+    names = list(names)
     found = scale_symmetries(ctx, names, values, raw)
-    out = {n: values[n] for n in free}
-    moved = False
-    for e in found:
-        ef = np.array([e[names.index(n)] for n in free])
-        if not np.any(ef):
-            continue
-        tau = _nearest(ef, free, out, nominal, factors)
-        out = {n: out[n] * math.exp(ef[i] * tau) for i, n in enumerate(free)}
-        moved = True
-    if not moved:
+    if not found:
         return None
-    return {n: math.copysign(min(max(abs(v), bounds[n][0]), bounds[n][1]), v) for n, v in out.items()}
+    out = {n: values[n] for n in names}
+    for e in found:
+        tau = _nearest(e, names, out, nominal, factors)
+        out = {n: out[n] * math.exp(e[i] * tau) for i, n in enumerate(names)}
+    moved = {n for e in found for i, n in enumerate(names) if e[i]}
+    return {n: math.copysign(min(max(abs(out[n]), bounds[n][0]), bounds[n][1]), out[n]) for n in names if n in moved}

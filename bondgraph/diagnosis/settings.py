@@ -28,6 +28,7 @@ class Settings:
     spread: float
     tolerance: float
     identifiable: float
+    tolerance_z: float
     residual_share: float
     fast_factor: float
     decimate_margin: float

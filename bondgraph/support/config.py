@@ -112,6 +112,13 @@ DEFAULTS: dict[str, Default] = {
         "a linear parameter is calibrated only if its pivot in the normalised "
         "sensitivity matrix (pivoted QR) is at least this share of the largest",
     ),
+    "diagnosis.tolerance_z": Default(
+        3.0,
+        "a parameter held by that rule is calibrated after all when a change "
+        "across its tolerance moves the output, beyond "
+        "what the calibrated ones can, by this many times the calibrated model's "
+        "residual RMS (at least the noise floor's)",
+    ),
     "diagnosis.residual_share": Default(
         0.2,
         "a parameter held by that rule is calibrated after all when its "
