@@ -1040,7 +1040,7 @@ def calibrate(
         what = (
             f"{', '.join(seen)} calibrated after all: within {'its' if len(seen) == 1 else 'their'} "
             f"tolerance {'it moves' if len(seen) == 1 else 'they move'} the output by "
-            f"{', '.join(f'{z:.3g}' for z in seen.values())} × the calibrated model's residual"
+            f"{', '.join(f'{z:.3g}×' for z in seen.values())} the calibrated model's residual"
         )
         say(what)
         ctx.notes.append(what)
