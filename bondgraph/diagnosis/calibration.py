@@ -1001,6 +1001,7 @@ def calibrate(
         if not patterns(known, [pat]):
             raise UsageError(f"TOLERANCE entry '{pat}' matches no parameter of {ctx.model.name}")
     nominal = {n: ctx.ident.current(n) for n in names}
+    factors = tolerances(names, tolerance, ctx.settings.tolerance)  # each parameter's plausible spread
     raw0 = ctx.ident.predict(nominal)
     idx = ctx.ident.fit_idx
     scale = float(np.linalg.norm(ctx.y[idx] - ctx.y[idx].mean())) or 1.0
@@ -1034,8 +1035,7 @@ def calibrate(
         for n in asked:
             held.pop(n)
     sigma = max(ctx.noise or 0.0, rms((ctx.y - sol.columns @ sol.coef)[ctx.ident.fit_idx]))
-    held_factors = tolerances(list(held), tolerance, ctx.settings.tolerance)
-    seen = visible_within_tolerance(ctx, names, free + list(asked), held, values, sol, held_factors, sigma)
+    seen = visible_within_tolerance(ctx, names, free + list(asked), held, values, sol, factors, sigma)
     if seen:
         what = (
             f"{', '.join(seen)} calibrated after all: within {'its' if len(seen) == 1 else 'their'} "
@@ -1056,7 +1056,6 @@ def calibrate(
         values, _, raw, sol, route = _fit(
             ctx, specs, nominal, z1, starts=[np.array([s.to_z(s.start) for s in specs])], drift=drift, workers=workers
         )
-    factors = tolerances(free, tolerance, ctx.settings.tolerance)
     values, raw, symmetric = fix_scales(ctx, free, values, raw, nominal, factors, bounds)
     if symmetric:
         say(
@@ -1127,9 +1126,8 @@ def calibrate(
     ]
     pz0 = np.array([s.to_z(s.start) for s in pspecs])
     pstarts = [np.array([s.to_z(nominal[s.name]) for s in pspecs])]
-    every = tolerances(names, tolerance, ctx.settings.tolerance)
     along = scale_start(
-        ctx, names, values, raw, nominal, every, {n: param_bounds(ctx, n, nominal[n], every[n]) for n in names}
+        ctx, names, values, raw, nominal, factors, {n: param_bounds(ctx, n, nominal[n], factors[n]) for n in names}
     )
     base = dict(nominal)
     if along is not None:  # the calibration at the model file's scale, held parameters moved too
