@@ -153,3 +153,34 @@ def test_two_missing_modes_of_a_mirror_are_named_one_after_the_other():
     rep = diagnose(modal_structure(modes[:1]), Dataset(t, {"F": u, "x": y}), workers=1)
     assert rep.causes[:2] == ["higher-mode", "higher-mode"]
     assert rep.account.unexplained_share < 0.01
+
+
+def test_a_mode_after_a_split_is_added_beside_the_split_model():
+    """After a mass split the model is no transform of its core's drive, but it is linear: a
+    resonator on the output (``ParallelMode``) is then added beside the split model, driven by
+    the recorded drive.  The truth is the resonator with its mass split twice (120 Hz, then a
+    hanging half at 300 Hz).  Asserted: the kind applies after the split; its fit contains the
+    split model (the current prediction is one of its columns: never worse on the fit part);
+    and two routes agree: the extended model written as a bond graph and simulated on the
+    exact linear route gives the fit's own prediction."""
+    from bondgraph.diagnosis.engine import advance, run_candidate
+    from bondgraph.diagnosis.modes import ParallelMode
+
+    t = np.arange(8000) / 4000.0
+    u = np.sin(2 * np.pi * (5 * t + 100 * t**2))
+    clean = view_of_resonator()
+    truth = OutputMode().build(clean, clean.rewrite(), 2 * math.pi * 120.0, 0.02, MU)
+    truth = OutputMode().build(clean, truth, 2 * math.pi * 300.0, 0.01, 0.5, "om2", plate=False)
+    y = bg.simulate(truth, t, {"F": bg.PiecewiseLinear(t, u)}, rtol=1e-9)["x"]
+    y = y + np.random.default_rng(3).normal(0, 1e-3 * np.std(y), y.size)
+    ctx = Context(resonator(), Dataset(t, {"F": u, "x": y}))
+    state, cal, _ = calibrate(ctx)
+    split = run_candidate(ctx, state, cal.free, OutputMode())
+    state = advance(ctx, state, split, View(ctx, state, cal.free))
+    view = View(ctx, state, cal.free)
+    assert view.current.drive is None and ParallelMode().applies(view) is True
+    mode = run_candidate(ctx, state, cal.free, ParallelMode())
+    assert view.score(mode.raw)[2] <= view.score(view.current.prediction)[2]
+    simulated = view.simulate(mode.extension.model, mode.extension.values)
+    offset = simulated - mode.raw
+    assert np.max(np.abs(offset - offset.mean())) < 1e-6 * np.ptp(simulated)

@@ -24,6 +24,7 @@ from .calibration import cross_spectra
 from .candidate import LINEAR, NOT_A_DRIVE, Candidate, Extension
 from .context import welch
 from .filters import resonator
+from .projection import projected_fit
 from .rewrite import add_to_output, junction_of, law, modify_law
 from .sites import Site, each_element, generic_sites
 
@@ -234,7 +235,8 @@ def resonance_trials(view) -> list[tuple[float, float, float]]:
     ValueError
         No frequency-response mismatch to place a mode at.
     """
-    d = np.asarray(view.current.drive)
+    # after a linear structural extension the model is driven by the recorded drive itself
+    d = np.asarray(view.current.drive if view.current.drive is not None else view.record.u)
     idx = view.record.fit_idx
     r = view.current.residual[idx] - view.current.residual[idx].mean()
     trials = []
@@ -294,7 +296,9 @@ class ParallelMode(Candidate):
         self.site_name = site.name if site is not None else "output"
 
     def applies(self, view):
-        """True, unless the model is no drive transform or the record resolves no frequency.
+        """True, unless the model is neither a drive transform nor linear (a linear structural
+        extension named before keeps it linear: the mode is then added beside the current
+        model, :meth:`fit`), or the record resolves no frequency.
 
         Parameters
         ----------
@@ -306,7 +310,9 @@ class ParallelMode(Candidate):
         bool or str
             True, or why it does not apply.
         """
-        return NOT_A_DRIVE if view.current.drive is None else unresolved(view) or True
+        if view.current.drive is None and not view.linear_current:
+            return NOT_A_DRIVE
+        return unresolved(view) or True
 
     def evidence(self, view):
         """The largest frequency-response mismatch and where it is.
@@ -340,6 +346,8 @@ class ParallelMode(Candidate):
             The model with the mode (parameters ``hm.omega`` rad/s, ``hm.zeta``, ``hm.g``,
             ``hm.h``).
         """
+        if view.current.drive is None:
+            return self._fit_beside(view)
         p = free_prefix(view.current.model, "hm")
         d = np.asarray(view.current.drive)
         trials = resonance_trials(view)
@@ -362,22 +370,7 @@ class ParallelMode(Candidate):
                 fit, best = trial, rms_fit
         om, ze = math.exp(fit.z[0]), math.exp(fit.z[1])
         g, h = (float(c) for c in fit.direct)
-        model = view.rewrite()
-        o = model.parameter(f"{p}.omega", om, "rad/s", "natural frequency of the added mode")
-        z = model.parameter(f"{p}.zeta", ze, "1", "damping ratio of the added mode")
-        gg = model.parameter(f"{p}.g", g, "", "output coefficient of the added mode's displacement (unit modal mass)")
-        hh = model.parameter(f"{p}.h", h, "", "output coefficient of the added mode's velocity (unit modal mass)")
-        model.add(
-            Se(f"{p}.force", view.current.drive_expr),
-            J1(f"{p}.mode"),
-            I(f"{p}.mass", 1),
-            C(f"{p}.spring", 1 / o**2),
-            R(f"{p}.damper", 2 * z * o),
-        )
-        model.bond(f"{p}.force", f"{p}.mode")
-        for e in ("mass", "spring", "damper"):
-            model.bond(f"{p}.mode", f"{p}.{e}")
-        add_to_output(model, view.record.output, gg * Quantity("q", f"{p}.spring") + hh * Quantity("p", f"{p}.mass"))
+        model = self._build(view, p, om, ze, g, h, view.current.drive_expr)
         new = {f"{p}.omega": om, f"{p}.zeta": ze, f"{p}.g": g, f"{p}.h": h}
         return Extension(
             model,
@@ -390,6 +383,88 @@ class ParallelMode(Candidate):
             fit.success,
             fit.message,
         )
+
+    def _fit_beside(self, view):
+        """The mode beside a linear current model that is no drive transform of its core (a
+        mass split before): driven by the recorded drive, fitted by variable projection with
+        the current prediction as one more column (its weight, the sensor gain, refitted), so
+        that the extended model contains the current one (g = h = 0).  The current model's
+        own parameters keep their values.
+
+        Parameters
+        ----------
+        view : View
+            The read-only view of the data, the split and the current model.
+
+        Returns
+        -------
+        Extension
+            The current model with the mode added on the output.
+        """
+        p = free_prefix(view.current.model, "hm")
+        d, dt = np.asarray(view.record.u), view.record.dt
+        trials = resonance_trials(view)
+        pred = np.asarray(view.current.prediction)
+
+        def columns(z, rows):
+            q = resonator(d, dt, math.exp(z[0]), math.exp(z[1]), velocity=True)
+            A = np.column_stack([pred, q, np.ones(pred.size)])
+            return A if rows is None else A[rows]
+
+        sol, best = None, np.inf
+        for _, om, ze in trials[:3]:
+            trial = projected_fit(
+                columns,
+                np.asarray(view.record.y),
+                view.record.fit_idx,
+                [math.log(om), math.log(ze)],
+                [math.log(om / 2), math.log(1e-4)],
+                [math.log(om * 2), math.log(0.5)],
+                [-np.inf] * 4,
+                [np.inf] * 4,
+                max_nfev=view.budget(30),
+            )
+            if trial.cost < best:
+                sol, best = trial, trial.cost
+        om, ze = math.exp(sol.z[0]), math.exp(sol.z[1])
+        weight = sol.coef[0] if sol.coef[0] != 0 else 1.0
+        g, h = (float(c / (weight * view.current.gain)) for c in sol.coef[1:3])
+        new = {f"{p}.omega": om, f"{p}.zeta": ze, f"{p}.g": g, f"{p}.h": h}
+        at = [list(new)[i] for i in sol.at_bounds]
+        q = sol.columns[:, 1:3]
+        raw = pred / view.current.gain + q @ np.array([g, h])
+        return Extension(
+            self._build(view, p, om, ze, g, h, view.record.input_symbol),
+            {**view.current.values, **new},
+            list(new),
+            raw,
+            None,
+            None,
+            at,
+            sol.success,
+            sol.message,
+        )
+
+    def _build(self, view, p, om, ze, g, h, drive_expr):
+        """A copy of the current model with the resonator, driven by ``drive_expr``, added on
+        the output."""
+        model = view.rewrite()
+        o = model.parameter(f"{p}.omega", om, "rad/s", "natural frequency of the added mode")
+        z = model.parameter(f"{p}.zeta", ze, "1", "damping ratio of the added mode")
+        gg = model.parameter(f"{p}.g", g, "", "output coefficient of the added mode's displacement (unit modal mass)")
+        hh = model.parameter(f"{p}.h", h, "", "output coefficient of the added mode's velocity (unit modal mass)")
+        model.add(
+            Se(f"{p}.force", drive_expr),
+            J1(f"{p}.mode"),
+            I(f"{p}.mass", 1),
+            C(f"{p}.spring", 1 / o**2),
+            R(f"{p}.damper", 2 * z * o),
+        )
+        model.bond(f"{p}.force", f"{p}.mode")
+        for e in ("mass", "spring", "damper"):
+            model.bond(f"{p}.mode", f"{p}.{e}")
+        add_to_output(model, view.record.output, gg * Quantity("q", f"{p}.spring") + hh * Quantity("p", f"{p}.mass"))
+        return model
 
     def implausible(self, view, ext):
         """Why the fitted mode is not plausible (:func:`mode_implausible`).
@@ -470,7 +545,7 @@ class OutputMode(Candidate):
         return next(iter(model.with_role(self.role)), None)
 
     def applies(self, view):
-        """True, or why not: no mass, fast dynamics, no drive transform, or a nonlinear model.
+        """True, or why not: no mass, fast dynamics, or a model that is not linear.
 
         Parameters
         ----------
@@ -490,10 +565,10 @@ class OutputMode(Candidate):
             )
         if view.record.reduced:
             return "the mass's dynamics are faster than the data resolve"
-        if view.current.drive is None:
-            return NOT_A_DRIVE
         if not view.record.exact:
             return "needs a model linear in its states"
+        if view.current.drive is None and not view.linear_current:
+            return "needs a model linear in its states (a nonlinear term was named)"
         return unresolved(view) or True
 
     def _plate_fits(self, view) -> bool:

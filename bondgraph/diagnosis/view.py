@@ -392,8 +392,19 @@ class View:
             extra = extra if np.max(np.abs(extra)) > 1e-9 * np.max(np.abs(state.raw)) else np.zeros_like(extra)
             self.current = replace(self.current, extra=_frozen(extra))
 
-    def _budget(self, max_nfev: int) -> int:
-        """An optimiser's evaluation budget at this view's effort."""
+    def budget(self, max_nfev: int) -> int:
+        """An optimiser's evaluation budget at this view's effort.
+
+        Parameters
+        ----------
+        max_nfev : int
+            The budget at effort 1.
+
+        Returns
+        -------
+        int
+            ``max_nfev`` times the view's effort, at least 1.
+        """
         return max(1, int(round(max_nfev * self._effort)))
 
     # ---- the current model ----------------------------------------------------------------
@@ -558,8 +569,9 @@ class View:
         return None if modal is None else modal.time(ctx.dt, columns, rows, steady=starts_steady())
 
     def frequency_response(self, omega: np.ndarray, values: Mapping[str, float] | None = None) -> np.ndarray:
-        """The linear core's frequency response at ``omega`` (rad/s), sensor gain 1, with the
-        drive's reading and the measurement chain's delay of the output behind the drive (as
+        """The linear core's frequency response at ``omega`` (rad/s) (the current model's after a
+        linear structural extension: :attr:`linear_current`), sensor gain 1, with the drive's
+        reading and the measurement chain's delay of the output behind the drive (as
         :meth:`respond` sees it).
 
         Parameters
@@ -575,13 +587,29 @@ class View:
             Complex H(jω), output units per drive unit.
         """
         ctx = self._ctx
-        th = self._theta_values(values)
         omega = np.asarray(omega, float)
-        return (
-            ctx.lti.state_space(th, ctx.cut).frequency_response(omega)
-            * ctx.reading_factor(omega)
-            * np.exp(-1j * omega * ctx.delay * ctx.dt)
-        )
+        if self._structural and self.linear_current:  # the current model itself: linear, no core's
+            ident = self._current_identification
+            known = {p.name for p in ident.sim.eqs.params}
+            vals = {k: v for k, v in {**self.current.values, **(values or {})}.items() if k in known}
+            ss = ident.lti.state_space(ident.sim.theta(vals), ident.cut)
+        else:
+            ss = ctx.lti.state_space(self._theta_values(values), ctx.cut)
+        return ss.frequency_response(omega) * ctx.reading_factor(omega) * np.exp(-1j * omega * ctx.delay * ctx.dt)
+
+    @cached_property
+    def _current_identification(self) -> Identification:
+        """An :class:`Identification` of the current model on this record (cached)."""
+        return self._identification(self.current.model)
+
+    @property
+    def linear_current(self) -> bool:
+        """True when the current model is linear on the exact route: its linear core, or the
+        core with linear structural extensions named (an added mode), no nonlinear term.  A
+        linear structural candidate can then extend the current model itself."""
+        if not self.record.exact or self.record.reduced or self._terms:
+            return False
+        return not self._structural or self._current_identification.lti is not None
 
     def first_order(self, column: np.ndarray) -> FirstOrder:
         """What a column (an effect's output per unit coefficient, sensor gain applied), or
@@ -931,7 +959,7 @@ class View:
             zu,
             lo,
             hi,
-            max_nfev=self._budget(max_nfev) if (nz or lin) else 1,
+            max_nfev=self.budget(max_nfev) if (nz or lin) else 1,
             starts=more_starts,
             derivatives=derivatives,
         )
@@ -1144,7 +1172,7 @@ class View:
             ub,
             [-np.inf] * 2,
             [np.inf] * 2,
-            max_nfev=self._budget(max_nfev),
+            max_nfev=self.budget(max_nfev),
             derivatives=derivatives if sens is not None else None,
         )
         return (values_of(sol.z), sol.columns[:, 0], sol.success, sol.message, [names[i] for i in sol.at_bounds])
