@@ -11,6 +11,11 @@ of scipy's Radau at the same tolerance, 3000× below the noise, in a hundredth o
 Asserted: the cause is friction (named ``nonlinear-damping`` before the cause vocabulary had
 a name for it), through the friction candidate (damping that falls with amplitude, where the
 cubic forms' rises); the same record without friction is effect-free.
+
+A shear-thinning damper, c·v·((1 − ρ) + ρ/(1 + |v|/v₀)) with ρ = 0.8 and v₀ a fifth of the
+peak velocity (a rational law, not the candidate's tanh), is viscous at low speed and levels
+off gradually: the friction candidate fits it with a wide knee, and rule ``knee-width`` names it
+``nonlinear-damping``.
 """
 
 import math
@@ -48,14 +53,17 @@ def resonator(f=40.0, zeta=0.02):
     return g
 
 
-def record(friction=True, seed=2):
+def record(friction=True, seed=2, thinning=False):
     t = np.arange(int(T * FS)) / FS
     u = np.sin(2 * np.pi * (10 * t + 15 * t**2))
     lin = bg.simulate(resonator(), t, {"F": bg.PiecewiseLinear(t, u)}, rtol=1e-9)
     truth = resonator()
-    if friction:
-        vpk = float(np.max(np.abs(np.gradient(lin["x"], t))))
-        c = 2 * 0.02 * 2 * math.pi * 40.0
+    vpk = float(np.max(np.abs(np.gradient(lin["x"], t))))
+    c = 2 * 0.02 * 2 * math.pi * 40.0
+    if thinning:
+        rho, v0 = 0.8, 0.2 * vpk
+        modify_law(truth, "c", lambda f, old: old - c * rho * f + c * rho * f / (1 + sp.Abs(f) / v0))
+    elif friction:
         force = c * vpk * math.pi / 4  # 4F/(π v_pk) = c at the peak velocity
         vs = 0.01 * vpk
         modify_law(truth, "c", lambda f, old: old + force * 2 / math.pi * sp.atan(f / vs))
@@ -89,3 +97,11 @@ def test_friction_is_named_friction():
 def test_without_friction_nothing_is_named():
     rep = diagnose(model_file_like(), record(friction=False), candidates=CANDIDATES, workers=1, chain=False)
     assert rep.cause == "none", rep.steps[0].why
+
+
+def test_a_thinning_damper_is_nonlinear_damping():
+    rep = diagnose(model_file_like(), record(thinning=True), candidates=CANDIDATES, workers=1, chain=False)
+    assert rep.cause == "nonlinear-damping", rep.steps[0].why
+    named = max((c for c in rep.steps[0].candidates if c.passed), key=lambda c: c.gain)
+    assert named.label.startswith(FrictionDamping.label) and named.label.endswith("(rule 'knee-width')")
+    assert named.gain > 1.5

@@ -479,6 +479,7 @@ class LawTerm(Candidate):
         where = self._carrier(view, lure, values, coefs, r2s, els) if len(kept) > 1 else ""
         cause = self.stands_for(coefs, r2s, xs)
         cause = cause if cause != self.cause else ""
+        why = self.renamed_because(cause) if cause else ""
         return Extension(
             self.build(view, coefs, r2s),
             values,
@@ -492,7 +493,7 @@ class LawTerm(Candidate):
             terms=terms,
             where=kept[0][1] if len(kept) == 1 and len(els) > 1 else where,
             cause=cause,
-            why=f"the fitted law is {cause} where the record takes it (rule 'secant-trend')" if cause else "",
+            why=why,
         )
 
     def stands_for(self, coefs: dict, r2s: dict, xs: dict) -> str:
@@ -514,6 +515,22 @@ class LawTerm(Candidate):
             A cause, or "".
         """
         return ""
+
+    def renamed_because(self, cause: str) -> str:
+        """Why the fit names ``cause`` rather than the kind's own, with the rule's name (the
+        candidate table's verdict line).
+
+        Parameters
+        ----------
+        cause : str
+            The cause :meth:`stands_for` returned.
+
+        Returns
+        -------
+        str
+            The reason.
+        """
+        return f"the fitted law is {cause} where the record takes it (rule 'secant-trend')"
 
     def _carrier(self, view, lure, values, coefs, r2s, els) -> str:
         """The element whose fitted term alone moves the output at least
@@ -911,12 +928,20 @@ def _is_spring(model, name: str) -> bool:
     return isinstance(el, C) and getattr(el, "role", None) in (None, "stiffness")
 
 
+#: a friction fit whose smoothing velocity is at least this share of the peak velocity is a
+#: damping that thins with speed (rule ``knee-width``, :meth:`Friction.stands_for`)
+KNEE_SHARE = 0.1
+
+
 class Friction(LawTerm):
     """Friction (Coulomb, smoothed) in a damper: e = law(f) + F·tanh(f/s), F = μ·s, μ ≥ 0 in
     units of the element's damping; s keeps the law smooth: 3 % of the data's peak velocity,
     or 10 or 30 % if these fit better (tried only when the first improves the fit part by 2 %
     or more).  Its equivalent viscous damping 4F/(πV) falls with the velocity amplitude V,
-    where the cubic forms' rises.  Runs on the exact Lur'e route.
+    where the cubic forms' rises.  Runs on the exact Lur'e route.  A fit that needs a wide
+    knee (s ≥ :data:`KNEE_SHARE` of the peak velocity) is named ``nonlinear-damping``: a
+    force viscous at low speed that levels off gradually is a damping that thins with speed,
+    not a dry friction, whose force turns over at rest (rule ``knee-width``).
 
     Parameters
     ----------
@@ -984,9 +1009,54 @@ class Friction(LawTerm):
         r2 : float
             s = share · f_peak, velocity.
         """
-        return abs(slope(view.current.model, el, view.current.values)), (
-            self.velocity_share or self.smoothing[0]
-        ) * _peak(x)
+        return abs(slope(view.current.model, el, view.current.values)), self._share * _peak(x)
+
+    @property
+    def _share(self) -> float:
+        """The smoothing velocity of this fit as a share of the peak velocity."""
+        return self.velocity_share or self.smoothing[0]
+
+    def stands_for(self, coefs, r2s, xs):
+        """``nonlinear-damping`` when this fit's knee is wide (rule ``knee-width``): dry friction
+        (Coulomb, Stribeck) turns its force over within a small share of the velocity range
+        around rest, so its fit prefers the narrowest smoothing; a force that is viscous at low
+        speed and levels off over :data:`KNEE_SHARE` of the peak velocity or more is a damping
+        that thins with speed (a shear-thinning damper, c·v/(1 + |v|/v₀) with v₀ a sizeable
+        share of the speeds visited).
+
+        Parameters
+        ----------
+        coefs : dict of str to float
+            Element → its fitted coefficient μ.
+        r2s : dict of str to float
+            Element → the smoothing velocity s.
+        xs : dict of str to numpy.ndarray
+            Element → its flow series in the current model.
+
+        Returns
+        -------
+        str
+            "nonlinear-damping", or "" (friction).
+        """
+        return "nonlinear-damping" if self._share >= KNEE_SHARE and any(coefs.values()) else ""
+
+    def renamed_because(self, cause):
+        """The knee's width, with the rule's name.
+
+        Parameters
+        ----------
+        cause : str
+            The cause :meth:`stands_for` returned.
+
+        Returns
+        -------
+        str
+            The reason.
+        """
+        return (
+            f"the fitted force levels off across {self._share:.0%} of the peak velocity, not at rest: a damping "
+            f"that thins with speed (rule 'knee-width')"
+        )
 
     def fit(self, view):
         """Fit at this smoothing, or, without one, at each of :attr:`smoothing` while it helps.
