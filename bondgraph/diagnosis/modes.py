@@ -49,6 +49,23 @@ def frf_mismatch(view):
     return w, np.abs(H - Hm) * coh / np.maximum(np.abs(Hm), 1e-300 + 1e-3 * np.abs(Hm).max(initial=0.0))
 
 
+def driving(view) -> np.ndarray:
+    """The series that drives the current model: the drive its linear core sees (a transform
+    of the recorded drive), or, after a linear structural extension, the recorded drive itself.
+
+    Parameters
+    ----------
+    view : View
+        The read-only view of the data and the current model.
+
+    Returns
+    -------
+    numpy.ndarray
+        The series on every sample, drive units.
+    """
+    return np.asarray(view.current.drive if view.current.drive is not None else view.record.u)
+
+
 def unresolved(view) -> str:
     """Why no mode can be placed from the record's frequency response ('' if one can): the
     record resolves the response at no frequency (output and drive coherent nowhere).
@@ -188,8 +205,7 @@ def mode_implausible(view, omega: float, zeta: float, raw: np.ndarray | None = N
             f"its frequency ({f:.4g} Hz) is below half the model's lowest mode ({low:.4g} Hz): not a "
             f"higher mode of this structure"
         )
-    d = np.asarray(view.current.drive if view.current.drive is not None else view.record.u)
-    fr, P = welch(d, view.record.fs, 4096)
+    fr, P = welch(driving(view), view.record.fs, 4096)
     near = np.abs(fr - f) <= max(0.1 * f, fr[1])
     excited = bool(near.any() and P[near].max() >= 1e-6 * P.max())
     strong = fr[(P >= DRIVE_BAND_LEVEL * P.max()) & (fr > 0)]
@@ -235,8 +251,7 @@ def resonance_trials(view) -> list[tuple[float, float, float]]:
     ValueError
         No frequency-response mismatch to place a mode at.
     """
-    # after a linear structural extension the model is driven by the recorded drive itself
-    d = np.asarray(view.current.drive if view.current.drive is not None else view.record.u)
+    d = driving(view)
     idx = view.record.fit_idx
     r = view.current.residual[idx] - view.current.residual[idx].mean()
     trials = []
@@ -402,7 +417,7 @@ class ParallelMode(Candidate):
             The current model with the mode added on the output.
         """
         p = free_prefix(view.current.model, "hm")
-        d, dt = np.asarray(view.record.u), view.record.dt
+        d, dt = driving(view), view.record.dt
         trials = resonance_trials(view)
         pred = np.asarray(view.current.prediction)
 
