@@ -10,10 +10,10 @@
   Domain Approach*, 2nd ed., Wiley, 2012, ch. 3), with the coherence estimate's bias for the
   number of averaged segments removed (:func:`linear_share`); and the validation energy that
   a rational filter of the drive (an output-error fit, Steiglitz-McBride) fitted on the fit
-  part predicts from the drive alone (:func:`filtered_linear_share`).  The coherence misses what a lightly damped residual
-  carries from one Welch segment into the next (a mode ringing longer than a segment, under a
-  sweep); the filter misses what its order cannot follow.  The rest is a nonlinearity no
-  candidate covers, or noise.
+  part predicts from the drive alone (:func:`filtered_linear_share`).  The coherence misses
+  what a lightly damped residual carries from one Welch segment into the next (a mode ringing
+  longer than a segment, under a sweep); the filter misses what its order cannot follow.  The
+  rest is a nonlinearity no candidate covers, or noise.
 * ``noise_rms``: the measurement noise, estimated from the data on every drive: where the
   drive leaves a quiet band, the output's density there; else the floor of the residual's
   spectrum (an upper estimate).
@@ -166,9 +166,9 @@ def filtered_linear_share(u: np.ndarray, e: np.ndarray, val: np.ndarray) -> floa
     the equation error into the output error (an ARX fit alone weighs the noise by A(q) and
     misplaces lightly damped poles).  The equations are the fit part's; through the filter's
     memory its filtered residual also carries earlier held-out samples, which lends a filter
-    of at most 33 coefficients little (the tests' signal-to-noise splits come out as the
-    analytic share).  Each filter is simulated from the drive alone over the record (from rest; an unstable one is
-    dropped); the order whose simulation errs least on the fit part is scored on the
+    of at most 2·max(ORDERS) + 1 coefficients little (the tests' signal-to-noise splits come
+    out as the analytic share).  Each filter is simulated from the drive alone over the record
+    (from rest; an unstable one is dropped); the order whose simulation errs least on the fit part is scored on the
     validation part: one less the validation error's energy over the residual's (each about
     its mean, as the coherence leaves the mean out), 0 when no filter predicts anything.
 
